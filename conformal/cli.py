@@ -1,0 +1,101 @@
+"""The ``conformal`` command.
+
+    conformal solve SCENE.toml [--json OUT.json] [--plot OUT.png] [--theory NAME]
+    conformal demo [--out DIR]
+
+Bad input ends with exit code 2 and one line on stderr naming the key and the problem.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from importlib import resources
+from pathlib import Path
+
+from conformal.errors import ConformalError, InputError
+
+
+def _write_json(summary: dict, path: str | None) -> None:
+    text = json.dumps(summary, indent=2)
+    print(text)
+    if path:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        Path(path).write_text(text + "\n", encoding="utf-8")
+
+
+def _solve_and_report(scene, json_path: str | None, plot_path: str | None) -> int:
+    from conformal.solve import solve_scene
+
+    result = solve_scene(scene)
+    if plot_path:
+        from conformal.plots import plot_result
+
+        plot_result(result, plot_path, title=f"{scene.name}: {result.theory}")
+    _write_json(result.summary(), json_path)
+    return 0
+
+
+def cmd_solve(args) -> int:
+    from conformal.scene import load_scene
+
+    scene = load_scene(args.scene)
+    if args.theory:
+        from conformal.scene import THEORIES
+
+        if args.theory not in THEORIES:
+            raise InputError(f"--theory: must be one of {', '.join(THEORIES)}, got {args.theory!r}")
+        scene = scene.with_model(theory=args.theory)
+    return _solve_and_report(scene, args.json, args.plot)
+
+
+def demo_scene_path() -> Path:
+    return Path(str(resources.files("conformal") / "data" / "scenes" / "demo.toml"))
+
+
+def cmd_demo(args) -> int:
+    from conformal.scene import load_scene
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    scene = load_scene(demo_scene_path())
+    code = _solve_and_report(scene, str(out / "demo.json"), str(out / "demo.png"))
+    print(f"wrote {out / 'demo.json'} and {out / 'demo.png'}", file=sys.stderr)
+    return code
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="conformal", description="Conformal wheel-rail rolling contact workbench")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    s = sub.add_parser("solve", help="solve a scene file and print a JSON summary")
+    s.add_argument("scene", help="scene file (TOML)")
+    s.add_argument("--json", metavar="OUT.json", help="also write the JSON summary to this file")
+    s.add_argument("--plot", metavar="OUT.png", help="write a PNG of the tractions")
+    s.add_argument("--theory", help="override [model] theory")
+    s.set_defaults(func=cmd_solve)
+
+    d = sub.add_parser("demo", help="solve the built-in demo scene, write JSON and PNG")
+    d.add_argument("--out", default="out", help="output folder (default: out)")
+    d.set_defaults(func=cmd_demo)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except ConformalError as exc:
+        print(f"conformal: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"conformal: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("conformal: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
