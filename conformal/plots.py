@@ -94,3 +94,78 @@ def plot_result(result: Result, path: str | Path, title: str | None = None) -> P
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+# ----------------------------------------------------------------------------- 3-D (pyvista, meshio)
+def strip_points(x_edges: np.ndarray, y_edges: np.ndarray, z_edges: np.ndarray) -> np.ndarray:
+    """Corner points (mx+1, ms+1, 3) of a strip: x along rolling, (y, z) the profile edges along s."""
+    nx, ns = len(x_edges), len(y_edges)
+    P = np.empty((nx, ns, 3))
+    P[..., 0] = np.asarray(x_edges)[:, None]
+    P[..., 1] = np.asarray(y_edges)[None, :]
+    P[..., 2] = np.asarray(z_edges)[None, :]
+    return P
+
+
+def strip_mesh(points: np.ndarray, cell_data: dict[str, np.ndarray] | None = None):
+    """A pyvista StructuredGrid of quadrilateral cells from corner points (nx, ns, 3);
+    ``cell_data`` arrays have shape (nx-1, ns-1) or (nx-1, ns-1, 3)."""
+    import pyvista as pv
+
+    nx, ns = points.shape[:2]
+    grid = pv.StructuredGrid()
+    grid.points = points.transpose(1, 0, 2).reshape(-1, 3)  # x fastest (VTK order)
+    grid.dimensions = (nx, ns, 1)
+    for name, values in (cell_data or {}).items():
+        v = np.asarray(values, dtype=float)
+        grid.cell_data[name] = v.transpose(1, 0, *range(2, v.ndim)).reshape((nx - 1) * (ns - 1), *v.shape[2:])
+    return grid
+
+
+def export_vtu(path: str | Path, points: np.ndarray, cell_data: dict[str, np.ndarray]) -> Path:
+    """Write a strip of quadrilaterals with per-element data as VTU (meshio), for ParaView."""
+    import meshio
+
+    nx, ns = points.shape[:2]
+    idx = np.arange(nx * ns).reshape(nx, ns)
+    quads = np.stack([idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]], axis=-1).reshape(-1, 4)
+    data = {k: [np.asarray(v, dtype=float).reshape((nx - 1) * (ns - 1), *np.shape(v)[2:])]
+            for k, v in cell_data.items()}
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    meshio.write(path, meshio.Mesh(points.reshape(-1, 3), [("quad", quads)], cell_data=data))
+    return path
+
+
+def plot_surfaces_3d(path: str | Path, contact: "object", *, bodies: list | None = None,
+                     scalar: str = "pn", vectors: np.ndarray | None = None, boundary: "object" = None,
+                     title: str = "", window: tuple[int, int] = (1200, 900)) -> Path:
+    """Off-screen pyvista PNG: body surfaces (grey, translucent), the contact strip coloured by
+    ``scalar``, traction vectors (glyphs at element centres) and a slip/adhesion boundary line.
+
+    ``contact`` is a StructuredGrid from :func:`strip_mesh`; ``bodies`` more meshes to show;
+    ``vectors`` (mx*ms, 3) traction vectors at cell centres in 3-D; ``boundary`` a PolyData line.
+    """
+    import pyvista as pv
+
+    pv.OFF_SCREEN = True
+    plotter = pv.Plotter(off_screen=True, window_size=list(window))
+    for body in bodies or []:
+        plotter.add_mesh(body, color="lightgrey", opacity=0.35, show_edges=False)
+    plotter.add_mesh(contact, scalars=scalar, cmap="viridis", show_edges=True, edge_color="#555555",
+                     scalar_bar_args={"title": scalar})
+    if vectors is not None:
+        centres = contact.cell_centers()
+        centres["traction"] = np.asarray(vectors)
+        scale = 0.3 * max(contact.length / 10, 1e-9) / max(np.abs(vectors).max(), 1e-300)
+        plotter.add_mesh(centres.glyph(orient="traction", scale="traction", factor=scale), color="white")
+    if boundary is not None:
+        plotter.add_mesh(boundary, color="red", line_width=4)
+    if title:
+        plotter.add_text(title, font_size=10)
+    plotter.view_isometric()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    plotter.screenshot(str(path))
+    plotter.close()
+    return path
