@@ -2,6 +2,7 @@
 
     conformal solve SCENE.toml [--json OUT.json] [--plot OUT.png] [--theory NAME]
     conformal demo [--out DIR]
+    conformal sweep SCENE.toml [--shift START:STOP:STEP] [--out DIR]
 
 Bad input ends with exit code 2 and one line on stderr naming the key and the problem.
 """
@@ -64,6 +65,23 @@ def cmd_demo(args) -> int:
     return code
 
 
+def cmd_sweep(args) -> int:
+    from conformal.geometry.sweep import parse_range, plot, sweep, write_csv
+    from conformal.scene import load_scene
+
+    scene = load_scene(args.scene)
+    if scene.geometry.kind != "wheel_rail":
+        raise InputError(f"[geometry] kind: a sweep needs a wheel_rail scene, got {scene.geometry.kind!r}")
+    rows = sweep(scene.geometry, parse_range(args.shift), scene.base_dir)
+    out = Path(args.out)
+    write_csv(rows, out / "sweep.csv")
+    plot(rows, out / "sweep.png", title=f"{scene.name}: lateral shift sweep")
+    for r in rows:
+        print("  ".join(f"{k}={v:.5g}" if isinstance(v, float) else f"{k}={v}" for k, v in r.items()))
+    print(f"wrote {out / 'sweep.csv'} and {out / 'sweep.png'}", file=sys.stderr)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="conformal", description="Conformal wheel-rail rolling contact workbench")
     sub = p.add_subparsers(dest="command", required=True)
@@ -74,6 +92,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--plot", metavar="OUT.png", help="write a PNG of the tractions")
     s.add_argument("--theory", help="override [model] theory")
     s.set_defaults(func=cmd_solve)
+
+    w = sub.add_parser("sweep", help="wheel-rail geometry versus lateral shift: CSV and PNG")
+    w.add_argument("scene", help="wheel_rail scene file (TOML)")
+    w.add_argument("--shift", default="0:10:0.5", help="lateral shifts start:stop:step in mm (default 0:10:0.5)")
+    w.add_argument("--out", default="out", help="output folder (default: out)")
+    w.set_defaults(func=cmd_sweep)
 
     d = sub.add_parser("demo", help="solve the built-in demo scene, write JSON and PNG")
     d.add_argument("--out", default="out", help="output folder (default: out)")

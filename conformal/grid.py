@@ -68,3 +68,109 @@ class PlanarGrid:
     def mesh(self) -> tuple[np.ndarray, np.ndarray]:
         """Element centres as two (mx, my) arrays."""
         return np.meshgrid(self.x, self.y, indexing="ij")
+
+
+@dataclass(frozen=True, eq=False)
+class CurvedGrid:
+    """Potential contact area on the curved rail surface (conformal contact, DESIGN.md §4).
+
+    mx uniform elements along the rolling direction x (as in :class:`PlanarGrid`: edges
+    ``xl + i dx``) times ms elements along s, the arc length of the rail profile.  Arrays on the
+    grid have shape (mx, ms), indexed [ix, js].  The rail is an extrusion along x, so everything
+    that depends on the cross-section (centres, normals, contact angle) is given per js.
+
+    Frames.  The *rail-profile frame* is the rail profile's own coordinate system (the profile
+    file, right-side form: y towards this rail's field side, z downwards, before the cant); x is
+    the rolling direction.  The pair's *side frame* (track axes, mirrored for a left wheel) follows
+    by ``side = R(cant) @ (y, z) + rail_origin`` with R(c) = [[cos c, sin c], [-sin c, cos c]].
+
+    Fields
+    ------
+    mx, dx, xl : elements, element length (mm) and lower edge (mm) along x (x = 0 at the
+        contact reference point, rolling in +x).
+    s_edges : (ms + 1,) element edges along the rail profile (mm of arc length from the first
+        point of the rail profile); element js spans [s_edges[js], s_edges[js + 1]].
+    y, z : (ms,) element centres (at the centre arc length) in the rail-profile frame, on the
+        rail surface.
+    normal : (ms, 2) unit inner normals (n_y, n_z) of the rail (body 1) at the centres, in the
+        rail-profile frame.
+    delta : (ms,) contact angle (rad) at the centres: rotation about x from the side frame's
+        z axis to the inner normal (CONTACT's DELTCP; negative at a right gauge corner).
+    s_ref : arc length of the contact reference point (where x = 0, s = s_ref).
+    cant, rail_origin : the rail-profile frame inside the side frame (see above).
+    rail_curve : (n, 2) points (y, z) of the rail profile (rail-profile frame) from some mm
+        before the first to some mm after the last element: the local curve to mesh the rail.
+    rail_curve_s : (n,) their arc lengths.
+    wheel_profile : (k, 2) points (y_w, z_w) of the wheel profile (wheel-profile coordinates:
+        y_w along the axle towards the field side, z_w = increase of radius) over the part that
+        faces the grid.
+    wheel_centre : (3,) the point of the axle at the wheel-profile origin (y_w = 0), in the
+        rail-profile frame (x, y, z).
+    wheel_axle, wheel_down : (3,) unit axle direction (towards +y_w) and the wheel's 'down'
+        direction (theta = 0), rail-profile frame.  A wheel surface point is
+        ``wheel_centre + y_w wheel_axle + (wheel_radius + z_w) (cos(t) wheel_down + sin(t) f)``
+        with f = wheel_axle x wheel_down (forward).
+    wheel_radius : radius at the wheel-profile origin (mm).
+    side : "left" | "right" (a left pair is the mirror image of a right pair).
+    """
+
+    mx: int
+    dx: float
+    xl: float
+    s_edges: np.ndarray
+    y: np.ndarray
+    z: np.ndarray
+    normal: np.ndarray
+    delta: np.ndarray
+    s_ref: float
+    cant: float
+    rail_origin: tuple[float, float]
+    rail_curve: np.ndarray
+    rail_curve_s: np.ndarray
+    wheel_profile: np.ndarray
+    wheel_centre: np.ndarray
+    wheel_axle: np.ndarray
+    wheel_down: np.ndarray
+    wheel_radius: float
+    side: str = "right"
+
+    def __post_init__(self):
+        if self.mx < 1 or len(self.s_edges) < 2:
+            raise InputError(f"[grid]: a curved grid needs at least one element, got {self.mx} x {len(self.s_edges) - 1}")
+        if not self.dx > 0 or np.any(np.diff(self.s_edges) <= 0):
+            raise InputError("[grid]: curved grid element sizes must be > 0")
+
+    @property
+    def ms(self) -> int:
+        return len(self.s_edges) - 1
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self.mx, self.ms)
+
+    @property
+    def size(self) -> int:
+        return self.mx * self.ms
+
+    @property
+    def ds(self) -> np.ndarray:
+        """(ms,) element widths along s (mm)."""
+        return np.diff(self.s_edges)
+
+    @property
+    def area(self) -> np.ndarray:
+        """(ms,) element areas dx ds_j (mm²), the same for every ix."""
+        return self.dx * self.ds
+
+    @property
+    def x(self) -> np.ndarray:
+        return self.xl + (np.arange(self.mx) + 0.5) * self.dx
+
+    @property
+    def s(self) -> np.ndarray:
+        """(ms,) element-centre arc lengths."""
+        return 0.5 * (self.s_edges[:-1] + self.s_edges[1:])
+
+    def mesh(self) -> tuple[np.ndarray, np.ndarray]:
+        """Element centres (x, s) as two (mx, ms) arrays."""
+        return np.meshgrid(self.x, self.s, indexing="ij")

@@ -84,6 +84,10 @@ class WheelRailGeometry:
     flange_back: float = 1360.0          # mm
     wheel_radius: float = 460.0          # mm, nominal rolling radius
     kind: str = "wheel_rail"
+    flange_back_pos: float | None = None  # mm, flange back in wheel-profile y (None: from the profile)
+    smoothing: float = 1.0               # mm, profile smoothing-spline wavelength (0 = interpolate)
+    element_size: float | None = None    # mm, square grid elements covering each patch (CONTACT DX = DS)
+    patch_combine: float = 8.0           # mm, overlap regions closer than this form one patch
 
 
 Geometry = QuadraticGeometry | HertzGeometry | TableGeometry | WheelRailGeometry
@@ -111,6 +115,12 @@ class Kinematics:
     fx_rel: float | None = None
     fy_rel: float | None = None
     velocity: float = 1000.0  # mm/s, rolling speed (for frictional power)
+    # wheel-rail only: wheelset velocities; with `speed` set the creepages follow per contact patch
+    speed: float | None = None          # mm/s, forward velocity of the wheelset
+    pitch_velocity: float | None = None  # rad/s about the axle (None: pure rolling at wheel_radius)
+    yaw_rate: float = 0.0               # rad/s
+    roll_rate: float = 0.0              # rad/s
+    lateral_velocity: float = 0.0       # mm/s
 
 
 @dataclass(frozen=True)
@@ -297,6 +307,10 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
         gauge_height=sec.number("gauge_height", d.gauge_height, nonnegative=True),
         flange_back=sec.number("flange_back", d.flange_back, positive=True),
         wheel_radius=sec.number("wheel_radius", d.wheel_radius, positive=True),
+        flange_back_pos=sec.number("flange_back_pos"),
+        smoothing=sec.number("smoothing", d.smoothing, nonnegative=True),
+        element_size=sec.number("element_size", positive=True),
+        patch_combine=sec.number("patch_combine", d.patch_combine, nonnegative=True),
     )
 
 
@@ -313,7 +327,8 @@ def _load(data: Any, geometry: Geometry) -> Load:
 
 
 def _kinematics(data: Any) -> Kinematics:
-    known = {"xi", "eta", "phi", "rolling", "fx_rel", "fy_rel", "velocity"}
+    known = {"xi", "eta", "phi", "rolling", "fx_rel", "fy_rel", "velocity",
+             "speed", "pitch_velocity", "yaw_rate", "roll_rate", "lateral_velocity"}
     sec = _Section("kinematics", data, known)
     rolling = sec.choice("rolling", ("steady", "shift"), "steady")
     for creep, force in (("xi", "fx_rel"), ("eta", "fy_rel")):
@@ -325,7 +340,10 @@ def _kinematics(data: Any) -> Kinematics:
             raise sec.error(key, f"a force F/(mu FN) must lie in (-1, 1), got {v:g}")
     return Kinematics(xi=sec.number("xi", 0.0), eta=sec.number("eta", 0.0), phi=sec.number("phi", 0.0),
                       rolling=rolling, fx_rel=fx, fy_rel=fy,
-                      velocity=sec.number("velocity", 1000.0, positive=True))
+                      velocity=sec.number("velocity", 1000.0, positive=True),
+                      speed=sec.number("speed", positive=True), pitch_velocity=sec.number("pitch_velocity"),
+                      yaw_rate=sec.number("yaw_rate", 0.0), roll_rate=sec.number("roll_rate", 0.0),
+                      lateral_velocity=sec.number("lateral_velocity", 0.0))
 
 
 def _grid(data: Any) -> GridSpec:

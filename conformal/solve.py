@@ -45,6 +45,10 @@ def combine(results: list[Result], theory: str) -> Result:
 
 def solve_scene(scene: Scene) -> Result:
     t0 = time.perf_counter()
+    if scene.geometry.kind == "wheel_rail":  # patches in their own frames, track-frame totals
+        from conformal.geometry.wheelrail import solve_wheel_rail
+
+        return replace(solve_wheel_rail(scene), wall_s=time.perf_counter() - t0)
     problems = problems_from_scene(scene)
     results = [solve_problem(p) for p in problems]
     out = results[0] if len(results) == 1 else combine(results, scene.model.theory)

@@ -1,0 +1,352 @@
+"""Contact patches of a loaded wheel: interpenetration regions, reference points and grids.
+
+At a wheelset height where the undeformed wheel overlaps the rail, the overlap along the wheel's
+contact locus splits into connected regions (*lobes*).  Lobes closer than ``d_comb`` along the
+rail profile form one patch (CONTACT's D_COMB); each patch is then solved on its own grid.
+
+Contact reference point.  Per patch, the centroid of the interpenetration weighted by the
+squared interpenetration, sum(s pen²) / sum(pen²) over the 2-D overlap region.  Integrated
+across the rolling direction (the overlap of a strip is pen(s) - A x²) a strip carries the
+weight pen(s)^2.5 / sqrt(A(s)).  This definition reproduces CONTACT's reference points of the
+Manchester benchmark to about 0.01 mm, where the deepest point is up to 2.5 mm away on wide,
+flat (nearly conformal) patches (studies/manchester_a22.py).
+
+Grids.
+* planar: the tangent plane of the rail at the reference point, (xi, eta) along (t1 = x, t2);
+  the undeformed distance h is measured along the plane's normal between the *true* surfaces
+  (Newton intersections of the normal lines with rail and wheel), not a quadratic fit;
+* curved: x along the rail, s the arc length of the rail profile, the distance measured along
+  the local inner normal of the rail at each element centre.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from conformal.errors import ConvergenceError, InputError, NoContactError
+from conformal.geometry.search import ContactPoint, RailTop, newton_contact, wheel_locus
+from conformal.geometry.surfaces import RailSurface, WheelSurface
+from conformal.grid import CurvedGrid, PlanarGrid
+
+D_COMB = 8.0        # mm, lobes closer than this along the rail profile form one patch (CONTACT's D_SEP)
+REF_EXPONENT = 2.0  # interpenetration weight exponent of the reference point (pen²)
+
+
+@dataclass(frozen=True, eq=False)
+class Patch:
+    """One contact patch at a given wheelset height (side frame)."""
+
+    s_ref: float                 # rail arc length of the reference point
+    x_ref: float                 # x of the reference point
+    point: np.ndarray            # (3,) reference point on the rail surface
+    normal: np.ndarray           # (3,) inner rail normal at the reference point
+    t2: np.ndarray               # (3,) lateral tangent, n x t1
+    wheel_point: np.ndarray      # (3,) wheel surface point on the normal line through `point`
+    wheel_s: float               # its wheel-profile arc length
+    wheel_theta: float           # and rotation angle
+    deepest: ContactPoint        # Newton-refined deepest point (seed Eqs. 54-56)
+    penetration: float           # largest overlap along the locus (mm)
+    s_range: tuple[float, float]   # rail arc lengths covered by the overlap
+    x_range: tuple[float, float]   # rolling-direction extent of the overlap (absolute x)
+    eta_range: tuple[float, float]  # lateral extent in the tangent plane (relative to point)
+    n_lobes: int = 1
+
+    @property
+    def delta(self) -> float:
+        """Contact angle (rad) of the reference normal (CONTACT's DELTCP, side frame)."""
+        return float(math.atan2(-self.normal[1], self.normal[2]))
+
+
+# ----------------------------------------------------------------------------- lobes
+def locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop):
+    """Locus samples with their rail arc length s_r, normal overlap pen (> 0 inside the rail) and
+    the rolling-direction curvature A = (e_r . n) / (2 rho) of the gap."""
+    loc = wheel_locus(wheel, top)
+    ok = np.isfinite(loc.theta) & np.isfinite(loc.gap)
+    pts = loc.points
+    s_r = rail.project(pts[:, 1:], top.s_near(pts[:, 1:]))     # closest rail point, from the nearest sample
+    Y, Z, Y1, Z1, _, _ = rail.profile(s_r)
+    g = np.hypot(Y1, Z1)
+    ny, nz = -Z1 / g, Y1 / g
+    pen = (pts[:, 1] - Y) * ny + (pts[:, 2] - Z) * nz
+    er = wheel.e_r(np.nan_to_num(loc.theta))
+    rho = wheel.rolling_radius(loc.s)
+    A = np.clip((er[:, 1] * ny + er[:, 2] * nz) / (2 * rho), 1e-6, None)
+    # points that project onto an end of the rail are not over the rail
+    inside = ok & (s_r > 1e-6) & (s_r < rail.curve.length - 1e-6)
+    pen = np.where(inside, pen, np.nan)
+    return loc, s_r, pen, A
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Inclusive index ranges of the True runs of mask."""
+    m = np.r_[False, mask, False].astype(int)
+    d = np.diff(m)
+    starts, ends = np.nonzero(d == 1)[0], np.nonzero(d == -1)[0] - 1
+    return list(zip(starts.tolist(), ends.tolist()))
+
+
+def find_patches(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = None, *,
+                 d_comb: float = D_COMB) -> list[Patch]:
+    """The contact patches of the wheel at its current height, most penetrating first.
+
+    Raises NoContactError (with the smallest gap) when the wheel does not touch the rail."""
+    top = top or RailTop.of(rail)
+    loc, s_r, pen, A = locus_penetration(wheel, rail, top)
+    if not np.isfinite(pen).any():
+        raise NoContactError("wheel-rail contact: the wheel is not over the rail")
+    pmax = float(np.nanmax(pen))
+    if pmax <= 0.0:
+        i = int(np.nanargmax(pen))
+        gap = -pmax
+        try:   # the exact smallest gap (seed Eq. 56) from the closest sample
+            gap = -newton_contact(wheel, rail, (loc.s[i], loc.theta[i], loc.points[i, 0], s_r[i])).penetration
+        except ConvergenceError:
+            pass
+        raise NoContactError(f"wheel lifted off: the smallest gap between wheel and rail is "
+                             f"{gap:.4g} mm (at rail y = {float(rail.curve.y(s_r[i])):.2f} mm)")
+    runs = _runs(np.nan_to_num(pen, nan=-1.0) > 0)
+    valid = np.isfinite(pen)
+    for a, b in runs:
+        if a == 0 or b == pen.size - 1 or not (valid[a - 1] and valid[b + 1]):
+            y_w = float(wheel.curve.y(loc.s[a if a == 0 or not valid[a - 1] else b]))
+            raise InputError(f"the overlap of wheel and rail reaches the end of a profile (wheel y = "
+                             f"{y_w:.2f} mm): the profiles do not cover this position")
+    # combine runs that are close along the rail profile
+    groups: list[list[tuple[int, int]]] = []
+    for r in runs:
+        if groups:
+            prev = groups[-1][-1]
+            gap = min(abs(s_r[r[0]] - s_r[prev[1]]), abs(s_r[r[1]] - s_r[prev[0]]))
+            if gap < d_comb:
+                groups[-1].append(r)
+                continue
+        groups.append([r])
+    patches = []
+    for grp in groups:
+        idx = np.concatenate([np.arange(a, b + 1) for a, b in grp])
+        patches.append(_patch(wheel, rail, loc, s_r[idx], pen[idx], A[idx], idx, len(grp)))
+    patches.sort(key=lambda p: -p.penetration)
+    return patches
+
+
+def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobes) -> Patch:
+    x = loc.points[idx, 0]
+    k = int(np.argmax(pen))
+    i = int(idx[k])
+    # deepest point: Newton-Raphson from the deepest locus sample (seed Eqs. 54-55)
+    deepest = newton_contact(wheel, rail, (loc.s[i], loc.theta[i], x[k], s_r[k]))
+    w = pen ** (REF_EXPONENT + 0.5) / np.sqrt(A)
+    s_ref = float(np.sum(w * s_r) / np.sum(w))
+    x_ref = float(np.sum(w * x) / np.sum(w))
+    Y, Z = (float(v) for v in rail.profile(s_ref)[:2])
+    # the reference normal: weighted mean of the contact angles (equal to the normal at s_ref on
+    # narrow patches; on wide ones it follows the mean inclination, as CONTACT's does)
+    nr = rail.normal(s_r)
+    delta = float(np.sum(w * np.arctan2(-nr[:, 0], nr[:, 1])) / np.sum(w))
+    n = np.array([0.0, -math.sin(delta), math.cos(delta)])
+    t2 = np.cross(n, np.array([1.0, 0.0, 0.0]))
+    P = np.array([x_ref, Y, Z])
+    # the wheel point on the normal line through P (start from the deepest point)
+    q = wheel_on_lines(wheel, P[None, :], n, np.array([deepest.s_w]), np.array([deepest.theta]))
+    sw, th, t = (float(v[0]) for v in q)
+    half = np.sqrt(np.clip(pen, 0, None) / A)
+    pts = rail.point(s_r)
+    eta = (pts[:, 0] - Y) * t2[1] + (pts[:, 1] - Z) * t2[2]
+    return Patch(s_ref=s_ref, x_ref=x_ref, point=P, normal=n, t2=t2,
+                 wheel_point=P + t * n, wheel_s=sw, wheel_theta=th, deepest=deepest,
+                 penetration=float(pen.max()), s_range=(float(s_r.min()), float(s_r.max())),
+                 x_range=(float((x - half).min()), float((x + half).max())),
+                 eta_range=(float(eta.min()), float(eta.max())), n_lobes=n_lobes)
+
+
+# ----------------------------------------------------------------------------- intersections
+def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: np.ndarray, *,
+                   maxit: int = 30, tol: float = 1e-10):
+    """Intersections of the lines Q + t n with the wheel surface: returns (s_w, theta, t).
+
+    Q (N, 3), n (3,) or (N, 3); Newton on r_w(s_w, theta) - Q - t n = 0, vectorised."""
+    Q = np.asarray(Q, float)
+    N = Q.shape[0]
+    n = np.broadcast_to(np.asarray(n, float), (N, 3))
+    s = np.array(s0, float).reshape(N).copy()
+    th = np.array(th0, float).reshape(N).copy()
+    t = np.zeros(N)
+    f = wheel.frame
+    L = wheel.curve.length
+    for _ in range(maxit):
+        u, rho, u1, rho1, _, _ = wheel.meridian(s)
+        er, et = wheel.e_r(th), wheel.e_t(th)
+        r = f.O + u[:, None] * f.a + rho[:, None] * er
+        F = r - Q - t[:, None] * n
+        J = np.stack([u1[:, None] * f.a + rho1[:, None] * er, rho[:, None] * et, -n], axis=2)
+        d = np.linalg.solve(J, -F[..., None])[..., 0]
+        d[:, 0] = np.clip(d[:, 0], -2.0, 2.0)
+        d[:, 1] = np.clip(d[:, 1], -0.05, 0.05)
+        s = np.clip(s + d[:, 0], 0.0, L)
+        th += d[:, 1]
+        t += d[:, 2]
+        if np.max(np.abs(F)) < tol:
+            break
+    if not np.max(np.abs(F)) < 1e-7:
+        raise ConvergenceError(f"wheel surface: the normal lines do not meet the wheel (residual "
+                               f"{np.max(np.abs(F)):.2e} mm); the patch reaches beyond the wheel profile")
+    return s, th, t
+
+
+def rail_on_lines(rail: RailSurface, Q: np.ndarray, n: np.ndarray, s0: np.ndarray, *,
+                  maxit: int = 30, tol: float = 1e-10):
+    """Intersections of the (y, z) lines Q + t n with the rail profile: returns (s_r, t)."""
+    Q = np.asarray(Q, float)
+    N = Q.shape[0]
+    n = np.broadcast_to(np.asarray(n, float), (N, 2))
+    s = np.array(s0, float).reshape(N).copy()
+    t = np.zeros(N)
+    L = rail.curve.length
+    for _ in range(maxit):
+        Y, Z, Y1, Z1, _, _ = rail.profile(s)
+        F = np.stack([Y - Q[:, 0] - t * n[:, 0], Z - Q[:, 1] - t * n[:, 1]], axis=1)
+        det = Y1 * (-n[:, 1]) - (-n[:, 0]) * Z1
+        ds = (-F[:, 0] * (-n[:, 1]) + n[:, 0] * -F[:, 1]) / det
+        dt = (Y1 * -F[:, 1] - Z1 * -F[:, 0]) / det
+        s = np.clip(s + np.clip(ds, -2.0, 2.0), 0.0, L)
+        t += dt
+        if np.max(np.abs(F)) < tol:
+            break
+    if not np.max(np.abs(F)) < 1e-7:
+        raise ConvergenceError(f"rail surface: the normal lines do not meet the rail profile (residual "
+                               f"{np.max(np.abs(F)):.2e} mm); the patch reaches beyond the rail profile")
+    return s, t
+
+
+# ----------------------------------------------------------------------------- planar grid
+def planar_distance(wheel: WheelSurface, rail: RailSurface, patch: Patch, xi: np.ndarray,
+                    eta: np.ndarray) -> np.ndarray:
+    """Undeformed distance (mm, < 0 = overlap) between rail and wheel along the patch normal at
+    tangent-plane points (xi, eta) (arrays of one shape), from the true surfaces."""
+    xi, eta = np.broadcast_arrays(np.asarray(xi, float), np.asarray(eta, float))
+    P, n, t2 = patch.point, patch.normal, patch.t2
+    e1 = np.array([1.0, 0.0, 0.0])
+    # rail: depends on eta only
+    eta_u, inv = np.unique(eta.ravel(), return_inverse=True)
+    Qr = P[1:][None, :] + eta_u[:, None] * t2[1:][None, :]
+    s_r, t_r = rail_on_lines(rail, Qr, n[1:], patch.s_ref + eta_u)
+    # wheel: start from the linear prediction at the reference wheel point
+    Q = P[None, :] + xi.reshape(-1, 1) * e1 + eta.reshape(-1, 1) * t2
+    s_w, th_w = _wheel_start(wheel, patch, Q)
+    _, _, t_w = wheel_on_lines(wheel, Q, n, s_w, th_w)
+    return (t_r[inv] - t_w).reshape(xi.shape)
+
+
+def _wheel_start(wheel: WheelSurface, patch: Patch, Q: np.ndarray):
+    u, rho, u1, rho1, _, _ = (float(v) for v in wheel.meridian(patch.wheel_s))
+    f = wheel.frame
+    er, et = wheel.e_r(patch.wheel_theta), wheel.e_t(patch.wheel_theta)
+    J = np.column_stack([u1 * f.a + rho1 * er, rho * et, -patch.normal])
+    d = np.linalg.solve(J, (Q - patch.wheel_point).T)
+    return patch.wheel_s + d[0], patch.wheel_theta + d[1]
+
+
+def planar_grid_for_patch(wheel: WheelSurface, rail: RailSurface, patch: Patch, *,
+                          element_size: float | None = None, n: int = 40, scale: float = 1.1,
+                          explicit: tuple | None = None) -> tuple[PlanarGrid, np.ndarray, float]:
+    """Planar potential contact grid on the patch's tangent plane, the undeformed distance h on it
+    (min 0) and the approach (largest overlap on the grid).
+
+    The grid covers the overlap region (x_range, eta_range) times ``scale``: with square elements
+    of ``element_size`` mm (CONTACT's DX = DS), or n x n elements; ``explicit`` = (mx, my, dx, dy,
+    xl, yl) fixes it (xl, yl relative to the reference point, None = centred)."""
+    if explicit is not None:
+        mx, my, dx, dy, xl, yl = explicit
+        grid = PlanarGrid(mx, my, dx, dy, -0.5 * mx * dx if xl is None else xl,
+                          -0.5 * my * dy if yl is None else yl)
+    else:
+        x0, x1 = (v - patch.x_ref for v in patch.x_range)
+        e0, e1 = patch.eta_range
+        # at least a couple of elements' worth of margin around the overlap
+        cx, cy = 0.5 * (x0 + x1), 0.5 * (e0 + e1)
+        hx, hy = 0.5 * (x1 - x0) * scale, 0.5 * (e1 - e0) * scale
+        if element_size is not None:
+            hx, hy = hx + element_size, hy + element_size
+            mx = max(1, int(math.ceil(2 * hx / element_size)))
+            my = max(1, int(math.ceil(2 * hy / element_size)))
+            dx = dy = element_size
+        else:
+            hy = max(hy, 1e-3)
+            mx = my = n
+            dx, dy = 2 * hx / n, 2 * hy / n
+        grid = PlanarGrid(mx, my, dx, dy, cx - 0.5 * mx * dx, cy - 0.5 * my * dy)
+    X, Y = grid.mesh()
+    d = planar_distance(wheel, rail, patch, X, Y)
+    approach = float(-d.min())
+    return grid, d + approach, approach
+
+
+# ----------------------------------------------------------------------------- curved grid
+def curved_distance(wheel: WheelSurface, rail: RailSurface, patch: Patch, x: np.ndarray,
+                    s: np.ndarray) -> np.ndarray:
+    """Undeformed distance (mm, < 0 = overlap) along the local inner rail normal at rail surface
+    points (x, s) (x absolute, side frame; arrays of one shape)."""
+    x, s = np.broadcast_arrays(np.asarray(x, float), np.asarray(s, float))
+    Y, Z, Y1, Z1, _, _ = rail.profile(s.ravel())
+    g = np.hypot(Y1, Z1)
+    nrm = np.stack([np.zeros_like(g), -Z1 / g, Y1 / g], axis=1)
+    R = np.stack([x.ravel(), Y, Z], axis=1)
+    s_w, th_w = _wheel_start(wheel, patch, R)
+    _, _, t = wheel_on_lines(wheel, R, nrm, s_w, th_w)
+    return (-t).reshape(x.shape)
+
+
+def curved_grid_for_patch(wheel: WheelSurface, rail: RailSurface, patch: Patch, *,
+                          element_size: float | None = None, n: int = 40, scale: float = 1.1,
+                          side: str = "right", margin: float = 5.0
+                          ) -> tuple[CurvedGrid, np.ndarray, float]:
+    """Curved potential contact grid (x, s) for the patch, h along the local normals (min 0) and
+    the approach.  Uniform elements in x and in s (``element_size`` or n x n)."""
+    x0, x1 = (v - patch.x_ref for v in patch.x_range)
+    s0, s1 = patch.s_range
+    cx, cs = 0.5 * (x0 + x1), 0.5 * (s0 + s1)
+    hx, hs = 0.5 * (x1 - x0) * scale, max(0.5 * (s1 - s0) * scale, 1e-3)
+    if element_size is not None:
+        hx, hs = hx + element_size, hs + element_size
+        mx = max(1, int(math.ceil(2 * hx / element_size)))
+        ms = max(1, int(math.ceil(2 * hs / element_size)))
+        dx = ds = element_size
+    else:
+        mx = ms = n
+        dx, ds = 2 * hx / n, 2 * hs / n
+    xl = cx - 0.5 * mx * dx
+    s_lo = max(cs - 0.5 * ms * ds, 0.0)
+    s_hi = min(s_lo + ms * ds, rail.curve.length)
+    s_edges = np.linspace(s_lo, s_hi, ms + 1)
+    sc = 0.5 * (s_edges[:-1] + s_edges[1:])
+    xc = xl + (np.arange(mx) + 0.5) * dx
+    X, S = np.meshgrid(xc + patch.x_ref, sc, indexing="ij")
+    d = curved_distance(wheel, rail, patch, X, S)
+    approach = float(-d.min())
+    own = rail.curve.point(sc)
+    nrm_own = rail.curve.normal(sc)
+    nrm_side = nrm_own @ rail.rotation.T
+    delta = np.arctan2(-nrm_side[:, 0], nrm_side[:, 1])
+    # local curves for meshing the bodies
+    sr = np.linspace(max(s_lo - margin, 0.0), min(s_hi + margin, rail.curve.length), 400)
+    rail_curve = rail.curve.point(sr)
+    Rm = rail.rotation
+    f = wheel.frame
+
+    def to_own3(v, is_point=True):
+        v = np.asarray(v, float)
+        yz = v[1:] - (np.asarray(rail.origin) if is_point else 0.0)
+        return np.r_[v[0] - (patch.x_ref if is_point else 0.0), yz @ Rm]
+
+    centre = f.O + wheel.offset * f.a
+    sw = np.linspace(max(patch.wheel_s - (s_hi - s_lo) - margin, 0.0),
+                     min(patch.wheel_s + (s_hi - s_lo) + margin, wheel.curve.length), 400)
+    grid = CurvedGrid(mx=mx, dx=dx, xl=xl, s_edges=s_edges, y=own[:, 0], z=own[:, 1], normal=nrm_own,
+                      delta=delta, s_ref=patch.s_ref, cant=rail.cant, rail_origin=tuple(rail.origin),
+                      rail_curve=rail_curve, rail_curve_s=sr, wheel_profile=wheel.curve.point(sw),
+                      wheel_centre=to_own3(centre), wheel_axle=to_own3(f.a, False),
+                      wheel_down=to_own3(f.e_d, False), wheel_radius=wheel.radius, side=side)
+    return grid, d + approach, approach

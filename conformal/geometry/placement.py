@@ -1,0 +1,132 @@
+"""Track and wheelset placement: where the rail and the wheel sit in the side frame.
+
+Track (``placement = "wheelset"``, CONTACT module 1): the rail profile is rotated by the cant (top
+towards the track centre), lowered until its highest point touches the track plane z = 0, and
+moved sideways until its gauge face, ``gauge_height`` below the track plane, lies at gauge/2
+from the track centre.  The wheel-profile origin lies ``flange_back/2 - flange_back_pos`` from the
+wheelset centre along the axle (``flange_back_pos`` = the flange back in wheel-profile
+coordinates, -70 mm for S1002), and ``wheel_radius`` (the radius at the wheel-profile origin)
+below the axle: a wheelset height z = 0 puts the axle wheel_radius above the track plane.
+
+Single wheel (``placement = "single"``): both profiles keep their own origins; the rail is only
+rotated by the cant about its origin; the wheel-profile origin lies ``lateral_shift`` to the
+side of the rail-profile origin and ``wheel_radius`` below the wheel centre.
+
+A left pair is solved as the mirror image (y -> -y) of a right pair: lateral shift, roll and yaw
+change sign.
+
+>>> from conformal.geometry.profiles import load_profile
+>>> from conformal.geometry.spline import fit_curve
+>>> rail = place_rail(fit_curve(load_profile("UIC60_MBENCH_1IN40", "rail").points), cant=0.0,
+...                   placement="wheelset", gauge=1435.0, gauge_height=14.0)
+>>> round(rail.origin[0], 2)   # CONTACT's Manchester set-up: 760.53 mm
+760.53
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from conformal.errors import InputError
+from conformal.geometry.spline import ProfileCurve
+from conformal.geometry.surfaces import RailSurface, WheelFrame, WheelSurface, cant_matrix
+
+
+def gauge_point(rail: RailSurface, depth: float) -> tuple[float, float]:
+    """(y, s) of the gauge point: where the placed rail profile, walking from its highest point
+    towards the gauge side (smaller y), first reaches ``depth`` below the track plane."""
+    s, p = rail.sample(0.02)
+    i_top = int(np.argmin(p[:, 1]))
+    z = p[: i_top + 1, 1][::-1]
+    below = np.nonzero(z >= depth)[0]
+    if below.size == 0:
+        raise InputError(f"[geometry] gauge_height: the rail profile {rail.curve.name} does not reach "
+                         f"{depth:g} mm below its top on the gauge side (it goes to {z.max():.2f} mm)")
+    k = int(below[0])
+    i1, i0 = i_top - k, i_top - k + 1          # indices in the original order, i1 < i0
+    z0, z1 = p[i0, 1], p[i1, 1]
+    w = (depth - z0) / (z1 - z0) if z1 != z0 else 0.0
+    return float(p[i0, 0] + w * (p[i1, 0] - p[i0, 0])), float(s[i0] + w * (s[i1] - s[i0]))
+
+
+def place_rail(curve: ProfileCurve, *, cant: float, placement: str, gauge: float,
+               gauge_height: float) -> RailSurface:
+    """The rail of a right-side pair in the side frame (see module docstring)."""
+    if placement == "single":
+        return RailSurface(curve, cant, (0.0, 0.0))
+    rotated = RailSurface(curve, cant, (0.0, 0.0))
+    _, p = rotated.sample(0.01)
+    z_top = float(p[:, 1].min())
+    lowered = RailSurface(curve, cant, (0.0, -z_top))
+    y_gauge, _ = gauge_point(lowered, gauge_height)
+    return RailSurface(curve, cant, (0.5 * gauge - y_gauge, -z_top))
+
+
+_place_rail_cached = lru_cache(maxsize=64)(place_rail)   # curves are compared by identity
+
+
+@dataclass(frozen=True)
+class SidePose:
+    """Wheelset lateral shift, roll and yaw of one pair in its side frame (mirrored for left)."""
+
+    y: float
+    roll: float
+    yaw: float
+
+    @classmethod
+    def from_track(cls, side: str, y: float, roll: float, yaw: float) -> "SidePose":
+        m = 1.0 if side == "right" else -1.0
+        return cls(m * y, m * roll, m * yaw)
+
+
+@dataclass(frozen=True, eq=False)
+class WheelRailPair:
+    """One wheel on one rail in the side frame; the wheelset height z is the only free coordinate."""
+
+    wheel_curve: ProfileCurve
+    rail: RailSurface
+    radius: float          # radius at the wheel-profile origin (mm)
+    offset: float          # axial position of the wheel-profile origin from the wheelset centre
+    pose: SidePose
+    side: str = "right"
+
+    def frame(self, z: float) -> WheelFrame:
+        return WheelFrame.from_pose(self.pose.y, z, self.pose.roll, self.pose.yaw, self.radius)
+
+    def wheel(self, z: float) -> WheelSurface:
+        return WheelSurface(self.wheel_curve, self.radius, self.offset, self.frame(z))
+
+    @property
+    def mirror(self) -> float:
+        """+1 for a right pair, -1 for a left pair (side frame y = mirror * track y)."""
+        return 1.0 if self.side == "right" else -1.0
+
+
+def wheel_offset(wheel_curve: ProfileCurve, *, placement: str, flange_back: float,
+                 flange_back_pos: float | None, lateral_shift: float) -> tuple[float, float]:
+    """(axial offset of the wheel-profile origin from the wheelset centre, wheelset lateral
+    position in the side frame before mirroring) for the placement."""
+    if placement == "single":
+        return 0.0, lateral_shift
+    fb = float(wheel_curve.points[:, 0].min()) if flange_back_pos is None else flange_back_pos
+    return 0.5 * flange_back - fb, lateral_shift
+
+
+def make_pair(wheel_curve: ProfileCurve, rail_curve: ProfileCurve, *, side: str, placement: str,
+              lateral_shift: float, roll: float, yaw: float, rail_cant: float, gauge: float,
+              gauge_height: float, flange_back: float, flange_back_pos: float | None,
+              wheel_radius: float) -> WheelRailPair:
+    """Assemble the pair of ``side`` (track-frame shift, roll, yaw are mirrored for a left pair)."""
+    if side not in ("left", "right"):
+        raise InputError(f"[geometry] side: must be 'left' or 'right', got {side!r}")
+    rail = _place_rail_cached(rail_curve, cant=rail_cant, placement=placement, gauge=gauge,
+                              gauge_height=gauge_height)
+    offset, y = wheel_offset(wheel_curve, placement=placement, flange_back=flange_back,
+                             flange_back_pos=flange_back_pos, lateral_shift=lateral_shift)
+    # single: the roll and yaw turn the wheel about its own centre, offset = 0
+    return WheelRailPair(wheel_curve, rail, wheel_radius, offset, SidePose.from_track(side, y, roll, yaw), side)
+
+
+__all__ = ["gauge_point", "place_rail", "SidePose", "WheelRailPair", "wheel_offset", "make_pair", "cant_matrix"]

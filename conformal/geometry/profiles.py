@@ -1,0 +1,306 @@
+"""Wheel and rail cross-section profiles: reading, checking, built-in names.
+
+A profile is a list of points (y, z) in mm in CONTACT's *right-side* form (see
+``meshes/profiles/README.md``):
+
+* rail: y lateral, positive towards the field side, z positive **downwards**; the rail body lies
+  below the curve (larger z);
+* wheel: y lateral from the profile origin (the tape circle for S1002 and EN 13715 wheels),
+  positive towards the field side, flange at y < 0; z = increase of the radius, positive towards
+  the flange tip (downwards when the wheel stands on the rail); the wheel body lies above.
+
+Points are ordered from the flange/gauge side to the field side (increasing y overall); files in
+the opposite order are reversed.  Files are CSV/text (``y,z`` rows, '#' comments) or CONTACT's
+SIMPACK-like ``.prw``/``.prr`` files (``point.begin ... point.end`` block, '!' comments, header
+keys ``mirror.y``, ``inversion``, ``units.len.f``).
+
+Every defect raises :class:`~conformal.errors.InputError` naming the file: NaN or infinite values,
+too few points, points out of order (the curve turns back), self-intersection, and a wheel or rail
+given upside down (z positive upwards).
+
+>>> p = load_profile("S1002", kind="wheel")
+>>> p.name, p.points.shape[1], float(p.points[0, 0])
+('S1002', 2, -70.0)
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from conformal.errors import InputError
+
+MIN_POINTS = 5
+
+
+@dataclass(frozen=True)
+class BuiltinProfile:
+    file: str
+    kind: str                 # "wheel" | "rail"
+    mirror_y: bool = False    # the file stores y with the opposite sign
+    y_offset: float = 0.0     # added to y after mirroring (re-reference the origin)
+    note: str = ""
+    flange_back: float | None = None   # wheel: y of the flange back when the points do not reach it
+
+
+# Built-in names (case-insensitive).  Rail heads named without a cant are uncanted: the scene's
+# rail_cant rotates them.  Files with the cant included say so; use rail_cant = 0 with them.
+BUILTIN: dict[str, BuiltinProfile] = {
+    "S1002": BuiltinProfile("s1002_analytic.csv", "wheel", note="S1002/h28/e32.5/6.7%, analytic"),
+    "S1002_MBENCH": BuiltinProfile("s1002_contact_mbench_v3.csv", "wheel", mirror_y=True,
+                                   note="S1002, CONTACT Manchester benchmark v3 (raw points)"),
+    "EN13715_1IN40": BuiltinProfile("en13715_1in40_h28_e32p5_analytic.csv", "wheel"),
+    "EN15302_WHEEL_A": BuiltinProfile("en15302_wheelA_analytic.csv", "wheel"),
+    "EN15302_WHEEL_B": BuiltinProfile("en15302_wheelB_analytic.csv", "wheel"),
+    "EN15302_WHEEL_H": BuiltinProfile("en15302_wheelH_analytic.csv", "wheel"),
+    "EN15302_WHEEL_I": BuiltinProfile("en15302_wheelI_analytic.csv", "wheel"),
+    "APTA140": BuiltinProfile("apta140_1in40_analytic.csv", "wheel",
+                              note="origin at the gauge point, not a tape circle"),
+    "WORN_WHEEL_HM": BuiltinProfile("worn_wheel_contact_high_mileage.csv", "wheel", y_offset=-70.0,
+                                    note="worn heavy-haul wheel; origin moved to the tape circle (y = 70)",
+                                    flange_back=-70.0),
+    "UIC60": BuiltinProfile("uic60_head_r300w21_analytic.csv", "rail",
+                            note="UIC 60 head (Manchester/EN 15302 variant), uncanted"),
+    "60E1": BuiltinProfile("uic60_60e1_en13674_head_analytic.csv", "rail",
+                           note="60E1 head, EN 13674-1, uncanted"),
+    "UIC60_MBENCH_1IN40": BuiltinProfile("uic60_contact_mbench_v3_canted1in40.csv", "rail",
+                                         note="CONTACT Manchester rail, 1:40 cant INCLUDED (use rail_cant = 0)"),
+    "EN15302_RAIL_A_1IN20": BuiltinProfile("en15302_railA_1in20_analytic.csv", "rail",
+                                           note="EN 15302 rail A, 1:20 cant INCLUDED (use rail_cant = 0)"),
+    "WORN_RAIL_SITE_B": BuiltinProfile("worn_rail_contact_site_b_high_rail.csv", "rail",
+                                       note="worn heavy-haul high rail, as measured (use rail_cant = 0)"),
+}
+
+
+@dataclass(frozen=True, eq=False)
+class Profile:
+    """Checked profile points (n, 2) in right-side form, ordered by increasing y overall."""
+
+    name: str
+    kind: str
+    points: np.ndarray
+    source: str = ""
+
+
+def builtin_dir() -> Path:
+    return Path(str(resources.files("conformal") / "data" / "profiles"))
+
+
+# ----------------------------------------------------------------------------- reading
+def _read_csv(path: Path) -> np.ndarray:
+    rows = []
+    for lineno, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
+        text = line.split("#")[0].strip()
+        if not text:
+            continue
+        parts = [p for p in re.split(r"[,;\s]+", text) if p]
+        if len(parts) < 2:
+            raise InputError(f"profile {path.name}: line {lineno}: need two numbers 'y, z', got {text!r}")
+        try:
+            y, z = float(parts[0]), float(parts[1])
+        except ValueError:
+            # a header line such as "y_mm,z_mm" before any number is tolerated
+            if not rows:
+                continue
+            raise InputError(f"profile {path.name}: line {lineno}: not a number: {text!r}") from None
+        rows.append((y, z, lineno))
+    return _as_array(rows, path)
+
+
+def _as_array(rows, path: Path) -> np.ndarray:
+    for y, z, lineno in rows:
+        if not (math.isfinite(y) and math.isfinite(z)):
+            raise InputError(f"profile {path.name}: line {lineno}: NaN or infinite value ({y}, {z})")
+    return np.array([(y, z) for y, z, _ in rows], dtype=float).reshape(-1, 2)
+
+
+def _read_simpack(path: Path) -> np.ndarray:
+    """CONTACT/SIMPACK ``.prw`` (wheel) or ``.prr`` (rail) file."""
+    rows, in_points, saw_points = [], False, False
+    mirror_y = mirror_z = False
+    scale = 1.0
+    for lineno, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
+        text = line.split("!")[0].strip()
+        if not text:
+            continue
+        low = text.lower()
+        if low == "point.begin":
+            in_points, saw_points = True, True
+            continue
+        if low == "point.end":
+            in_points = False
+            continue
+        if in_points:
+            parts = text.replace(",", " ").split()
+            try:
+                y, z = float(parts[0]), float(parts[1])
+            except (ValueError, IndexError):
+                raise InputError(f"profile {path.name}: line {lineno}: need two numbers 'y z' "
+                                 f"in the point block, got {text!r}") from None
+            rows.append((y, z, lineno))
+            continue
+        m = re.match(r"([\w.]+)\s*=\s*([-+0-9.eE]+)", text)
+        if m:
+            key, value = m.group(1).lower(), float(m.group(2))
+            if key == "mirror.y":
+                mirror_y = value == 1
+            elif key == "mirror.z":
+                mirror_z = value == 1
+            elif key == "units.len.f":
+                if value <= 0:
+                    raise InputError(f"profile {path.name}: line {lineno}: units.len.f must be > 0")
+                scale = 1000.0 / value   # units.len.f = 1000: the file is in mm
+    if not saw_points:
+        raise InputError(f"profile {path.name}: no 'point.begin ... point.end' block")
+    if in_points:
+        raise InputError(f"profile {path.name}: 'point.begin' without 'point.end'")
+    p = _as_array(rows, path) * scale
+    if mirror_y:
+        p[:, 0] *= -1.0
+    if mirror_z:
+        p[:, 1] *= -1.0
+    return p
+
+
+def read_points(path: str | Path) -> np.ndarray:
+    """Raw (y, z) points of a profile file (CSV/text or .prw/.prr), no checks beyond parsing."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"profile file not found: {path}")
+    if path.suffix.lower() in (".prw", ".prr", ".prf"):
+        return _read_simpack(path)
+    return _read_csv(path)
+
+
+# ----------------------------------------------------------------------------- checks
+def _segments_cross(p: np.ndarray) -> tuple[int, int] | None:
+    """First pair (i, j) of non-adjacent polyline segments that properly cross, or None."""
+    a, b = p[:-1], p[1:]
+    n = len(a)
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+
+    def orient(P, Q, R):
+        return (Q[..., 0] - P[..., 0]) * (R[..., 1] - P[..., 1]) - (Q[..., 1] - P[..., 1]) * (R[..., 0] - P[..., 0])
+
+    chunk = max(1, 400_000 // max(n, 1))
+    for i0 in range(0, n, chunk):
+        i = np.arange(i0, min(n, i0 + chunk))[:, None]
+        j = np.arange(n)[None, :]
+        # bounding boxes overlap and the segments are not neighbours
+        cand = ((lo[i, 0] <= hi[j, 0]) & (lo[j, 0] <= hi[i, 0]) & (lo[i, 1] <= hi[j, 1])
+                & (lo[j, 1] <= hi[i, 1]) & (j > i + 1))
+        ii, jj = np.nonzero(cand)
+        if ii.size == 0:
+            continue
+        ii = ii + i0
+        d1 = orient(a[ii], b[ii], a[jj])
+        d2 = orient(a[ii], b[ii], b[jj])
+        d3 = orient(a[jj], b[jj], a[ii])
+        d4 = orient(a[jj], b[jj], b[ii])
+        hit = (d1 * d2 < 0) & (d3 * d4 < 0)
+        if hit.any():
+            k = int(np.argmax(hit))
+            return int(ii[k]), int(jj[k])
+    return None
+
+
+def check_points(points: np.ndarray, kind: str, name: str) -> np.ndarray:
+    """Validate and normalise profile points; returns the (n, 2) array ordered by increasing y.
+
+    Raises InputError for too few points, NaN, points out of order, self-intersection, or a
+    profile given upside down.
+    """
+    p = np.asarray(points, dtype=float)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise InputError(f"profile {name}: need (y, z) pairs, got an array of shape {p.shape}")
+    if not np.all(np.isfinite(p)):
+        i = int(np.argmax(~np.isfinite(p).all(axis=1)))
+        raise InputError(f"profile {name}: point {i + 1} is NaN or infinite: {p[i].tolist()}")
+    # drop exact repeats (zero-length segments) before counting
+    keep = np.ones(len(p), bool)
+    if len(p) > 1:
+        keep[1:] = np.hypot(*np.diff(p, axis=0).T) > 1e-9
+    p = p[keep]
+    if len(p) < MIN_POINTS:
+        raise InputError(f"profile {name}: too few points ({len(p)}); need at least {MIN_POINTS}")
+    if p[0, 0] > p[-1, 0]:
+        p = p[::-1].copy()
+    seg = np.diff(p, axis=0)
+    length = np.hypot(*seg.T)
+    if length.sum() < 1.0:
+        raise InputError(f"profile {name}: the points span only {length.sum():.3g} mm")
+    # a curve that doubles back on itself (turn of more than 150 degrees between segments)
+    cosang = np.einsum("ij,ij->i", seg[:-1], seg[1:]) / (length[:-1] * length[1:])
+    bad = np.nonzero(cosang < math.cos(math.radians(150.0)))[0]
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise InputError(f"profile {name}: points out of order: the curve turns back at point {i + 1} "
+                         f"(y = {p[i, 0]:.3f}, z = {p[i, 1]:.3f} mm)")
+    cross = _segments_cross(p)
+    if cross is not None:
+        i, j = cross
+        raise InputError(f"profile {name}: the curve intersects itself (segment at y = {p[i, 0]:.3f} "
+                         f"crosses segment at y = {p[j, 0]:.3f} mm)")
+    _check_orientation(p, kind, name)
+    return p
+
+
+def _check_orientation(p: np.ndarray, kind: str, name: str) -> None:
+    """Detect a profile given with z positive upwards (upside down)."""
+    z = p[:, 1]
+    top = float(z.min())
+    if kind == "rail":
+        # the running surface (smallest z) lies above both ends of a rail head
+        if z[0] <= top + 1e-9 or z[-1] <= top + 1e-9:
+            if z.max() - z[0] > 1.0 and z.max() - z[-1] > 1.0:
+                raise InputError(f"profile {name}: the rail looks upside down (its ends lie above the "
+                                 "running surface); z must be positive downwards")
+    elif kind == "wheel":
+        # a flanged wheel: the flange tip (largest z, towards the rail) lies on the flange side
+        zmax, zmin = float(z.max()), float(z.min())
+        y_at_max, y_at_min = p[np.argmax(z), 0], p[np.argmin(z), 0]
+        mid = 0.5 * (p[0, 0] + p[-1, 0])
+        if zmax - zmin > 10.0 and y_at_min < mid and y_at_max > mid:
+            raise InputError(f"profile {name}: the wheel looks upside down (the flange points away from "
+                             "the rail); z must be positive towards the flange tip")
+    else:
+        raise InputError(f"profile {name}: kind must be 'wheel' or 'rail', got {kind!r}")
+
+
+# ----------------------------------------------------------------------------- public
+def resolve_profile(spec: str, base_dir: str | Path = ".") -> tuple[Path, BuiltinProfile | None]:
+    """A built-in name or a file path (relative to base_dir) -> (path, builtin entry or None)."""
+    entry = BUILTIN.get(str(spec).upper())
+    if entry is not None:
+        return builtin_dir() / entry.file, entry
+    path = Path(spec)
+    if not path.is_absolute():
+        path = Path(base_dir) / path
+    if not path.is_file():
+        names = ", ".join(sorted(BUILTIN))
+        raise InputError(f"profile {spec!r}: neither a built-in name ({names}) nor an existing file ({path})")
+    return path, None
+
+
+def builtin_flange_back(spec: str) -> float | None:
+    """Flange-back position (wheel-profile y) of a built-in wheel whose points stop short of it."""
+    entry = BUILTIN.get(str(spec).upper())
+    return None if entry is None else entry.flange_back
+
+
+def load_profile(spec: str, kind: str, base_dir: str | Path = ".") -> Profile:
+    """Read and check a profile given by built-in name or file path."""
+    path, entry = resolve_profile(spec, base_dir)
+    if entry is not None and entry.kind != kind:
+        raise InputError(f"profile {spec!r} is a {entry.kind} profile, used as a {kind} profile")
+    points = read_points(path)
+    if entry is not None:
+        if entry.mirror_y:
+            points = points * np.array([-1.0, 1.0])
+        points = points + np.array([entry.y_offset, 0.0])
+    name = str(spec).upper() if entry is not None else path.name
+    return Profile(name=name, kind=kind, points=check_points(points, kind, name), source=str(path))

@@ -1,0 +1,358 @@
+"""Contact search: all local minima of the gap, refined by Newton-Raphson (seed Eqs. 54-56).
+
+1. *Global search.*  Because the rail is an extrusion along x, a contact point on the wheel must
+   lie on the wheel's *contact locus*: on each wheel circle, the point whose surface normal is
+   perpendicular to x (:meth:`WheelSurface.locus_theta`).  Sampling the locus every 0.05 mm of
+   wheel profile gives a curve that is compared with the rail profile in the (y, z) plane: the
+   vertical gap of every locus point to the top of the rail.  Every local minimum of that gap is a
+   candidate contact (tread and flange patches, two-point contact); minima shallower than 0.1 um
+   are merged with their neighbour.
+2. *Local refinement.*  Each candidate is refined by Newton-Raphson on the four conditions of seed
+   Eq. 54 in the surface parameters q = (s_w, theta, x, s_r), with the analytic Jacobian (seed
+   Eq. 55, built from the splines' first and second derivatives):
+
+       F1 = t1_r . d = 0,  F2 = t2_r . d = 0,  F3 = t1_w . n_r = 0,  F4 = e_t . n_r = 0,
+
+   d = r_w - r_r.  (F4 uses the unit tangent e_t = t2_w / rho instead of t2_w: the same equation,
+   better scaled.  The seed prints Eq. 55 with a column of its Jacobian misplaced; this Jacobian
+   is derived afresh.)
+3. *Penetration* (seed Eq. 56) delta = d . n_r with n_r the inner normal of the rail: delta > 0
+   is an overlap of the undeformed surfaces (the seed uses the outer normal, so its sign is the
+   opposite).
+
+Principal relative curvatures for Hertz follow from the second fundamental forms of both
+surfaces expressed in the contact frame (t1 = x, t2 = lateral tangent, n into the rail).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from conformal.errors import ConvergenceError, InputError, NoContactError
+from conformal.geometry.surfaces import RailSurface, WheelSurface
+
+LOCUS_STEP = 0.05      # mm of wheel profile between locus samples
+MERGE_DEPTH = 1e-4     # mm: minima separated by a smaller bump are one minimum
+
+
+# ----------------------------------------------------------------------------- rail top
+@dataclass(frozen=True, eq=False)
+class RailTop:
+    """The upper envelope z_top(y) of a placed rail profile (what a falling wheel meets first)."""
+
+    y0: float
+    hy: float
+    z: np.ndarray
+    s: np.ndarray          # arc length of the envelope point
+    tree: cKDTree
+    s_samples: np.ndarray
+    y_min: float
+    y_max: float
+
+    @classmethod
+    def of(cls, rail: RailSurface, step: float = 0.02) -> "RailTop":
+        return _rail_top(rail, step)
+
+    @classmethod
+    def build(cls, rail: RailSurface, step: float = 0.02) -> "RailTop":
+        s, p = rail.sample(step)
+        y, z = p[:, 0], p[:, 1]
+        hy = 0.5 * step
+        y0 = float(y.min())
+        n = int(math.ceil((y.max() - y0) / hy)) + 1
+        ya, yb, za, zb = y[:-1], y[1:], z[:-1], z[1:]
+        sa, sb = s[:-1], s[1:]
+        lo, hi = np.minimum(ya, yb), np.maximum(ya, yb)
+        i_lo = np.ceil((lo - y0) / hy - 1e-9).astype(int)
+        i_hi = np.floor((hi - y0) / hy + 1e-9).astype(int)
+        count = np.maximum(i_hi - i_lo + 1, 0)
+        seg = np.repeat(np.arange(ya.size), count)
+        idx = np.repeat(i_lo, count) + (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count))
+        yg = y0 + idx * hy
+        dy = yb[seg] - ya[seg]
+        w = np.where(np.abs(dy) > 1e-12, (yg - ya[seg]) / np.where(np.abs(dy) > 1e-12, dy, 1.0), 0.0)
+        w = np.clip(w, 0.0, 1.0)
+        zg = za[seg] + w * (zb[seg] - za[seg])
+        sg = sa[seg] + w * (sb[seg] - sa[seg])
+        order = np.lexsort((zg, idx))          # per grid index, smallest z first
+        idx, zg, sg = idx[order], zg[order], sg[order]
+        first = np.r_[True, idx[1:] != idx[:-1]]
+        ztop = np.full(n, np.nan)
+        stop = np.full(n, np.nan)
+        ztop[idx[first]] = zg[first]
+        stop[idx[first]] = sg[first]
+        return cls(y0, hy, ztop, stop, cKDTree(p), s, float(y.min()), float(y.max()))
+
+    def z_at(self, y: np.ndarray) -> np.ndarray:
+        """Envelope height at y (NaN outside the rail)."""
+        t = (np.asarray(y) - self.y0) / self.hy
+        i = np.clip(np.floor(t).astype(int), 0, self.z.size - 2)
+        w = t - i
+        z = (1 - w) * self.z[i] + w * self.z[i + 1]
+        return np.where((y >= self.y_min) & (y <= self.y_max), z, np.nan)
+
+    def s_near(self, yz: np.ndarray) -> np.ndarray:
+        """Arc length of the rail sample nearest to points yz (..., 2)."""
+        _, k = self.tree.query(yz)
+        return self.s_samples[k]
+
+
+@lru_cache(maxsize=64)
+def _rail_top(rail: RailSurface, step: float) -> RailTop:   # rails are compared by identity
+    return RailTop.build(rail, step)
+
+
+# ----------------------------------------------------------------------------- locus and gap
+@dataclass(frozen=True, eq=False)
+class Locus:
+    """The wheel's contact locus sampled along the wheel profile."""
+
+    s: np.ndarray          # wheel-profile arc length
+    theta: np.ndarray      # rotation angle (NaN: no locus point)
+    points: np.ndarray     # (n, 3) side frame
+    gap: np.ndarray        # vertical gap to the rail top (NaN outside the rail / no locus)
+
+
+def wheel_locus(wheel: WheelSurface, top: RailTop, step: float = LOCUS_STEP) -> Locus:
+    s, _ = wheel.curve.sample(step)
+    th = wheel.locus_theta(s)
+    pts = wheel.point(s, np.nan_to_num(th))
+    gap = top.z_at(pts[:, 1]) - pts[:, 2]
+    gap = np.where(np.isnan(th), np.nan, gap)
+    return Locus(s, th, pts, gap)
+
+
+def local_minima(g: np.ndarray, merge: float = MERGE_DEPTH) -> list[int]:
+    """Indices of the local minima of g (NaN = no data), merging minima separated by a bump
+    smaller than ``merge``; sorted by increasing g."""
+    valid = np.isfinite(g)
+    if not valid.any():
+        return []
+    gg = np.where(valid, g, np.inf)
+    left = np.r_[np.inf, gg[:-1]]
+    right = np.r_[gg[1:], np.inf]
+    cand = np.nonzero(valid & (gg <= left) & (gg < right))[0]
+    # plateaus that end with an equal value on the right
+    cand = list(cand)
+    if not cand:
+        return []
+    # merge neighbours whose separating maximum is less than `merge` above the higher minimum
+    merged = [cand[0]]
+    for i in cand[1:]:
+        j = merged[-1]
+        between = gg[j:i + 1]
+        bump = np.max(between[np.isfinite(between)]) if np.isfinite(between).any() else np.inf
+        if not np.all(np.isfinite(between)):
+            merged.append(i)          # a stretch without data separates the minima
+        elif bump - max(gg[i], gg[j]) < merge:
+            if gg[i] < gg[j]:
+                merged[-1] = i
+        else:
+            merged.append(i)
+    return sorted(merged, key=lambda k: gg[k])
+
+
+# ----------------------------------------------------------------------------- Newton (Eqs. 54-55)
+@dataclass(frozen=True, eq=False)
+class ContactPoint:
+    """A refined contact point of one wheel on one rail (side frame)."""
+
+    s_w: float
+    theta: float
+    x: float
+    s_r: float
+    rail_point: np.ndarray       # (3,) on the rail surface
+    wheel_point: np.ndarray      # (3,) on the wheel surface
+    normal: np.ndarray           # (3,) unit inner normal of the rail
+    t2: np.ndarray               # (3,) lateral unit tangent, t2 = n x t1
+    penetration: float           # mm, d . n_r > 0 = overlap (seed Eq. 56, sign flipped)
+    curvature: np.ndarray        # (2, 2) relative curvature K = K_rail - K_wheel in (t1, t2)
+    kappa_rail: float            # lateral curvature of the rail profile (1/mm)
+    kappa_wheel: float           # lateral curvature of the wheel profile (1/mm)
+    rolling_radius: float        # distance of the wheel point from the axle (mm)
+    y_wheel: float               # wheel-profile coordinates of the wheel point
+    z_wheel: float
+    iterations: int
+    residual: float
+    at_end: bool = False         # the solution sits on an end of a profile
+
+    @property
+    def delta(self) -> float:
+        """Contact angle (rad): rotation about x from the z axis to the inner normal (CONTACT's DELTCP)."""
+        return float(math.atan2(-self.normal[1], self.normal[2]))
+
+    @property
+    def gap(self) -> float:
+        return -self.penetration
+
+    def principal(self) -> tuple[float, float, float]:
+        """A, B (1/mm; h = A x'^2 + B y'^2 in principal axes) and the angle (rad) of the x' axis
+        from the rolling direction."""
+        K = 0.5 * (self.curvature + self.curvature.T)
+        w, v = np.linalg.eigh(0.5 * K)
+        # the eigenvector closest to the rolling direction is x'
+        k = int(np.argmax(np.abs(v[0, :])))
+        A, B = float(w[k]), float(w[1 - k])
+        vx = v[:, k] * np.sign(v[0, k])
+        return A, B, float(math.atan2(vx[1], vx[0]))
+
+
+def _residual_and_jacobian(wheel: WheelSurface, rail: RailSurface, q: np.ndarray):
+    s_w, th, x, s_r = q
+    u, rho, u1, rho1, u2, rho2 = (float(v) for v in wheel.meridian(s_w))
+    f = wheel.frame
+    er, et = wheel.e_r(th), wheel.e_t(th)
+    rw = f.O + u * f.a + rho * er
+    t1w = u1 * f.a + rho1 * er
+    t2w = rho * et
+    Y, Z, Y1, Z1, Y2, Z2 = (float(v) for v in rail.profile(s_r))
+    rr = np.array([x, Y, Z])
+    g = math.hypot(Y1, Z1)
+    t2r = np.array([0.0, Y1, Z1])
+    m = np.array([0.0, -Z1, Y1])
+    n = m / g
+    dm = np.array([0.0, -Z2, Y2])
+    dn = (dm - n * (n @ dm)) / g
+    dt2r = np.array([0.0, Y2, Z2])
+    d = rw - rr
+    F = np.array([d[0], t2r @ d, t1w @ n, et @ n])
+    J = np.array([
+        [t1w[0], t2w[0], -1.0, 0.0],
+        [t2r @ t1w, t2r @ t2w, 0.0, dt2r @ d - t2r @ t2r],
+        [(u2 * f.a + rho2 * er) @ n, rho1 * (et @ n), 0.0, t1w @ dn],
+        [0.0, -(er @ n), 0.0, et @ dn],
+    ])
+    return F, J, dict(rw=rw, rr=rr, n=n, t1w=t1w, t2w=t2w, er=er, et=et, u1=u1, rho1=rho1,
+                      u2=u2, rho2=rho2, rho=rho, t2r=t2r / g, d=d, Y1=Y1, Z1=Z1, Y2=Y2, Z2=Z2)
+
+
+def _curvatures(wheel: WheelSurface, rail: RailSurface, v: dict) -> tuple[np.ndarray, float, float]:
+    """Relative curvature matrix in (t1 = e_x, t2) and the lateral profile curvatures."""
+    n, f = v["n"], wheel.frame
+    # wheel second fundamental form in its parameters (s_w, theta), w.r.t. n (into the rail)
+    r_ss = v["u2"] * f.a + v["rho2"] * v["er"]
+    r_st = v["rho1"] * v["et"]
+    r_tt = -v["rho"] * v["er"]
+    II = np.array([[r_ss @ n, r_st @ n], [r_st @ n, r_tt @ n]])
+    Jw = np.column_stack([v["t1w"], v["t2w"]])
+    e1, e2 = np.array([1.0, 0.0, 0.0]), v["t2r"]
+    C = np.linalg.lstsq(Jw, np.column_stack([e1, e2]), rcond=None)[0]   # tangent vectors in (s_w, theta)
+    Kw = C.T @ II @ C
+    Y1, Z1, Y2, Z2 = v["Y1"], v["Z1"], v["Y2"], v["Z2"]
+    kr = (Y1 * Z2 - Z1 * Y2) / (Y1 * Y1 + Z1 * Z1) ** 1.5
+    Kr = np.array([[0.0, 0.0], [0.0, kr]])
+    return Kr - Kw, float(kr), float(Kw[1, 1])
+
+
+def newton_contact(wheel: WheelSurface, rail: RailSurface, q0, *, tol: float = 1e-11,
+                   maxit: int = 40) -> ContactPoint:
+    """Refine a contact point from the start q0 = (s_w, theta, x, s_r) (seed Eqs. 54-55)."""
+    q = np.array(q0, dtype=float)
+    Lw, Lr = wheel.curve.length, rail.curve.length
+    res = np.inf
+    for it in range(1, maxit + 1):
+        F, J, v = _residual_and_jacobian(wheel, rail, q)
+        res = float(np.linalg.norm(F))
+        try:
+            dq = np.linalg.solve(J, -F)
+        except np.linalg.LinAlgError:
+            raise ConvergenceError("contact search: singular Jacobian (seed Eq. 55) at "
+                                   f"s_w = {q[0]:.3f}, s_r = {q[3]:.3f} mm") from None
+        # limit the step (a Newton step may jump across the profile where curvatures change fast)
+        scale = max(1.0, abs(dq[0]) / 2.0, abs(dq[3]) / 2.0, abs(dq[1]) / 0.05)
+        dq /= scale
+        q += dq
+        q[0] = min(max(q[0], 0.0), Lw)
+        q[3] = min(max(q[3], 0.0), Lr)
+        if np.all(np.abs(dq[[0, 2, 3]]) < 1e-9) and abs(dq[1]) < 1e-12 and scale == 1.0:
+            break
+    F, J, v = _residual_and_jacobian(wheel, rail, q)
+    res = float(np.linalg.norm(F))
+    if not res < max(tol, 1e-8):
+        raise ConvergenceError(f"contact search: Newton-Raphson (seed Eq. 55) did not converge "
+                               f"in {maxit} iterations (residual {res:.2e})")
+    K, kr, kw = _curvatures(wheel, rail, v)
+    n = v["n"]
+    t2 = np.cross(n, np.array([1.0, 0.0, 0.0]))
+    y_w, z_w = (float(c) for c in wheel.curve.point(q[0]))
+    at_end = q[0] <= 1e-9 or q[0] >= Lw - 1e-9 or q[3] <= 1e-9 or q[3] >= Lr - 1e-9
+    return ContactPoint(s_w=float(q[0]), theta=float(q[1]), x=float(q[2]), s_r=float(q[3]),
+                        rail_point=v["rr"], wheel_point=v["rw"], normal=n, t2=t2,
+                        penetration=float(v["d"] @ n), curvature=K, kappa_rail=kr, kappa_wheel=kw,
+                        rolling_radius=float(v["rho"]), y_wheel=y_w, z_wheel=z_w, iterations=it,
+                        residual=res, at_end=bool(at_end))
+
+
+# ----------------------------------------------------------------------------- global search
+@dataclass(frozen=True, eq=False)
+class SearchResult:
+    contacts: list[ContactPoint]            # distinct local minima, deepest first
+    locus: Locus
+    candidates: list[int] = field(default_factory=list)
+
+
+def find_contacts(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = None, *,
+                  window: float = 1.0) -> SearchResult:
+    """All distinct contact candidates whose vertical gap is within ``window`` mm of the smallest,
+    refined by Newton-Raphson; deepest (largest penetration) first."""
+    top = top or RailTop.of(rail)
+    loc = wheel_locus(wheel, top)
+    if not np.isfinite(loc.gap).any():
+        raise NoContactError("contact search: the wheel does not lie over the rail "
+                             "(no part of the wheel profile is above the rail profile)")
+    gmin = float(np.nanmin(loc.gap))
+    i_min = int(np.nanargmin(loc.gap))
+    valid = np.isfinite(loc.gap)
+    if i_min == 0 or i_min == valid.size - 1 or not (valid[i_min - 1] and valid[i_min + 1]):
+        y_w = float(wheel.curve.y(loc.s[i_min]))
+        raise InputError(f"the wheel would touch the rail at the end of a profile (wheel y = {y_w:.2f} mm, "
+                         f"side-frame y = {loc.points[i_min, 1]:.2f} mm): the profiles do not cover "
+                         "this position")
+    cands = [i for i in local_minima(loc.gap) if loc.gap[i] <= gmin + window]
+    contacts: list[ContactPoint] = []
+    for i in cands:
+        p = loc.points[i]
+        s_r0 = float(top.s_near(np.array([p[1], p[2] + loc.gap[i]])))
+        try:
+            c = newton_contact(wheel, rail, (loc.s[i], loc.theta[i], p[0], s_r0))
+        except ConvergenceError:
+            continue
+        # a solution far from its start belongs to another minimum (or is a saddle)
+        if abs(c.s_w - loc.s[i]) > 3.0:
+            continue
+        if any(abs(c.s_w - o.s_w) < 0.05 and abs(c.s_r - o.s_r) < 0.05 for o in contacts):
+            continue
+        # keep minima of the distance only: the relative lateral curvature must not be strongly negative
+        contacts.append(c)
+    if not contacts:
+        raise ConvergenceError("contact search: no candidate converged (seed Eq. 55)")
+    contacts.sort(key=lambda c: -c.penetration)
+    return SearchResult(contacts, loc, cands)
+
+
+def touch_height(pair, top: RailTop | None = None, z0: float = 0.0, *, tol: float = 1e-9,
+                 maxit: int = 20) -> tuple[float, SearchResult]:
+    """Wheelset height z (side frame, z down) at which the wheel of ``pair`` first touches its
+    rail, and the contact search there (the deepest contact has zero penetration).
+
+    The locus is rigid under vertical translation, so the vertical gap gives the height to the
+    envelope's resolution in one step; Newton-Raphson contact points then correct it
+    (a vertical move dz changes the penetration by dz n_z)."""
+    top = top or RailTop.of(pair.rail)
+    loc = wheel_locus(pair.wheel(z0), top)
+    if not np.isfinite(loc.gap).any():
+        raise NoContactError("contact search: the wheel does not lie over the rail")
+    z = z0 + float(np.nanmin(loc.gap))
+    for _ in range(maxit):
+        sr = find_contacts(pair.wheel(z), pair.rail, top)
+        c = sr.contacts[0]
+        dz = -c.penetration / c.normal[2]
+        z += dz
+        if abs(c.penetration) < tol:
+            return z, sr
+    raise ConvergenceError(f"contact search: the touching height did not converge (penetration "
+                           f"{c.penetration:.2e} mm after {maxit} corrections)")

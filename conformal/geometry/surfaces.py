@@ -1,0 +1,160 @@
+"""Wheel and rail surfaces (seed Eqs. 50-53): the rail an extrusion, the wheel a surface of revolution.
+
+Everything is expressed in the *side frame* of one wheel-rail pair: the track frame (x forward
+along the track, y lateral, z down; CONTACT module 1) mirrored for a left wheel, so that y always
+points to the field side of this rail.  A left pair is solved as the mirror image of a right
+pair, as CONTACT does.
+
+Rail (extrusion along x), parameters (x, s_r) (seed: s_1^r along the rail, s_2^r across)::
+
+    r_r(x, s_r) = (x, Y(s_r), Z(s_r)),   t1_r = e_x,  t2_r = (0, Y', Z'),  n_r = t1_r x t2_r
+
+with (Y, Z) the rail profile rotated by the cant and placed; n_r points into the rail (+z on top).
+
+Wheel (revolution about the axle), parameters (s_w, theta) (seed: s_1^w the profile, s_2^w the
+rotation)::
+
+    r_w(s_w, theta) = O + u(s_w) a + rho(s_w) e_r(theta),   e_r = cos(theta) e_d + sin(theta) e_f
+
+with O the wheelset centre, a the axle direction (towards the field side), e_d the wheelset's
+downward axis, e_f = a x e_d its forward axis, u = L + y_w(s_w) the axial position and
+rho = R0 + z_w(s_w) the radius (z_w = radius increase of the wheel profile).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from conformal.geometry.spline import ProfileCurve
+
+
+def cant_matrix(cant: float) -> np.ndarray:
+    """Rotation of a right-side rail profile by its cant, top leaning towards the track centre (-y)."""
+    c, s = math.cos(cant), math.sin(cant)
+    return np.array([[c, s], [-s, c]])
+
+
+@dataclass(frozen=True, eq=False)
+class RailSurface:
+    """A rail profile curve (own coordinates) rotated by ``cant`` and moved to ``origin`` (side frame)."""
+
+    curve: ProfileCurve
+    cant: float = 0.0
+    origin: tuple[float, float] = (0.0, 0.0)
+
+    @property
+    def rotation(self) -> np.ndarray:
+        return cant_matrix(self.cant)
+
+    def profile(self, s) -> tuple[np.ndarray, ...]:
+        """Y, Z, Y', Z', Y'', Z'' of the placed profile at arc length s (side frame)."""
+        y, z, y1, z1, y2, z2 = self.curve.derivatives(s)
+        R = self.rotation
+        Y = R[0, 0] * y + R[0, 1] * z + self.origin[0]
+        Z = R[1, 0] * y + R[1, 1] * z + self.origin[1]
+        return (Y, Z, R[0, 0] * y1 + R[0, 1] * z1, R[1, 0] * y1 + R[1, 1] * z1,
+                R[0, 0] * y2 + R[0, 1] * z2, R[1, 0] * y2 + R[1, 1] * z2)
+
+    def point(self, s) -> np.ndarray:
+        Y, Z = self.profile(s)[:2]
+        return np.stack([Y, Z], axis=-1)
+
+    def normal(self, s) -> np.ndarray:
+        """Unit inner normal (n_y, n_z) in the side frame (seed Eq. 53, n = t1 x t2)."""
+        _, _, Y1, Z1, _, _ = self.profile(s)
+        g = np.hypot(Y1, Z1)
+        return np.stack([-Z1 / g, Y1 / g], axis=-1)
+
+    def project(self, yz: np.ndarray, s0: np.ndarray) -> np.ndarray:
+        """Arc lengths of the closest rail points to side-frame points yz (..., 2), Newton from s0."""
+        own = self.to_own(yz)
+        return self.curve.project(own, s0)
+
+    def to_own(self, yz: np.ndarray) -> np.ndarray:
+        """Side-frame (y, z) -> the rail profile's own coordinates."""
+        return (np.asarray(yz) - np.asarray(self.origin)) @ self.rotation
+
+    def sample(self, step: float = 0.02) -> tuple[np.ndarray, np.ndarray]:
+        s, _ = self.curve.sample(step)
+        return s, self.point(s)
+
+
+@dataclass(frozen=True)
+class WheelFrame:
+    """Position and axes of a wheelset in the side frame."""
+
+    O: np.ndarray     # wheelset centre (3,)
+    a: np.ndarray     # axle direction, towards this wheel's field side
+    e_d: np.ndarray   # wheelset 'down' axis
+    e_f: np.ndarray   # wheelset 'forward' axis, a x e_d
+
+    @classmethod
+    def from_pose(cls, y: float, z: float, roll: float, yaw: float, radius: float) -> "WheelFrame":
+        """CONTACT's wheelset orientation: roll about x, then yaw about the new vertical axis
+        (z down); the centre at (0, y, z - radius), i.e. z = 0 puts the axle ``radius`` above
+        the track plane and z > 0 lowers the wheelset."""
+        cr, sr, cy, sy = math.cos(roll), math.sin(roll), math.cos(yaw), math.sin(yaw)
+        Rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+        Rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+        R = Rx @ Rz
+        return cls(O=np.array([0.0, y, z - radius]), a=R[:, 1].copy(), e_d=R[:, 2].copy(), e_f=R[:, 0].copy())
+
+    def shifted(self, dz: float) -> "WheelFrame":
+        return WheelFrame(self.O + np.array([0.0, 0.0, dz]), self.a, self.e_d, self.e_f)
+
+
+@dataclass(frozen=True, eq=False)
+class WheelSurface:
+    """A wheel profile curve revolved about the axle of ``frame``.
+
+    ``offset`` is the axial position of the wheel-profile origin from the wheelset centre and
+    ``radius`` the radius at the profile origin (z_w = 0).
+    """
+
+    curve: ProfileCurve
+    radius: float
+    offset: float
+    frame: WheelFrame
+
+    def meridian(self, s) -> tuple[np.ndarray, ...]:
+        """u, rho, u', rho', u'', rho'' (axial position and radius along the profile)."""
+        y, z, y1, z1, y2, z2 = self.curve.derivatives(s)
+        return self.offset + y, self.radius + z, y1, z1, y2, z2
+
+    def e_r(self, theta) -> np.ndarray:
+        th = np.asarray(theta)[..., None]
+        return np.cos(th) * self.frame.e_d + np.sin(th) * self.frame.e_f
+
+    def e_t(self, theta) -> np.ndarray:
+        th = np.asarray(theta)[..., None]
+        return -np.sin(th) * self.frame.e_d + np.cos(th) * self.frame.e_f
+
+    def point(self, s, theta) -> np.ndarray:
+        u, rho = self.meridian(s)[:2]
+        return self.frame.O + np.asarray(u)[..., None] * self.frame.a + np.asarray(rho)[..., None] * self.e_r(theta)
+
+    def locus_theta(self, s) -> np.ndarray:
+        """Rotation angle theta(s_w) of the contact locus: the point of each wheel circle where the
+        surface normal is perpendicular to the rail direction e_x (the rail normal has no x
+        component, so a contact point must lie there).  NaN where no such point exists near the
+        bottom (a wheel flank parallel to the wheel's plane)."""
+        _, _, u1, rho1, _, _ = self.meridian(s)
+        f = self.frame
+        # meridian normal N = rho' a - u' e_r;  N . e_x = 0  <=>  A cos + B sin = C
+        A, B, C = u1 * f.e_d[0], u1 * f.e_f[0], rho1 * f.a[0]
+        Rn = np.hypot(A, B)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            phase = np.arctan2(B, A)
+            ratio = np.where(Rn > 0, C / np.where(Rn > 0, Rn, 1.0), np.nan)
+            dev = np.arccos(np.clip(ratio, -1.0, 1.0))
+        th1, th2 = phase + dev, phase - dev
+        th1 = (th1 + np.pi) % (2 * np.pi) - np.pi
+        th2 = (th2 + np.pi) % (2 * np.pi) - np.pi
+        th = np.where(np.abs(th1) < np.abs(th2), th1, th2)
+        bad = ~(np.abs(ratio) <= 1.0) | (np.abs(th) > 0.5)
+        return np.where(bad, np.nan, th)
+
+    def rolling_radius(self, s) -> np.ndarray:
+        return self.meridian(s)[1]

@@ -1,0 +1,168 @@
+"""Manchester contact benchmark A-2.2: the full table (21 lateral shifts x 2 wheels) against CONTACT.
+
+S1002 on UIC60 1:40, 10 kN per wheel, yaw 2.4 mrad/mm, CONTACT's roll and pitch velocity
+(reference A5, shared/reference/contact_cases.json).  For every case this script
+
+1. checks the geometry alone: at CONTACT's solved wheelset height Z_WS, our contact reference
+   point, contact angle and approach (no solver involved);
+2. solves the case itself: our wheelset height from the vertical load, patches on planar grids
+   (0.2 mm elements as CONTACT by default) with the exact half-space theory.  While the exact
+   tangential solver is missing (conformal/solvers/tangential.py), the height is balanced with
+   the half-space *normal* problem only and no creep forces are reported.
+
+Writes CSV and PNG to --out and prints the maxima.
+
+    python studies/manchester_a22.py [--element-size 0.2] [--out studies/out/manchester_a22]
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import importlib.util
+import json
+import math
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from conformal.geometry.patches import find_patches  # noqa: E402
+from conformal.geometry.wheelrail import place_scene, problems_from_wheel_rail, solve_wheel_rail  # noqa: E402
+from conformal.scene import load_scene  # noqa: E402
+
+REF = ROOT.parent / "shared" / "reference" / "contact_cases.json"
+SCENE = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"
+
+
+def scene_for(side, case, element_size, theory="exact"):
+    inp = case["inputs"]
+    s = load_scene(SCENE)
+    geo = replace(s.geometry, side=side, lateral_shift=inp["Y_WS_mm"], yaw=inp["YAW_WS_rad"],
+                  roll=inp["ROLL_WS_rad"], element_size=element_size)
+    kin = replace(s.kinematics, pitch_velocity=inp["VPITCH_rad_per_s"])
+    return replace(s, geometry=geo, kinematics=kin).with_model(theory=theory)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--element-size", type=float, default=0.2)
+    ap.add_argument("--out", default=str(ROOT / "studies" / "out" / "manchester_a22"))
+    ap.add_argument("--sides", default="right,left")
+    args = ap.parse_args(argv)
+    ref = json.loads(REF.read_text())["cases"]["mbench_a22"]
+    full = importlib.util.find_spec("conformal.solvers.tangential") is not None
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for side in args.sides.split(","):
+        for case in ref[side]:
+            inp, o = case["inputs"], case["outputs"]
+            p_ref = o["patches"][0]
+            sc = scene_for(side, case, args.element_size)
+            # 1. geometry at CONTACT's height
+            pl = place_scene(sc)
+            g = find_patches(pl.pair.wheel(o["Z_WS"]), pl.pair.rail, pl.top)[0]
+            m = pl.pair.mirror
+            row = {"side": side, "y_ws": inp["Y_WS_mm"],
+                   "geo_y_rail": float(m * pl.pair.rail.to_own(g.point[1:])[0]), "geo_delta": m * g.delta,
+                   "geo_approach": g.penetration, "ref_y_rail": p_ref["YCP(R)"], "ref_delta": p_ref["DELTCP(TR)"],
+                   "ref_approach": p_ref["APPROACH"], "ref_z_ws": o["Z_WS"], "ref_FN": p_ref["FN"],
+                   "ref_FX": p_ref["FX"], "ref_FS": p_ref["FS"]}
+            # 2. our own solution
+            t0 = time.perf_counter()
+            if full:
+                r = solve_wheel_rail(sc)
+                main_p = max(r.patches, key=lambda p: p.FN)
+                info, FN, FX, FS = main_p.extra, main_p.FN, main_p.FX, main_p.FY
+                z, n_p, FZ = r.extra["z_ws"], len(r.patches), r.extra["FZ_track"]
+                conv = r.converged
+            else:
+                probs = problems_from_wheel_rail(sc)
+                main_p = max(probs, key=lambda p: p.normal_force)
+                info, FN, FX, FS = main_p.info, main_p.normal_force, math.nan, math.nan
+                z, n_p = info["z_ws"], len(probs)
+                FZ = sum(p.normal_force * math.cos(p.info["contact_angle"]) for p in probs)
+                conv = "balance_warnings" not in main_p.info
+            row.update(wall_s=time.perf_counter() - t0, z_ws=z, y_rail=info["y_rail"],
+                       delta=info["contact_angle"], approach=info["penetration"], FN=FN, FX=FX, FS=FS,
+                       FZ_track=FZ, n_patches=n_p, converged=conv)
+            row["err_y_rail"] = row["y_rail"] - row["ref_y_rail"]
+            row["err_geo_y_rail"] = row["geo_y_rail"] - row["ref_y_rail"]
+            for k in ("FN", "FX", "FS"):
+                row[f"rel_{k}"] = row[k] / row[f"ref_{k}"] - 1.0 if row[f"ref_{k}"] else math.nan
+            rows.append(row)
+            print(f"{side:5s} {inp['Y_WS_mm']:4.1f}  y_rail {row['y_rail']:8.3f} (CONTACT {row['ref_y_rail']:8.3f}, "
+                  f"geometry at CONTACT's Z_WS {row['geo_y_rail']:8.3f})  delta {row['delta']:7.4f} "
+                  f"({row['ref_delta']:7.4f})  z_ws {z:8.4f} ({o['Z_WS']:8.4f})  FN {FN:7.0f} ({p_ref['FN']:7.0f})"
+                  + (f"  FX {FX:7.1f} ({p_ref['FX']:7.1f})  FS {FS:7.1f} ({p_ref['FS']:7.1f})" if full else "")
+                  + f"  patches {n_p}  {row['wall_s']:.2f} s" + ("" if conv else "  NOT CONVERGED"), flush=True)
+    with (out / "manchester_a22.csv").open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+    _plot(rows, out / "manchester_a22.png", full)
+    geo_err = max(abs(r["err_geo_y_rail"]) for r in rows)
+    pos_err = max(abs(r["err_y_rail"]) for r in rows)
+    worst = max(rows, key=lambda r: abs(r["err_y_rail"]))
+    print(f"\ngeometry at CONTACT's heights: max |y_rail - CONTACT| = {geo_err:.4f} mm, "
+          f"max |delta - CONTACT| = {max(abs(r['geo_delta'] - r['ref_delta']) for r in rows):.4f} rad, "
+          f"max approach error {max(abs(r['geo_approach'] / r['ref_approach'] - 1) for r in rows) * 100:.2f} %")
+    print(f"own balance: max |y_rail - CONTACT| = {pos_err:.4f} mm ({worst['side']} {worst['y_ws']} mm), "
+          f"element size {args.element_size} mm, total {sum(r['wall_s'] for r in rows):.1f} s")
+    if full:
+        for k in ("FN", "FX", "FS"):
+            e = [abs(r[f"rel_{k}"]) for r in rows if math.isfinite(r[f"rel_{k}"])]
+            print(f"  max |{k} / CONTACT - 1| = {max(e) * 100:.2f} %  (median {np.median(e) * 100:.2f} %)")
+    else:
+        print("  forces: exact tangential solver not available; height balanced with normal forces only")
+    print(f"wrote {out / 'manchester_a22.csv'} and {out / 'manchester_a22.png'}")
+
+
+def _plot(rows, path, full):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(2, 2, figsize=(12, 8))
+    for side, mk in (("right", "o"), ("left", "s")):
+        rs = [r for r in rows if r["side"] == side]
+        if not rs:
+            continue
+        y = [r["y_ws"] for r in rs]
+        ax[0, 0].plot(y, [r["ref_y_rail"] for r in rs], "k" + mk, mfc="none", ms=7, label=f"CONTACT {side}")
+        ax[0, 0].plot(y, [r["y_rail"] for r in rs], mk + "-", ms=3, label=f"conformal {side}")
+        ax[0, 1].plot(y, [r["err_y_rail"] for r in rs], mk + "-", ms=3, label=f"{side}, own height")
+        ax[0, 1].plot(y, [r["err_geo_y_rail"] for r in rs], mk + ":", ms=3, label=f"{side}, CONTACT's height")
+        ax[1, 0].plot(y, [r["ref_delta"] for r in rs], "k" + mk, mfc="none", ms=7)
+        ax[1, 0].plot(y, [r["delta"] for r in rs], mk + "-", ms=3, label=side)
+        if full:
+            for k, c in (("FN", "C0"), ("FX", "C1"), ("FS", "C2")):
+                ax[1, 1].plot(y, [100 * r[f"rel_{k}"] for r in rs], mk + "-", color=c, ms=3, label=f"{k} {side}")
+        else:
+            ax[1, 1].plot(y, [r["z_ws"] - r["ref_z_ws"] for r in rs], mk + "-", ms=3, label=f"z_ws {side}")
+    ax[0, 0].set_ylabel("contact position on the rail y_r [mm]")
+    ax[0, 1].set_ylabel("y_r - CONTACT [mm]")
+    ax[0, 1].axhspan(-0.5, 0.5, color="0.9")
+    ax[1, 0].set_ylabel("contact angle [rad]")
+    ax[1, 1].set_ylabel("force / CONTACT - 1 [%]" if full else "z_ws - CONTACT [mm]")
+    if full:
+        ax[1, 1].axhspan(-3, 3, color="0.9")
+    for a in ax.flat:
+        a.set_xlabel("lateral shift y_ws [mm]")
+        a.grid(alpha=0.3)
+        a.legend(fontsize=7)
+    fig.suptitle("Manchester benchmark A-2.2: conformal vs CONTACT")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    main()
