@@ -34,7 +34,7 @@ from conformal.theories import fastsim as fs  # noqa: E402
 from conformal.theories import linear  # noqa: E402
 from conformal.theories.hertz import hertz_from_curvatures, hertz_from_semiaxes  # noqa: E402
 
-REF = ROOT.parent / "shared" / "reference" / "contact_cases.json"
+REF = ROOT / "tests" / "reference" / "contact_cases.json"
 G, NU = 82000.0, 0.28
 
 

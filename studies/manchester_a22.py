@@ -35,7 +35,7 @@ from conformal.geometry.patches import find_patches  # noqa: E402
 from conformal.geometry.wheelrail import place_scene, problems_from_wheel_rail, solve_wheel_rail  # noqa: E402
 from conformal.scene import load_scene  # noqa: E402
 
-REF = ROOT.parent / "shared" / "reference" / "contact_cases.json"
+REF = ROOT / "tests" / "reference" / "contact_cases.json"
 SCENE = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"
 
 

@@ -13,7 +13,7 @@ from conformal.scene import scene_from_dict
 from conformal.theories import coefficients as coef
 from conformal.theories import empirical as emp
 
-REF = Path(__file__).resolve().parents[2] / "shared" / "reference" / "contact_cases.json"
+REF = Path(__file__).resolve().parent / "reference" / "contact_cases.json"
 G, NU, MU, FN = 82000.0, 0.28, 0.33, 106700.0
 A, B = 6.3036, 12.6072          # tractcurv's Hertz ellipse, a/b = 0.5
 

@@ -15,7 +15,7 @@ from conformal.scene import scene_from_dict
 from conformal.theories import coefficients as coef
 from conformal.theories import fastsim as fs
 
-REF = Path(__file__).resolve().parents[2] / "shared" / "reference" / "contact_cases.json"
+REF = Path(__file__).resolve().parent / "reference" / "contact_cases.json"
 CASES = json.loads(REF.read_text())["cases"]
 G, NU = 82000.0, 0.28
 # fastsim case: a = 8, b = 4 mm, FN = 82 kN, mu = 0.3, eta = -6.25e-4, phi = +6.25e-4 rad/mm

@@ -12,7 +12,7 @@ from conformal.errors import InputError
 from conformal.materials import Material
 from conformal.theories.hertz import hertz_from_curvatures, hertz_from_semiaxes
 
-REF = Path(__file__).resolve().parents[2] / "shared" / "reference" / "contact_cases.json"
+REF = Path(__file__).resolve().parent / "reference" / "contact_cases.json"
 STEEL = Material.identical(82000.0, 0.28)
 
 

@@ -13,7 +13,7 @@ from conformal.scene import scene_from_dict
 from conformal.theories import coefficients as coef
 from conformal.theories import linear
 
-REF = Path(__file__).resolve().parents[2] / "shared" / "reference" / "contact_cases.json"
+REF = Path(__file__).resolve().parent / "reference" / "contact_cases.json"
 
 
 def problem(**kin):

@@ -14,7 +14,7 @@ from conformal.geometry.wheelrail import place_scene, problems_from_wheel_rail, 
 from conformal.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
-REF = ROOT.parent / "shared" / "reference" / "contact_cases.json"
+REF = ROOT / "tests" / "reference" / "contact_cases.json"
 SCENE = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"
 
 

@@ -14,7 +14,7 @@ from conformal.geometry.surfaces import WheelFrame
 from conformal.geometry.wheelrail import wheelset_roll
 from conformal.scene import WheelRailGeometry
 
-REF = Path(__file__).resolve().parents[2] / "shared" / "reference" / "contact_cases.json"
+REF = Path(__file__).resolve().parent / "reference" / "contact_cases.json"
 WHEEL = fit_curve(load_profile("S1002_MBENCH", "wheel").points, 1.0)
 RAIL = fit_curve(load_profile("UIC60_MBENCH_1IN40", "rail").points, 1.0)
 

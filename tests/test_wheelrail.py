@@ -20,7 +20,7 @@ from conformal.solve import solve_scene
 ROOT = Path(__file__).resolve().parents[1]
 MBENCH = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"
 SWEEP = ROOT / "meshes" / "scenes" / "s1002_uic60_sweep.toml"
-REF = ROOT.parent / "shared" / "reference" / "contact_cases.json"
+REF = ROOT / "tests" / "reference" / "contact_cases.json"
 
 
 def mbench_scene(y=5.0, side="right", theory="hertz", element_size=0.5, **geo):
