@@ -81,6 +81,13 @@ def single_body_influence(x, y, dx: float, dy: float, *, G: float, nu: float) ->
 
 
 # ------------------------------------------------------------------ FFT operator on a grid
+# Parities of the corner primitives (reference §3.1) under a -> -a and b -> -b.  Corner offsets of
+# a uniform grid are half-integer multiples of dx, dy (never 0), so each primitive is evaluated
+# once on the positive quadrant of the corner lattice and mirrored.
+_PARITY = {"L1": (-1, -1), "L2": (-1, -1), "R": (1, 1), "T1": (1, -1), "T2": (-1, 1)}
+_PRIM_INDEX = {"L1": 0, "L2": 1, "R": 2, "T1": 3, "T2": 4}
+
+
 def _offsets(m: int, M: int) -> tuple[np.ndarray, np.ndarray]:
     """Offsets d(k) in wrap-around order for a padded length M >= 2m-1, and the mask of used k."""
     k = np.arange(M)
@@ -89,13 +96,30 @@ def _offsets(m: int, M: int) -> tuple[np.ndarray, np.ndarray]:
     return d, used
 
 
+def _wrap(D: np.ndarray, mx: int, my: int, Mx: int, My: int) -> np.ndarray:
+    """Place D[i, j] (offset i - (mx-1), j - (my-1)) into wrap-around order on an Mx x My array."""
+    C = np.zeros((Mx, My))
+    C[:mx, :my] = D[mx - 1:, my - 1:]
+    C[:mx, My - my + 1:] = D[mx - 1:, :my - 1]
+    C[Mx - mx + 1:, :my] = D[:mx - 1, my - 1:]
+    C[Mx - mx + 1:, My - my + 1:] = D[:mx - 1, :my - 1]
+    return C
+
+
 @dataclass(frozen=True, eq=False)
 class HalfSpaceInfluence:
     """The influence operator of a uniform mx x my grid of dx x dy elements.
 
     ``apply(p)`` takes tractions p of shape (3, mx, my) ordered (x, y, z) and returns the
     displacement differences u of the same shape; ``apply_normal(pn)`` and
-    ``apply_tangential(px, py)`` are the cheaper products of the uncoupled sub-problems.
+    ``apply_tangential(px, py)`` are the cheaper products of the uncoupled sub-problems;
+    ``apply_coupling_tn(pn)`` and ``apply_coupling_nt(px, py)`` the parts proportional to K.
+
+    Kernels and their transforms are computed on first use (the normal problem of
+    quasi-identical bodies needs only A_zz).  Each kernel comes from one evaluation of the
+    corner primitives on the (2mx x 2my) corner lattice, of which only the positive quadrant is
+    computed (parities, reference §4.1); the FFT products transform only the mx non-zero rows
+    along y before the transform along x (a pruned zero-padded FFT).
 
     >>> from conformal.materials import Material
     >>> op = HalfSpaceInfluence.for_grid(3, 2, 1.0, 1.0, Material.identical(1.0, 0.28))
@@ -116,69 +140,153 @@ class HalfSpaceInfluence:
     @classmethod
     def for_grid(cls, mx: int, my: int, dx: float, dy: float, material: Material) -> "HalfSpaceInfluence":
         op = cls(mx, my, dx, dy, material.G, material.nu, material.K)
-        Mx, My = sfft.next_fast_len(2 * mx - 1, real=True), sfft.next_fast_len(2 * my - 1, real=True)
-        ox, ux = _offsets(mx, Mx)
-        oy, uy = _offsets(my, My)
-        A = rectangle_influence(ox[:, None] * dx, oy[None, :] * dy, dx, dy, G=op.G, nu=op.nu, K=op.K)
-        A *= (ux[:, None] & uy[None, :])[..., None, None]
-        for i, j in ((X, X), (Y, Y), (Z, Z), (X, Y), (Z, X), (Z, Y)):
-            op._fhat[i, j] = sfft.rfft2(A[..., i, j])
-        op._fhat["shape"] = (Mx, My)
-        op._fhat["kernel"] = A  # wrap-around kernel, kept for dense() and self terms
+        op._fhat["shape"] = (sfft.next_fast_len(2 * mx - 1, real=True),
+                             sfft.next_fast_len(2 * my - 1, real=True))
         return op
 
     @property
     def coupled(self) -> bool:
         return abs(self.K) > 0.0
 
-    def _kernel_hat(self, i: int, j: int) -> np.ndarray:
-        if (i, j) in self._fhat:
-            return self._fhat[i, j]
-        if i == Y and j == X:
-            return self._fhat[X, Y]
-        return -self._fhat[j, i]  # A_xz = -A_zx, A_yz = -A_zy
+    @property
+    def padded_shape(self) -> tuple[int, int]:
+        """(Mx, My), the zero-padded FFT size."""
+        return self._fhat["shape"]
 
+    # -------------------------------------------------------------- kernels (lazy)
+    def _primitive_difference(self, name: str) -> np.ndarray:
+        """[[F]] of one corner primitive at every grid offset, shape (2mx-1, 2my-1)."""
+        key = ("D", name)
+        if key not in self._fhat:
+            mx, my = self.mx, self.my
+            cx = (np.arange(mx) + 0.5) * self.dx
+            cy = (np.arange(my) + 0.5) * self.dy
+            F = _primitives(cx[:, None], cy[None, :])[_PRIM_INDEX[name]]
+            sa, sb = _PARITY[name]
+            full = np.empty((2 * mx, 2 * my))
+            full[mx:, my:] = F
+            full[:mx, my:] = sa * F[::-1, :]
+            full[mx:, :my] = sb * F[:, ::-1]
+            full[:mx, :my] = (sa * sb) * F[::-1, ::-1]
+            self._fhat[key] = full[1:, 1:] - full[1:, :-1] - full[:-1, 1:] + full[:-1, :-1]
+        return self._fhat[key]
+
+    def _component(self, i: int, j: int) -> np.ndarray:
+        """A_ij at every grid offset, shape (2mx-1, 2my-1), index (ix - jx + mx-1, iy - jy + my-1)."""
+        key = ("A", i, j)
+        if key not in self._fhat:
+            c, ck, nu = 1.0 / (math.pi * self.G), self.K / (math.pi * self.G), self.nu
+            D = self._primitive_difference
+            if (i, j) == (Z, Z):
+                A = c * (1 - nu) * (D("L1") + D("L2"))
+            elif (i, j) == (X, X):
+                A = c * ((1 - nu) * D("L1") + D("L2"))
+            elif (i, j) == (Y, Y):
+                A = c * (D("L1") + (1 - nu) * D("L2"))
+            elif (i, j) in ((X, Y), (Y, X)):
+                A = -c * nu * D("R")
+            elif (i, j) == (Z, X):
+                A = ck * D("T1")
+            elif (i, j) == (Z, Y):
+                A = ck * D("T2")
+            elif (i, j) == (X, Z):
+                A = -self._component(Z, X)
+            else:  # (Y, Z)
+                A = -self._component(Z, Y)
+            self._fhat[key] = A
+        return self._fhat[key]
+
+    def kernel(self, i: int, j: int) -> np.ndarray:
+        """A_ij in wrap-around order on the padded (Mx, My) array (reference §5, step 2)."""
+        Mx, My = self.padded_shape
+        return _wrap(self._component(i, j), self.mx, self.my, Mx, My)
+
+    def _kernel_hat(self, i: int, j: int) -> np.ndarray:
+        if (i, j) == (Y, X):
+            i, j = X, Y
+        if (i, j) in ((X, Z), (Y, Z)):
+            return -self._kernel_hat(j, i)  # A_xz = -A_zx, A_yz = -A_zy
+        if (i, j) not in self._fhat:
+            self._fhat[i, j] = sfft.rfft2(self.kernel(i, j))
+        return self._fhat[i, j]
+
+    def kernel_hat(self, i: int, j: int) -> np.ndarray:
+        """The (Mx, My//2+1) real-to-complex transform of :meth:`kernel`."""
+        return self._kernel_hat(i, j)
+
+    # -------------------------------------------------------------- products
     def _forward(self, p: np.ndarray) -> np.ndarray:
-        return sfft.rfft2(p, s=self._fhat["shape"])
+        """Zero-padded rfft2 of p (..., mx, my): only the mx non-zero rows are transformed along y."""
+        Mx, My = self.padded_shape
+        rows = sfft.rfft(p, n=My, axis=-1)
+        buf = np.zeros(p.shape[:-2] + (Mx, My // 2 + 1), dtype=complex)
+        buf[..., : self.mx, :] = rows
+        return sfft.fft(buf, axis=-2, overwrite_x=True)
 
     def _back(self, uhat: np.ndarray) -> np.ndarray:
-        return sfft.irfft2(uhat, s=self._fhat["shape"])[: self.mx, : self.my]
+        """irfft2 restricted to the first mx x my entries (only mx rows are transformed back along y)."""
+        Mx, My = self.padded_shape
+        cols = sfft.ifft(uhat, axis=-2, overwrite_x=True)[..., : self.mx, :]
+        return sfft.irfft(cols, n=My, axis=-1)[..., : self.my]
 
     def apply(self, p: np.ndarray) -> np.ndarray:
         """u = A p for tractions p of shape (3, mx, my)."""
-        ph = [self._forward(p[j]) for j in range(3)]
-        u = np.empty((3, self.mx, self.my))
+        ph = self._forward(np.asarray(p, dtype=float))
+        acc = np.empty_like(ph)
         for i in range(3):
-            acc = self._kernel_hat(i, i) * ph[i]
+            acc[i] = self._kernel_hat(i, i) * ph[i]
             for j in range(3):
                 if j != i and (self.coupled or {i, j} == {X, Y}):
-                    acc = acc + self._kernel_hat(i, j) * ph[j]
-            u[i] = self._back(acc)
-        return u
+                    acc[i] += self._kernel_hat(i, j) * ph[j]
+        return self._back(acc)
 
     def apply_normal(self, pn: np.ndarray) -> np.ndarray:
         """u_n due to p_n alone (the normal problem of quasi-identical bodies)."""
-        return self._back(self._fhat[Z, Z] * self._forward(pn))
+        uh = self._forward(np.asarray(pn, dtype=float))
+        uh *= self._kernel_hat(Z, Z)
+        return self._back(uh)
 
     def apply_tangential(self, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(u_x, u_y) due to (p_x, p_y) alone."""
-        hx, hy = self._forward(px), self._forward(py)
-        return (self._back(self._fhat[X, X] * hx + self._fhat[X, Y] * hy),
-                self._back(self._fhat[X, Y] * hx + self._fhat[Y, Y] * hy))
+        h = self._forward(np.stack([np.asarray(px, dtype=float), np.asarray(py, dtype=float)]))
+        fxx, fxy, fyy = self._kernel_hat(X, X), self._kernel_hat(X, Y), self._kernel_hat(Y, Y)
+        acc = np.empty_like(h)
+        acc[0] = fxx * h[0] + fxy * h[1]
+        acc[1] = fxy * h[0] + fyy * h[1]
+        u = self._back(acc)
+        return u[0], u[1]
+
+    def apply_coupling_nt(self, px: np.ndarray, py: np.ndarray) -> np.ndarray:
+        """u_n due to (p_x, p_y): A_zx p_x + A_zy p_y (zero for quasi-identical bodies)."""
+        if not self.coupled:
+            return np.zeros((self.mx, self.my))
+        h = self._forward(np.stack([np.asarray(px, dtype=float), np.asarray(py, dtype=float)]))
+        return self._back(self._kernel_hat(Z, X) * h[0] + self._kernel_hat(Z, Y) * h[1])
+
+    def apply_coupling_tn(self, pn: np.ndarray) -> np.ndarray:
+        """(u_x, u_y) due to p_n, shape (2, mx, my): A_xz p_n, A_yz p_n (zero when K = 0)."""
+        if not self.coupled:
+            return np.zeros((2, self.mx, self.my))
+        h = self._forward(np.asarray(pn, dtype=float))
+        return self._back(np.stack([self._kernel_hat(X, Z) * h, self._kernel_hat(Y, Z) * h]))
 
     def self_influence(self) -> np.ndarray:
         """A_ij(0, 0), the 3 x 3 self term (diagonal)."""
-        return self._fhat["kernel"][0, 0]
+        S = np.zeros((3, 3))
+        for i in range(3):
+            S[i, i] = self._component(i, i)[self.mx - 1, self.my - 1]
+        return S
 
     def dense(self) -> np.ndarray:
         """The full 3N x 3N matrix (N = mx my; rows/cols ordered component-major, then ix, iy).
         For tests and small grids only."""
         ix, iy = np.meshgrid(np.arange(self.mx), np.arange(self.my), indexing="ij")
         ix, iy = ix.ravel(), iy.ravel()
-        Mx, My = self._fhat["shape"]
-        kern = self._fhat["kernel"]
-        dxi = (ix[:, None] - ix[None, :]) % Mx
-        dyi = (iy[:, None] - iy[None, :]) % My
-        blocks = kern[dxi, dyi]  # (N, N, 3, 3)
+        dxi = ix[:, None] - ix[None, :] + self.mx - 1
+        dyi = iy[:, None] - iy[None, :] + self.my - 1
         N = ix.size
-        return blocks.transpose(2, 0, 3, 1).reshape(3 * N, 3 * N)
+        out = np.empty((3 * N, 3 * N))
+        for i in range(3):
+            for j in range(3):
+                out[i * N:(i + 1) * N, j * N:(j + 1) * N] = self._component(i, j)[dxi, dyi]
+        return out

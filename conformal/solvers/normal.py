@@ -1,0 +1,346 @@
+"""The normal contact problem of the exact (half-space) theory: seed Eqs. 45-46 on a planar grid.
+
+Find the pressure p_n >= 0 on the potential contact grid such that the deformed gap
+
+    e_I = h_I - approach + sum_J A_zz(I, J) p_n(J) + extra_I  >= 0,    p_n(I) e_I = 0,
+
+with either the normal force FN = dxdy sum p_n (seed Eq. 46, planar: cos delta = 1) or the approach
+prescribed.  ``extra`` is an additional normal displacement difference, e.g. the coupling term
+A_zt p_t of dissimilar bodies (K != 0) in the Panagiotopoulos process.
+
+Solver: projected conjugate gradients of Polonsky & Keer (1999), i.e. CG on the current contact
+set, restarted when the set grows, with the pressure projected onto p >= 0 (and rescaled to FN when
+the force is prescribed), plus an optional FFT preconditioner in the spirit of CONTACT's NormCG
+(Vollebregt 2014): the inverse of the circulant embedding of A_zz, applied by the same zero-padded
+FFTs as the product, restricted to the contact set.  Each product A p costs two FFTs of the padded
+grid (conformal.influence.halfspace).  Iterations stop when the pressure changes by less than
+``tol`` (relative, sum |dp| / sum p) from one iteration to the next, as in Polonsky & Keer.
+
+>>> import numpy as np
+>>> from conformal.grid import PlanarGrid
+>>> from conformal.materials import Material
+>>> g = PlanarGrid.centred(20, 20, 0.1, 0.1)
+>>> X, Y = g.mesh()
+>>> sol = solve_normal(None, g, 0.01 * (X**2 + Y**2), normal_force=9.1954, material=Material.identical(200, 0.42))
+>>> sol.converged, round(sol.FN, 4)
+(True, 9.1954)
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from conformal.errors import InputError, NoContactError
+from conformal.grid import PlanarGrid
+from conformal.influence.halfspace import Z, HalfSpaceInfluence
+from conformal.materials import Material
+
+#: use the FFT preconditioner from this many grid elements on (measured break-even, see
+#: studies/halfspace_scaling.py: at 50 x 50 both variants take about the same time, from 100 x 100 on
+#: the preconditioned iteration is faster and its iteration count grows much more slowly)
+PRECONDITION_FROM = 2500
+
+
+@dataclass(frozen=True, eq=False)
+class NormalSolution:
+    """Solution of the normal problem on a grid; arrays have the grid's shape (mx, my).
+
+    pn : pressure on body 1 (N/mm²), >= 0.
+    un : normal displacement difference at the element centres (mm), A_zz pn plus ``extra_un``.
+    approach : the approach (mm), prescribed or solved.
+    FN : dxdy sum pn (N).
+    contact : the elements in contact (pn > 0).
+    iterations, residual, converged : the projected-CG iteration count, the final relative change
+        of the pressure (the stopping criterion) and whether it fell below the tolerance.
+    gap_residual : max |e| over the contact set and max(-e) outside it, relative to the approach
+        (the discrete Signorini conditions; small when converged).
+    """
+
+    pn: np.ndarray
+    un: np.ndarray
+    approach: float
+    FN: float
+    contact: np.ndarray
+    iterations: int
+    residual: float
+    converged: bool
+    gap_residual: float = 0.0
+    preconditioned: bool = False
+
+    @property
+    def n_contact(self) -> int:
+        return int(np.count_nonzero(self.contact))
+
+    @property
+    def pmax(self) -> float:
+        return float(self.pn.max())
+
+    def gap(self, h: np.ndarray) -> np.ndarray:
+        """Deformed gap e = h - approach + un (mm)."""
+        return h - self.approach + self.un
+
+
+def _check_array(name: str, a, shape) -> np.ndarray:
+    a = np.asarray(a, dtype=float)
+    if a.shape != tuple(shape):
+        raise InputError(f"{name}: expected an array of shape {tuple(shape)}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise InputError(f"{name}: contains NaN or infinite values")
+    return a
+
+
+def _check_positive(name: str, v) -> float:
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: must be a number, got {v!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise InputError(f"{name}: must be > 0, got {v!r}")
+    return v
+
+
+def fft_preconditioner(op: HalfSpaceInfluence) -> Callable[[np.ndarray], np.ndarray]:
+    """z = P g, an approximate inverse of A_zz by FFT on the padded grid (after CONTACT's NormCG).
+
+    The half-space maps a pressure wave of wave number k to a displacement 2(1-nu)/(G |k|) times
+    it (Boussinesq), so P multiplies by |k| (the constant does not matter to CG).  The discrete
+    wave numbers 2 sin(k dx/2)/dx keep P positive definite.  (The inverse of the circulant
+    embedding of the discrete kernel is better for square elements but indefinite for
+    dx != dy: measured 146 to >1000 iterations at dx/dy = 0.3, against 13-16 with this P.)
+    """
+    Mx, My = op.padded_shape
+    kx = 2.0 * np.sin(np.pi * np.fft.fftfreq(Mx))[:, None] / op.dx
+    ky = 2.0 * np.sin(np.pi * np.fft.rfftfreq(My))[None, :] / op.dy
+    sym = np.hypot(kx, ky)
+    sym[0, 0] = sym[sym > 0].min() if (sym > 0).any() else 1.0
+
+    def apply(g: np.ndarray) -> np.ndarray:
+        gh = op._forward(g)
+        gh *= sym
+        return op._back(gh)
+
+    return apply
+
+
+def solve_normal(op: HalfSpaceInfluence | None, grid: PlanarGrid, h: np.ndarray, *,
+                 normal_force: float | None = None, approach: float | None = None,
+                 extra_un: np.ndarray | None = None, material: Material | None = None,
+                 tol: float = 1e-6, maxit: int = 1000, p_start: np.ndarray | None = None,
+                 precondition: bool | None = None) -> NormalSolution:
+    """Solve the normal contact problem on ``grid`` for the undeformed distance ``h``.
+
+    Parameters
+    ----------
+    op : the influence operator of the grid, or None to build it from ``material``.
+    grid : the potential contact grid; ``h`` has its shape (mx, my) (mm, before the approach).
+    normal_force, approach : exactly one of them (N, mm).
+    extra_un : additional normal displacement difference (mm), e.g. A_zt p_t for K != 0.
+    tol, maxit : stop when sum|dp| / sum p < tol; at most maxit iterations.
+    p_start : a starting pressure (e.g. the previous outer iteration), optional.
+    precondition : use the FFT preconditioner (default: from PRECONDITION_FROM elements on).
+
+    Raises
+    ------
+    InputError for bad input (negative or NaN values, wrong shapes), NoContactError when the
+    prescribed approach does not exceed the smallest undeformed distance.
+    """
+    if (normal_force is None) == (approach is None):
+        raise InputError("[load] normal_force: give exactly one of normal_force (N) or approach (mm)")
+    h = _check_array("[geometry] undeformed distance h", h, grid.shape)
+    if op is None:
+        if material is None:
+            raise InputError("solve_normal: give the influence operator or the material")
+        op = HalfSpaceInfluence.for_grid(grid.mx, grid.my, grid.dx, grid.dy, material)
+    if (op.mx, op.my) != grid.shape:
+        raise InputError(f"solve_normal: the influence operator is for a {op.mx} x {op.my} grid, "
+                         f"the grid has {grid.mx} x {grid.my} elements")
+    if not (tol > 0 and math.isfinite(tol)):
+        raise InputError(f"[model] tol: must be > 0, got {tol!r}")
+    if int(maxit) < 1:
+        raise InputError(f"[model] maxit: must be >= 1, got {maxit!r}")
+    h_eff = h if extra_un is None else h + _check_array("extra_un", extra_un, grid.shape)
+    if precondition is None:
+        precondition = grid.size >= PRECONDITION_FROM
+    pc = fft_preconditioner(op) if precondition else None
+    dA = grid.area
+
+    if normal_force is not None:
+        FN = _check_positive("[load] normal_force", normal_force)
+        if p_start is not None and np.any(np.asarray(p_start) > 0):
+            p0 = np.maximum(_check_array("p_start", p_start, grid.shape), 0.0)
+        else:
+            p0 = initial_pressure(h_eff, FN, op.G / (1.0 - op.nu), dA)
+        p0 = p0 * (FN / (p0.sum() * dA))
+        p, u, k, eps = _pk_force(op.apply_normal, pc, op.self_influence()[Z, Z], h_eff, FN / dA, p0, tol, int(maxit))
+        if pc is not None and not eps < tol:  # safety net: the plain Polonsky-Keer iteration
+            pc = None
+            p, u, k2, eps = _pk_force(op.apply_normal, None, op.self_influence()[Z, Z], h_eff, FN / dA, p0,
+                                      tol, int(maxit))
+            k += k2
+        act = p > 0
+        delta = float(np.mean((u + h_eff)[act]))
+    else:
+        delta = float(approach)
+        if not math.isfinite(delta):
+            raise InputError(f"[load] approach: must be a finite number, got {approach!r}")
+        hmin = float(h_eff.min())
+        if delta <= hmin:
+            raise NoContactError(f"no contact: the approach {delta:.6g} mm does not exceed the smallest "
+                                 f"undeformed distance {hmin:.6g} mm (gap {hmin - delta:.6g} mm)")
+        p, u, k, eps = _solve_for_approach(op, pc, h_eff, delta, dA, tol, int(maxit), p_start)
+        if pc is not None and not eps < tol:  # safety net: the plain Polonsky-Keer iteration
+            pc = None
+            p, u, k2, eps = _solve_for_approach(op, None, h_eff, delta, dA, tol, int(maxit), p_start)
+            k += k2
+        act = p > 0
+    un = u if extra_un is None else u + extra_un
+    e = h - delta + un
+    scale = max(abs(delta), float(np.ptp(h_eff[act])) if act.any() else 0.0, 1e-300)
+    gap_res = max(float(np.abs(e[act]).max()) if act.any() else 0.0,
+                  float(np.maximum(-e[~act], 0.0).max()) if (~act).any() else 0.0) / scale
+    return NormalSolution(pn=p, un=un, approach=delta, FN=float(p.sum() * dA), contact=act, iterations=k,
+                          residual=eps, converged=bool(eps < tol), gap_residual=gap_res,
+                          preconditioned=pc is not None)
+
+
+def initial_pressure(h: np.ndarray, FN: float, E_star: float, dA: float) -> np.ndarray:
+    """A Hertz-like starting pressure for the force-prescribed iteration.
+
+    The area below a level t of a paraboloid h - min h = r²/(2R) is 2 pi R t, which gives an
+    effective radius R; Hertz then gives the approach d = (9 FN² / (16 E*² R))^(1/3), and the
+    start is proportional to sqrt(d/2 - (h - min h)) (the Hertz pressure of a circle; for other
+    shapes the iteration corrects it).  Measured on case circ: 6 iterations instead of 16 at
+    200 x 200; two bumps: 8 instead of 27; elongated ellipses unchanged (15-20).  Falls back to a
+    uniform pressure when h has no usable minimum (e.g. a flat punch)."""
+    t = h - h.min()
+    level = float(np.quantile(t, 0.2))
+    area = np.count_nonzero(t < level) * dA
+    if level > 0 and area > 0:
+        R = area / (2 * math.pi * level)
+        d = (9 * FN**2 / (16 * E_star**2 * R)) ** (1 / 3)
+        p0 = np.sqrt(np.maximum(0.5 * d - t, 0.0))
+        if np.count_nonzero(p0) >= 1:
+            return p0 * (FN / (p0.sum() * dA))
+    return np.full(h.shape, FN / (dA * h.size))
+
+
+def _solve_for_approach(op, pc, h, delta, dA, tol, maxit, p_start):
+    """Prescribed approach: the force-prescribed iteration inside a secant iteration on FN.
+
+    The approach above first contact, d = approach - min h, grows monotonically with FN (as
+    FN^(2/3) for Hertz, FN for a flat punch), so the secant runs on log FN against log d; each
+    inner solve starts from the previous pressure.  A direct projected CG with the approach
+    prescribed was measured to oscillate for many iterations from a poor first guess.
+    Returns (p, u, total inner iterations, relative approach mismatch)."""
+    a_self = op.self_influence()[Z, Z]
+    hmin = float(h.min())
+    d_target = delta - hmin
+    if p_start is not None and np.any(np.asarray(p_start) > 0):
+        p = np.maximum(np.asarray(p_start, dtype=float), 0.0)
+        FN = float(p.sum() * dA)
+    else:  # E* r d, between flat punch (2 E* a d) and Hertz (4/3 E* a d, a = r / sqrt 2)
+        E_star = op.G / (1.0 - op.nu)
+        r = math.sqrt(np.count_nonzero(h < delta) * dA / math.pi)
+        FN = max(E_star * r * d_target, d_target / a_self * dA)
+        p = None
+    history: list[tuple[float, float]] = []
+    total, mismatch = 0, math.inf
+    inner_tol = 0.1 * tol
+    for _ in range(60):
+        if p is None or p.sum() <= 0:
+            p = np.full(h.shape, FN / (dA * h.size))
+        p = p * (FN / (p.sum() * dA))
+        p, u, k, eps = _pk_force(op.apply_normal, pc, a_self, h, FN / dA, p, inner_tol, maxit)
+        total += k
+        act = p > 0
+        d = float(np.mean((u + h)[act])) - hmin
+        mismatch = abs(d - d_target) / d_target
+        if mismatch < tol or total >= maxit:
+            break
+        history.append((math.log(FN), math.log(max(d, 1e-300))))
+        slope = 1.5  # Hertz: FN ~ d^(3/2)
+        if len(history) >= 2:
+            (f0, d0), (f1, d1) = history[-2], history[-1]
+            if abs(d1 - d0) > 1e-14:
+                slope = min(max((f1 - f0) / (d1 - d0), 0.5), 3.0)
+        FN = math.exp(history[-1][0] + slope * (math.log(d_target) - history[-1][1]))
+    return p, u, total, mismatch
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> float:
+    """Sum of a*b without BLAS: a threaded BLAS dot on a busy 2-core machine was measured 1000x
+    slower (ms instead of µs) than this elementwise product."""
+    return float(np.multiply(a, b).sum())
+
+
+def _direction(ga, act, na, pc, project_mean):
+    """Preconditioned steepest-descent direction z on the contact set (zero elsewhere)."""
+    if pc is None:
+        return ga
+    z = pc(ga)
+    z *= act
+    if project_mean:  # keep the load: zero sum over the contact set
+        z -= act * (z.sum() / na)
+    return z
+
+
+def _pk_force(A, pc, a_self, h, load, p, tol, maxit):
+    """Polonsky-Keer with the load sum(p) = load prescribed (load = FN / dxdy).
+
+    Returns (p, u = A p, iterations, last relative change)."""
+    u = A(p)
+    t = np.zeros_like(p)
+    G_old, restart = 1.0, True
+    eps, k = math.inf, 0
+    for k in range(1, maxit + 1):
+        act = p > 0
+        na = int(np.count_nonzero(act))
+        if na == 0:  # cannot happen with a positive load; guard anyway
+            p = np.where(h == h.min(), 1.0, 0.0)
+            p *= load / p.sum()
+            u = A(p)
+            continue
+        g = u + h
+        actf = act.astype(float)
+        g -= _dot(g, actf) / na   # mean over the contact set = the approach
+        ga = g * actf
+        z = _direction(ga, actf, na, pc, True)
+        G = float(_dot(ga, z))
+        if restart:
+            t = z.copy()
+        else:
+            t *= G / G_old
+            t += z
+            t *= actf
+        G_old = G
+        r = A(t)
+        rt = float(_dot(r, t)) - float(_dot(r, actf)) / na * float(t.sum())
+        if not rt > 0.0:   # t = 0: the gap is already uniform on the contact set
+            eps = 0.0 if G == 0.0 else eps
+            break
+        tau = float(_dot(ga, t)) / rt
+        p_new = p - tau * t
+        u_new = u - tau * r
+        neg = p_new < 0.0
+        overlap = (~act) & (g < 0.0)  # not in contact but interpenetrating: enter the contact set
+        changed = bool(neg.any())
+        if changed:
+            p_new[neg] = 0.0
+        if overlap.any():
+            # Polonsky-Keer's -tau g; with the preconditioner tau is no longer a compliance, so
+            # close each gap as if the element were alone: -g / A_zz(0, 0)
+            p_new[overlap] = -g[overlap] * (tau if pc is None else 1.0 / a_self)
+            changed, restart = True, True
+        else:
+            restart = False
+        s = load / p_new.sum()
+        p_new *= s
+        u = A(p_new) if changed else u_new * s
+        eps = float(np.abs(p_new - p).sum()) / load
+        p = p_new
+        if eps < tol:
+            break
+    return p, A(p), k, eps

@@ -1,0 +1,731 @@
+"""The tangential problem of Kalker's exact theory: steady rolling and transient shift with Coulomb
+friction (seed Eqs. 47-49; CONTACT's T = 3 and T = 1).
+
+Given the pressure p_n on the potential contact grid, find the tangential tractions p = (p_x, p_y) on
+body 1 such that in every element I with p_n > 0 (conventions: reference/contact_cases.md)
+
+    s_I = w_I + (L p)_I                                          slip (per unit rolled / per shift)
+    adhesion:  s_I = 0,                    |p_I| <= mu_static  p_n,I
+    slip:      p_I = -mu_kinetic p_n,I s_I/|s_I|,   s_I != 0
+
+and p = 0 outside (exterior).  Steady rolling in +x (material enters at the leading edge x = xh):
+L p = (u - u')/dx with u = A p the tangential displacement difference and u' its value one element
+upstream (x + dx): CONTACT's discretisation with the time step dq replaced by dx.  Rigid slip
+w = (xi - phi y, eta + phi (x + dx/6)) (CONTACT's W_I/dq for chi = 0).  Shift (CONTACT T = 1,
+starting from zero tangential tractions): L p = A p, W = (xi - phi y, eta + phi x) with xi, eta
+rigid shift distances (mm) and phi a rotation (rad); the slip is then a distance (mm).
+A coupling displacement ``extra_u`` (A_tn p_n for dissimilar bodies) enters u.
+
+When FX/(mu_static FN) and/or FY/(mu_static FN) are prescribed (``fx_rel``, ``fy_rel``), xi and/or
+eta become unknowns, with one force equation each (CONTACT's F = 1, 2), and are returned.
+
+Method: a semismooth Newton method on Alart-Curnier's projection form of the friction law,
+
+    F(p) = p - Proj_{|q| <= g}(p - c s(p)) = 0,        c = 1/diag(L),
+
+whose Jacobian in adhesion is c L and in slip
+``I - kappa (I - n n^T)(I - c L)`` (n = direction of p - c s, kappa = g/|p - c s| < 1).  The step
+fixes |p| = g in slip along n (a local update) and leaves one unknown per slip element along the
+tangent t, whose row reads ``(|s|/g) dp_t + t.(L dp) = ...``; with the adhesion rows
+``(L dp) = -s`` this reduced linear system is solved by GMRES (right preconditioned), each
+iteration one FFT product L v.  Prescribed forces add one unknown and one row each (a bordered
+system in the same GMRES).  A line search on ||F||^2 costs no products: s is linear in p, so
+s(p + a dp) = s + a L dp with L dp assembled from the GMRES basis.
+
+Preconditioner (the key to speed).  Steady rolling: L = D A / dx with D the upwind difference
+along x, so L^-1 = A^-1 D^-1 dx, where D^-1 is a cumulative sum from the leading edge (exact, cheap)
+and A^-1 is approximated by the inverse of the circulant (Strang) approximation of A on the
+unpadded mx x my grid, a 2 x 2 matrix per Fourier mode; the kernel is probed from the operator
+itself (two products), so any x-invariant operator works (half-space, curved strips).  Shift:
+A^-1 alone.  In slip elements whose |s|/g dominates the diagonal of L the tangent unknown is
+preconditioned by that diagonal alone.  The preconditioner costs one unpadded FFT pair, about a
+quarter of a padded product.
+
+Start.  Large problems (>= NESTED_FROM contact elements, planar half-space) start from the same
+problem on a grid of 2 x 2 merged elements (block means of pressure and rigid slip), solved to
+NESTED_TOL and interpolated (nested iteration, recursive): the fine grid then needs 3-4 Newton
+steps instead of 8-17.  Inside GMRES the products use single-precision FFTs (2.5x faster, relative
+error 1e-7); the slip is recomputed in double precision before convergence is declared.
+
+What was measured (case "circ" of reference/contact_performance.md: steel, A = B = 0.001,
+FN = 100 kN, normal problem solved, mu = 0.3, xi = 0.001, tol 1e-6; this shared 2-core machine,
+best of 3; studies/steady_rolling_speed.py, CONTACT's GDsteady times in brackets):
+
+* GMRES iterations for one Newton system (dense experiments at 30 x 30 and 50 x 50, rtol 1e-8):
+  no preconditioner 99 / 154; Jacobi 99 / 152; exact inverse of the 5 x 5 near field 22 / 28 (no
+  cheap way to apply it); 1-3 Gauss-Seidel sweeps of the near field 57-800 (diverging);
+  cumsum + circulant A^-1: 20 / 21 on the all-adhesion operator, 26-35 with slip elements.  The
+  padded (DC-FFT) circulant inverse needed 40 iterations where the unpadded Strang one needed 22,
+  at a quarter of the cost.
+* Whole tangential solve: 25^2 0.018 s; 50^2 0.06 s (0.29); 100^2 0.10-0.16 s (1.17);
+  150^2 0.35 s (2.87); 200^2 0.73-1.1 s (6.8); 300^2 2.6 s.  Variants at 100^2 / 200^2:
+  Newton-GMRES from zero, double precision 0.17 / 1.47 s (8 / 17 Newton steps); + coarse start
+  0.12 / 0.90 s (3 / 4 steps); + single-precision products 0.10 / 0.73 s.
+* FX agrees with CONTACT's printed FX on every grid (-14332 / -14114 / -13987 / -13948 / -13935
+  against -14330 / -14110 / -13990 / -13950 / -13940); relative to 300^2 the error of FX is
+  5.0e-3 at 100^2 and 1.3e-3 at 200^2.
+* Element-wise Gauss-Seidel (CONTACT's SteadyGS) costs O(N^2) per sweep and O(mx) sweeps
+  (6.8 s / 211 s in CONTACT); not pursued.
+
+Static and kinetic friction (mu_static > mu_kinetic): an element leaves adhesion when the traction
+it needs exceeds mu_static p_n and then slips with mu_kinetic p_n; it re-adheres when its slip
+would reverse.  The classification keeps this memory between Newton iterations (a hysteresis),
+so the solution found satisfies both conditions; it is one of possibly several (the law is not
+monotone) and is reached from zero tractions (or ``p_start``).
+
+>>> import numpy as np
+>>> from conformal.grid import PlanarGrid
+>>> from conformal.influence.halfspace import HalfSpaceInfluence
+>>> from conformal.materials import Material
+>>> g = PlanarGrid.centred(20, 20, 0.1, 0.1)
+>>> X, Y = g.mesh()
+>>> pn = 1000.0 * np.sqrt(np.clip(1 - (X**2 + Y**2) / 0.9**2, 0, None))
+>>> op = HalfSpaceInfluence.for_grid(20, 20, 0.1, 0.1, Material.steel())
+>>> sol = solve_tangential(op, g, pn, xi=1.0, eta=0.0, phi=0.0, mu_static=0.3, mu_kinetic=0.3)
+>>> sol.converged, bool(np.all(sol.status[pn > 0] == 2))     # huge creepage: full slip
+(True, True)
+>>> round(float(-sol.px.sum() / (0.3 * pn.sum())), 3)       # |FX| = mu FN
+1.0
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import fft as sfft
+
+from conformal.errors import InputError
+from conformal.result import ADHESION, EXTERIOR, SLIP
+
+#: GMRES restart length and the most GMRES iterations for one Newton step
+GMRES_RESTART = 60
+GMRES_MAXIT = 240
+#: slip elements with |s|/g larger than this times diag(L) get a diagonal preconditioner
+STIFF_RATIO = 1.0
+#: Krylov products in single precision where the operator allows (studies switch it off to compare)
+SINGLE_PRECISION = True
+
+
+@dataclass(frozen=True, eq=False)
+class TangentialSolution:
+    """Solution of the tangential problem; arrays have the grid's shape (mx, my).
+
+    px, py : tangential tractions on body 1 (N/mm²); zero outside the contact (p_n = 0).
+    sx, sy : slip in contact elements (steady rolling: relative slip velocity s/V, -; shift: slip
+        distance, mm); zero in adhesion and outside.
+    ux, uy : tangential displacement difference A p (+ extra_u) at the element centres (mm).
+    status : EXTERIOR / ADHESION / SLIP (conformal.result).
+    xi, eta : the creepages (shifts) used: solved where fx_rel / fy_rel were prescribed.
+    iterations : Newton iterations; residual : max |F| (the friction-law residual in traction
+        units) relative to the largest traction, and the relative force errors; converged :
+        residual <= tol; message : why not, when not converged.
+    products : number of influence products (FFT pairs) spent, for studies.
+    """
+
+    px: np.ndarray
+    py: np.ndarray
+    sx: np.ndarray
+    sy: np.ndarray
+    ux: np.ndarray
+    uy: np.ndarray
+    status: np.ndarray
+    xi: float
+    eta: float
+    iterations: int
+    residual: float
+    converged: bool
+    message: str = ""
+    products: int = 0
+
+
+# ----------------------------------------------------------------------------- input checks
+def _number(name: str, v, *, positive=False, nonneg=False) -> float:
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: must be a number, got {v!r}") from None
+    if not math.isfinite(v):
+        raise InputError(f"{name}: must be finite, got {v!r}")
+    if positive and not v > 0:
+        raise InputError(f"{name}: must be > 0, got {v!r}")
+    if nonneg and v < 0:
+        raise InputError(f"{name}: must be >= 0, got {v!r}")
+    return v
+
+
+def _field(name: str, a, shape) -> np.ndarray:
+    a = np.asarray(a, dtype=float)
+    if a.shape != tuple(shape):
+        raise InputError(f"{name}: expected an array of shape {tuple(shape)}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise InputError(f"{name}: contains NaN or infinite values")
+    return a
+
+
+# ----------------------------------------------------------------------------- the operator L
+class _SinglePrecisionProduct:
+    """(u_x, u_y) = A_tt p by the zero-padded FFTs of HalfSpaceInfluence, in single precision
+    (2.5x faster at 200 x 200; relative error about 1e-7).  Used for the Krylov products only."""
+
+    def __init__(self, op):
+        self.mx, self.my = op.mx, op.my
+        self.Mx, self.My = op.padded_shape
+        self.k = [op.kernel_hat(i, j).astype(np.complex64) for i, j in ((0, 0), (0, 1), (1, 1))]
+
+    def __call__(self, p: np.ndarray) -> np.ndarray:
+        rows = sfft.rfft(p.astype(np.float32), n=self.My, axis=-1)
+        buf = np.zeros((2, self.Mx, self.My // 2 + 1), dtype=np.complex64)
+        buf[:, : self.mx] = rows
+        h = sfft.fft(buf, axis=-2, overwrite_x=True)
+        kxx, kxy, kyy = self.k
+        acc = np.empty_like(h)
+        acc[0] = kxx * h[0] + kxy * h[1]
+        acc[1] = kxy * h[0] + kyy * h[1]
+        cols = sfft.ifft(acc, axis=-2, overwrite_x=True)[:, : self.mx]
+        return sfft.irfft(cols, n=self.My, axis=-1)[:, :, : self.my].astype(float)
+
+
+class _SlipOperator:
+    """L p on the contact elements (steady: upwind difference of A p over dx; shift: A p) and its
+    approximate inverse (the preconditioner), see the module docstring."""
+
+    def __init__(self, op, grid, contact: np.ndarray, steady: bool):
+        self.op, self.steady = op, steady
+        self.mx, self.my = grid.mx, contact.shape[1]
+        self.dx = float(grid.dx)
+        self.idx = np.flatnonzero(contact.ravel())
+        self.products = 0
+        self._ext = None
+        self._single: dict = {}
+        if steady and contact[-1].any():  # u' of the leading column lies outside the grid
+            self._ext = self._extended(op)
+        self._build_preconditioner()
+
+    @staticmethod
+    def _extended(op):
+        """The same operator on a grid one column longer (x + dx), so u' of the leading column is
+        exact; operators without a constructor for that fall back to u' = u there."""
+        from conformal.influence.halfspace import HalfSpaceInfluence
+        from conformal.materials import Material
+
+        if isinstance(op, HalfSpaceInfluence):
+            mat = Material.identical(op.G, op.nu)  # K does not enter A_tt
+            return HalfSpaceInfluence.for_grid(op.mx + 1, op.my, op.dx, op.dy, mat)
+        return None
+
+    # --- products
+    def grid_u(self, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        self.products += 1
+        return self.op.apply_tangential(px, py)
+
+    def difference(self, ux: np.ndarray, uy: np.ndarray, ux_up=None, uy_up=None) -> np.ndarray:
+        """(u - u')/dx on the grid, shape (2, mx, my); u' of the leading column from ux_up, uy_up
+        (the extended grid) or u itself."""
+        out = np.empty((2, self.mx, self.my))
+        for k, (u, up) in enumerate(((ux, ux_up), (uy, uy_up))):
+            out[k, :-1] = u[:-1] - u[1:]
+            out[k, -1] = (u[-1] - up) if up is not None else 0.0
+        return out / self.dx
+
+    def apply(self, pc: np.ndarray, fast: bool = False) -> np.ndarray:
+        """L p for p given on the contact elements (2, nc); returns (2, nc).  ``fast``: single
+        precision FFTs (Krylov products, where 1e-7 relative is ample), when available."""
+        full = np.zeros((2, self.mx * self.my))
+        full[:, self.idx] = pc
+        full = full.reshape(2, self.mx, self.my)
+        self.products += 1
+        if self._ext is not None:
+            pad = np.zeros((2, 1, self.my))
+            u = self._product(self._ext, np.concatenate([full, pad], axis=1), fast)
+            Lp = self.difference(u[0, :-1], u[1, :-1], u[0, -1], u[1, -1])
+        else:
+            u = self._product(self.op, full, fast)
+            Lp = self.difference(u[0], u[1]) if self.steady else u
+        return Lp.reshape(2, -1)[:, self.idx]
+
+    def _product(self, op, p: np.ndarray, fast: bool) -> np.ndarray:
+        if fast and SINGLE_PRECISION and hasattr(op, "kernel_hat") and hasattr(op, "padded_shape"):
+            key = id(op)
+            if key not in self._single:
+                self._single[key] = _SinglePrecisionProduct(op)
+            return self._single[key](p)
+        ux, uy = op.apply_tangential(p[0], p[1])
+        return np.stack([ux, uy])
+
+    # --- preconditioner
+    def _build_preconditioner(self) -> None:
+        """Probe the kernel at the centre element (two products), fold it onto the unpadded
+        periodic grid (Strang circulant) and invert its 2 x 2 symbol per Fourier mode."""
+        mx, my = self.mx, self.my
+        cx, cy = mx // 2, my // 2
+        e = np.zeros((mx, my))
+        e[cx, cy] = 1.0
+        z = np.zeros((mx, my))
+        kxx, kyx = self.grid_u(e, z)
+        kxy, kyy = self.grid_u(z, e)
+        # diagonal of L per component (scalars): self term, minus the upstream neighbour if steady
+        dxx, dyy = kxx[cx, cy], kyy[cx, cy]
+        if self.steady:
+            if mx > 1:
+                up = cx + 1 if cx + 1 < mx else cx - 1  # kernel even in x
+                dxx, dyy = (dxx - kxx[up, cy]) / self.dx, (dyy - kyy[up, cy]) / self.dx
+            else:
+                dxx, dyy = dxx / self.dx, dyy / self.dx
+        self.diag = 0.5 * (dxx + dyy)
+        sym = [sfft.rfft2(np.roll(k, (-cx, -cy), axis=(0, 1))) for k in (kxx, kxy, kyx, kyy)]
+        a, b, c, d = sym
+        det = a * d - b * c
+        floor = 1e-8 * np.abs(det).max()
+        det = np.where(np.abs(det) < floor, floor, det)
+        # single precision: the preconditioner need not be accurate
+        self._inv = tuple((v / det).astype(np.complex64) for v in (d, -b, -c, a))
+
+    def precondition(self, rc: np.ndarray) -> np.ndarray:
+        """Approximately L^-1 r for r on the contact elements (2, nc); returns (2, nc)."""
+        full = np.zeros((2, self.mx * self.my))
+        full[:, self.idx] = rc
+        full = full.reshape(2, self.mx, self.my)
+        if self.steady:  # D^-1: sum from the leading edge downstream
+            full = np.cumsum(full[:, ::-1], axis=1)[:, ::-1] * self.dx
+        s = (self.mx, self.my)
+        hx, hy = sfft.rfft2(full[0].astype(np.float32)), sfft.rfft2(full[1].astype(np.float32))
+        i00, i01, i10, i11 = self._inv
+        qx = sfft.irfft2(i00 * hx + i01 * hy, s=s)
+        qy = sfft.irfft2(i10 * hx + i11 * hy, s=s)
+        return np.stack([qx.ravel()[self.idx], qy.ravel()[self.idx]]).astype(float)
+
+
+# ----------------------------------------------------------------------------- GMRES
+def _dot(a: np.ndarray, b: np.ndarray) -> float:
+    # elementwise sums, not BLAS: threaded BLAS on a loaded 2-core machine made ddot 100x slower
+    return float((a * b).sum())
+
+
+def _gmres(matvec, prec, b: np.ndarray, rtol: float, maxit: int, restart: int):
+    """Right-preconditioned restarted GMRES for M x = b.  ``matvec(z)`` returns (M z, extra) with
+    ``extra`` a by-product linear in z (here L V z); returns (x, extra(x), iterations, relres)."""
+    beta0 = math.sqrt(_dot(b, b))
+    x = np.zeros_like(b)
+    ext = None
+    if beta0 == 0.0:
+        return x, ext, 0, 0.0
+    r = b.copy()
+    total = 0
+    relres = 1.0
+    while total < maxit:
+        beta = math.sqrt(_dot(r, r))
+        m_max = min(restart, maxit - total)
+        V = [r / beta]
+        Z, E = [], []
+        H = np.zeros((m_max + 1, m_max))
+        cs, sn = np.zeros(m_max), np.zeros(m_max)
+        g = np.zeros(m_max + 1)
+        g[0] = beta
+        m = 0
+        for k in range(m_max):
+            z = prec(V[k])
+            w, e = matvec(z)
+            Z.append(z)
+            E.append(e)
+            for i in range(k + 1):  # modified Gram-Schmidt
+                H[i, k] = _dot(w, V[i])
+                w = w - H[i, k] * V[i]
+            H[k + 1, k] = math.sqrt(_dot(w, w))
+            V.append(w / H[k + 1, k] if H[k + 1, k] > 0 else w)
+            for i in range(k):  # previous Givens rotations
+                t = cs[i] * H[i, k] + sn[i] * H[i + 1, k]
+                H[i + 1, k] = -sn[i] * H[i, k] + cs[i] * H[i + 1, k]
+                H[i, k] = t
+            rho = math.hypot(H[k, k], H[k + 1, k])
+            cs[k], sn[k] = (H[k, k] / rho, H[k + 1, k] / rho) if rho > 0 else (1.0, 0.0)
+            H[k, k], H[k + 1, k] = rho, 0.0
+            g[k + 1] = -sn[k] * g[k]
+            g[k] = cs[k] * g[k]
+            m = k + 1
+            relres = abs(g[k + 1]) / beta0
+            if relres <= rtol or H[k, k] == 0.0:
+                break
+        y = np.zeros(m)  # back substitution (no LAPACK: see _dot)
+        for i in range(m - 1, -1, -1):
+            y[i] = (g[i] - _dot(H[i, i + 1:m], y[i + 1:])) / H[i, i] if H[i, i] != 0 else 0.0
+        dx_ = sum(yi * zi for yi, zi in zip(y, Z))
+        de = sum(yi * ei for yi, ei in zip(y, E))
+        x = x + dx_
+        ext = de if ext is None else ext + de
+        total += m
+        if relres <= rtol or total >= maxit:
+            break
+        Mx, _ = matvec(x)  # true residual for the restart (one product)
+        r = b - Mx
+        relres = math.sqrt(_dot(r, r)) / beta0
+        if relres <= rtol:
+            break
+    return x, ext, total, relres
+
+
+# ----------------------------------------------------------------------------- the Newton method
+@dataclass
+class _State:
+    p: np.ndarray       # (2, nc) traction on the contact elements
+    s: np.ndarray       # (2, nc) slip
+    creep: np.ndarray   # (2,) the unknown creepages' current values (xi, eta)
+    slipping: np.ndarray  # (nc,) bool, classification memory (static/kinetic hysteresis)
+
+
+class _Newton:
+    def __init__(self, L: _SlipOperator, w: np.ndarray, gs: np.ndarray, gk: np.ndarray, area: np.ndarray,
+                 force_rows: list[tuple[int, float]], FN_mu: float):
+        self.L, self.w, self.gs, self.gk = L, w, gs, gk
+        self.area = area
+        self.c = 1.0 / L.diag
+        self.force_rows = force_rows          # [(component, target force)]
+        self.FN_mu = FN_mu                    # mu_static FN: scale of the force errors
+        self.A_tot = float(area.sum())
+        self.nc = gs.size
+        self.gmax = float(gk.max())
+
+    def classify(self, p, s, slipping):
+        z = p - self.c * s
+        nz = np.hypot(z[0], z[1])
+        slip = nz > np.where(slipping, self.gk, self.gs)
+        return z, nz, slip
+
+    def residual(self, p, s, slipping):
+        """F (2, nc) and the force errors (N) at (p, s)."""
+        z, nz, slip = self.classify(p, s, slipping)
+        scale = np.where(slip, self.gk / np.where(slip, nz, 1.0), 0.0)
+        F = np.where(slip, p - scale * z, self.c * s)
+        ferr = [float((self.area * p[k]).sum()) - target for k, target in self.force_rows]
+        return F, ferr, slip
+
+    def merit(self, F, ferr) -> float:
+        m = float((F * F).sum())
+        for e in ferr:
+            m += self.nc * (e / self.A_tot) ** 2
+        return m
+
+    def measure(self, p, F, ferr) -> float:
+        """The convergence measure: max |F| relative to the largest traction, and the force errors
+        relative to the largest of the prescribed and the current tangential force (relative, so
+        tiny creepages are solved as accurately as large ones)."""
+        pscale = max(float(np.sqrt((p * p).sum(axis=0)).max()), 1e-12 * self.gmax)
+        r = float(np.abs(F).max()) / pscale if F.size else 0.0
+        if ferr:
+            fscale = max([abs(t) for _, t in self.force_rows]
+                         + [float((self.area * np.hypot(p[0], p[1])).sum()), 1e-12 * self.FN_mu])
+            for e in ferr:
+                r = max(r, abs(e) / fscale)
+        return r
+
+    def step(self, st: _State, F, ferr, slip, rtol: float):
+        """One semismooth Newton direction: returns (dp, L dp + creepage part, dcreep, gmres its)."""
+        L, c = self.L, self.c
+        p, s = st.p, st.s
+        z = p - c * s
+        nz = np.hypot(z[0], z[1])
+        ia, isl = np.flatnonzero(~slip), np.flatnonzero(slip)
+        nA, nS, nF = ia.size, isl.size, len(self.force_rows)
+        n = z[:, isl] / nz[isl]
+        t = np.stack([-n[1], n[0]])
+        kap = self.gk[isl] / nz[isl]
+        sigma = (1.0 - kap) / (kap * c)   # = |s|/g at a solution
+        stiff = sigma > STIFF_RATIO * L.diag
+        # known part: |p| = g along n in slip
+        D0 = np.zeros((2, self.nc))
+        D0[:, isl] = (self.gk[isl] - (n[0] * p[0, isl] + n[1] * p[1, isl])) * n
+        LD0 = L.apply(D0, fast=True)
+        tp = t[0] * p[0, isl] + t[1] * p[1, isl]
+        rhs = np.concatenate([-s[0, ia] - LD0[0, ia], -s[1, ia] - LD0[1, ia],
+                              -tp / (kap * c) - (t[0] * LD0[0, isl] + t[1] * LD0[1, isl]),
+                              [-self.L.diag * (e + float((self.area * D0[k]).sum())) / self.A_tot
+                               for e, (k, _) in zip(ferr, self.force_rows)]])
+
+        def expand(x):
+            d = np.zeros((2, self.nc))
+            d[0, ia], d[1, ia] = x[:nA], x[nA:2 * nA]
+            d[:, isl] = x[2 * nA:2 * nA + nS] * t
+            return d
+
+        def matvec(x):
+            d = expand(x)
+            Ld = L.apply(d, fast=True)
+            for j, (k, _) in enumerate(self.force_rows):  # creepage columns: ds = dcreep e_k
+                Ld[k] += x[2 * nA + nS + j]
+            out = np.concatenate([Ld[0, ia], Ld[1, ia],
+                                  sigma * x[2 * nA:2 * nA + nS] + t[0] * Ld[0, isl] + t[1] * Ld[1, isl],
+                                  [self.L.diag * float((self.area * d[k]).sum()) / self.A_tot
+                                   for k, _ in self.force_rows]])
+            return out, Ld
+
+        def prec(r):
+            d = np.zeros((2, self.nc))
+            d[0, ia], d[1, ia] = r[:nA], r[nA:2 * nA]
+            rt = r[2 * nA:2 * nA + nS]
+            d[:, isl] = np.where(stiff, 0.0, rt) * t
+            q = L.precondition(d)
+            qt = np.where(stiff, rt / (sigma + L.diag), t[0] * q[0, isl] + t[1] * q[1, isl])
+            return np.concatenate([q[0, ia], q[1, ia], qt, r[2 * nA + nS:]])
+
+        x, Ldx, its, _ = _gmres(matvec, prec, rhs, rtol, GMRES_MAXIT, GMRES_RESTART)
+        dp = D0 + expand(x)
+        ds = LD0 + (Ldx if Ldx is not None else 0.0)
+        dcreep = np.zeros(2)
+        for j, (k, _) in enumerate(self.force_rows):
+            dcreep[k] = x[2 * nA + nS + j]
+        return dp, ds, dcreep, its
+
+    def fresh(self, st: _State) -> _State:
+        """The slip recomputed from the tractions in double precision (the iteration updates it
+        incrementally with single-precision products)."""
+        s = self.w + (st.creep - self.creep0)[:, None] + self.L.apply(st.p)
+        return _State(st.p, s, st.creep, st.slipping)
+
+    def solve(self, st: _State, tol: float, maxit: int):
+        """Newton iterations until the residual measure <= tol (checked with a fresh slip).
+        Returns (state with fresh slip, its, res, msg)."""
+        F, ferr, slip = self.residual(st.p, st.s, st.slipping)
+        res = self.measure(st.p, F, ferr)
+        best, stall, it = res, 0, 0
+        msg, is_fresh = "", True
+        while True:
+            if res <= tol:
+                if is_fresh:
+                    break
+                st, is_fresh = self.fresh(st), True
+                F, ferr, slip = self.residual(st.p, st.s, st.slipping)
+                res = self.measure(st.p, F, ferr)
+                if res <= tol:
+                    break
+            if it >= maxit:
+                msg = f"no convergence in {maxit} Newton iterations (residual {res:.3g} > tol {tol:g})"
+                break
+            it += 1
+            rtol = min(0.1, max(1e-3, 0.1 * res))   # inexact Newton: loose far away, tight near
+            dp, ds, dcreep, _ = self.step(st, F, ferr, slip, rtol)
+            m0 = self.merit(F, ferr)
+            memory = slip  # thresholds for the trial points: g_k where slipping now, g_s in adhesion
+            alpha, tried = 1.0, []
+            while True:
+                p_t, s_t = st.p + alpha * dp, st.s + alpha * ds
+                F_t, ferr_t, slip_t = self.residual(p_t, s_t, memory)
+                m_t = self.merit(F_t, ferr_t)
+                tried.append((m_t, alpha, p_t, s_t, F_t, ferr_t, slip_t))
+                if m_t <= (1.0 - 1e-4 * alpha) * m0:
+                    break
+                if alpha < 1.0 / 64:  # no decrease: take the best step tried (non-monotone)
+                    break
+                alpha *= 0.5
+            m_t, alpha, p_t, s_t, F_t, ferr_t, slip_t = min(tried, key=lambda r: r[0])
+            st, is_fresh = _State(p_t, s_t, st.creep + alpha * dcreep, slip_t), False
+            F, ferr, slip = F_t, ferr_t, slip_t
+            res = self.measure(st.p, F, ferr)
+            if res < 0.9 * best:
+                best, stall = res, 0
+            else:
+                stall += 1
+                if stall >= 25:
+                    msg = f"Newton stalled at residual {res:.3g} (tol {tol:g}) after {it} iterations"
+                    break
+        if not is_fresh:
+            st = self.fresh(st)
+        return st, it, res, msg
+
+
+# ----------------------------------------------------------------------------- entry point
+def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: float,
+                     mu_static: float, mu_kinetic: float, rolling: str = "steady",
+                     fx_rel: float | None = None, fy_rel: float | None = None,
+                     extra_u: np.ndarray | None = None, tol: float = 1e-6, maxit: int = 100,
+                     p_start: np.ndarray | None = None,
+                     rigid_slip: np.ndarray | None = None) -> TangentialSolution:
+    """Solve the tangential problem (module docstring) for the pressure ``pn`` on ``grid``.
+
+    Parameters
+    ----------
+    op : the influence operator of the grid (HalfSpaceInfluence or any x-invariant operator with
+        ``apply_tangential(px, py)``, e.g. CurvedInfluence).
+    grid : PlanarGrid (or CurvedGrid: x along the rolling direction, ``mesh()`` and ``area``).
+    pn : (mx, my) pressure (N/mm²); elements with pn = 0 are exterior (zero traction).
+    xi, eta, phi : creepages (steady: -, -, rad/mm) or rigid shifts (shift: mm, mm, rad).  With
+        fx_rel (fy_rel) prescribed, xi (eta) is the starting value of the unknown.
+    mu_static, mu_kinetic : friction coefficients, mu_static >= mu_kinetic >= 0.
+    rolling : "steady" (steady rolling in +x) or "shift" (transient shift from zero traction).
+    fx_rel, fy_rel : prescribed FX/(mu_static FN), FY/(mu_static FN), or None.
+    extra_u : (2, mx, my) tangential displacement difference from other loads (A_tn pn), or None.
+    tol : on the friction-law residual relative to the largest traction, and on the relative
+        force errors.
+    maxit : most Newton iterations.
+    p_start : (2, mx, my) starting tractions (e.g. the previous solution), or None (zero).
+    rigid_slip : (2, mx, my) rigid slip per element added to the creepage part (curved grids with
+        creepages varying over the patch), or None.
+
+    Returns
+    -------
+    TangentialSolution; ``converged`` False with a ``message`` when the tolerance was not met.
+    """
+    shape = tuple(grid.shape)
+    pn = _field("pn", pn, shape)
+    if np.any(pn < 0):
+        raise InputError("pn: the pressure must be >= 0")
+    if (op.mx, op.my) != shape:
+        raise InputError(f"op: influence operator is for {op.mx} x {op.my} elements, the grid has {shape}")
+    if rolling not in ("steady", "shift"):
+        raise InputError(f"[kinematics] rolling: must be \"steady\" or \"shift\", got {rolling!r}")
+    xi, eta, phi = (_number(f"[kinematics] {k}", v) for k, v in (("xi", xi), ("eta", eta), ("phi", phi)))
+    mu_s = _number("[friction] mu_static", mu_static, nonneg=True)
+    mu_k = _number("[friction] mu_kinetic", mu_kinetic, nonneg=True)
+    if mu_k > mu_s:
+        raise InputError(f"[friction] mu_kinetic: must not exceed mu_static ({mu_k} > {mu_s})")
+    tol = _number("[model] tol", tol, positive=True)
+    if int(maxit) < 1:
+        raise InputError(f"[model] maxit: must be >= 1, got {maxit}")
+    targets = {}
+    for key, v, k in (("fx_rel", fx_rel, 0), ("fy_rel", fy_rel, 1)):
+        if v is not None:
+            targets[k] = _number(f"[kinematics] {key}", v)
+    if targets and mu_k == 0.0:
+        raise InputError("[kinematics] fx_rel, fy_rel: a prescribed tangential force needs friction (mu > 0)")
+    if targets:
+        fmag = math.hypot(*targets.values())
+        limit = mu_k / mu_s
+        if not fmag < limit:
+            raise InputError(f"[kinematics] fx_rel, fy_rel: the prescribed force |F|/(mu_static FN) = {fmag:.6g} "
+                             f"must be < mu_kinetic/mu_static = {limit:.6g}, the force in full slip (with "
+                             "mu_static > mu_kinetic larger forces lie on a falling branch of the creep-force "
+                             "curve and are not unique)")
+    steady = rolling == "steady"
+    mx, my = shape
+    area = np.broadcast_to(np.asarray(grid.area, dtype=float), shape)
+    contact = pn > 0
+    zeros = np.zeros(shape)
+
+    # rigid slip (seed Eq. 47; CONTACT's W/dq with chi = 0)
+    X, Y = grid.mesh()
+    dq6 = grid.dx / 6.0 if steady else 0.0
+    w = np.stack([xi - phi * Y, eta + phi * (X + dq6)])
+    if rigid_slip is not None:
+        w = w + _field("rigid_slip", np.asarray(rigid_slip, dtype=float), (2,) + shape)
+    if extra_u is not None:
+        eu = _field("extra_u", extra_u, (2,) + shape)
+        if steady:  # (u - u')/dx of the extra displacement; u' of the leading column: u there
+            w = w + np.stack([np.concatenate([eu[k, :-1] - eu[k, 1:], np.zeros((1, my))]) for k in (0, 1)]) / grid.dx
+        else:
+            w = w + eu
+
+    def finish(px, py, sx, sy, status, xi_, eta_, its, res, conv, msg, nprod, L=None):
+        ux, uy = op.apply_tangential(px, py) if L is None else L.grid_u(px, py)
+        if extra_u is not None:
+            ux, uy = ux + extra_u[0], uy + extra_u[1]
+        return TangentialSolution(px=px, py=py, sx=sx, sy=sy, ux=ux, uy=uy, status=status.astype(np.int8),
+                                  xi=float(xi_), eta=float(eta_), iterations=its, residual=float(res),
+                                  converged=conv, message=msg, products=nprod + 1)
+
+    if not contact.any():
+        return finish(zeros, zeros.copy(), zeros.copy(), zeros.copy(), np.full(shape, EXTERIOR), xi, eta,
+                      0, 0.0, True, "", 0)
+    FN = float((pn * area).sum())
+    if mu_k == 0.0:  # frictionless: no traction, every element with rigid slip slips
+        ws = np.where(contact, w, 0.0)
+        status = np.where(contact, np.where(np.hypot(ws[0], ws[1]) > 0, SLIP, ADHESION), EXTERIOR)
+        return finish(zeros, zeros.copy(), ws[0], ws[1], status, xi, eta, 0, 0.0, True, "", 0)
+
+    force_rows = [(k, targets[k] * mu_s * FN) for k in sorted(targets)]
+    if p_start is not None:
+        p_start = _field("p_start", p_start, (2,) + shape)
+    st, slip, its, res, msg, L = _solve_grid(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows,
+                                             np.array([xi, eta]), tol, int(maxit), p_start)
+    idx = L.idx
+    conv = res <= tol
+    if conv:
+        msg = ""
+    elif not msg:
+        msg = f"residual {res:.3g} > tol {tol:g} after {its} Newton iterations"
+    px, py, sx, sy = (np.zeros(mx * my) for _ in range(4))
+    px[idx], py[idx] = st.p
+    sx[idx], sy[idx] = np.where(slip, st.s, 0.0)
+    status = np.full(mx * my, EXTERIOR)
+    status[idx] = np.where(slip, SLIP, ADHESION)
+    r = lambda a: a.reshape(shape)
+    return finish(r(px), r(py), r(sx), r(sy), r(status), st.creep[0], st.creep[1], its, res, conv, msg,
+                  L.products, L)
+
+
+
+# ----------------------------------------------------------------------------- one grid (+ nested start)
+#: solve a 2x coarser problem first (nested iteration) from this many contact elements on
+NESTED_FROM = 1500
+#: tolerance of the coarse solve that gives the starting tractions
+NESTED_TOL = 1e-3
+PROLONG_LINEAR = True
+
+
+def _solve_grid(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows, creep0, tol, maxit, p_start):
+    """Newton on one grid; returns (state, slip classification, iterations, residual, message, L).
+    Without ``p_start`` on a large planar half-space problem the start comes from the same problem
+    on a 2x coarser grid (nested iteration), prolonged element-wise."""
+    contact = pn > 0
+    L = _SlipOperator(op, grid, contact, steady)
+    idx = L.idx
+    gk = (mu_k * pn).ravel()[idx]
+    gs = (mu_s * pn).ravel()[idx]
+    wc = w.reshape(2, -1)[:, idx].copy()
+    FN = float((pn * area).sum())
+    newton = _Newton(L, wc, gs, gk, area.ravel()[idx], force_rows, mu_s * FN)
+    newton.creep0 = creep0
+    creep = creep0.copy()
+    if p_start is None and idx.size >= NESTED_FROM:
+        p_start, creep = _coarse_start(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows, creep0, maxit)
+    if p_start is not None:
+        p0 = p_start.reshape(2, -1)[:, idx].copy()
+        mag = np.hypot(p0[0], p0[1])
+        p0 *= np.where(mag > gs, gs / np.where(mag > 0, mag, 1.0), 1.0)
+        slipping = mag >= gk * (1.0 - 1e-9)
+    else:
+        p0, slipping = np.zeros((2, idx.size)), np.zeros(idx.size, bool)
+    s0 = wc + (creep - creep0)[:, None] + L.apply(p0)
+    st, its, res, msg = newton.solve(_State(p0, s0, creep, slipping), tol, maxit)
+    F, ferr, slip = newton.residual(st.p, st.s, st.slipping)
+    res = newton.measure(st.p, F, ferr)
+    return st, slip, its, res, msg, L
+
+
+def _coarse_start(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows, creep0, maxit):
+    """Starting tractions from the problem on a grid of 2 x 2 merged elements (block means of the
+    pressure and the rigid slip), or (None, creep0) where that is not possible."""
+    from conformal.grid import PlanarGrid
+    from conformal.influence.halfspace import HalfSpaceInfluence
+    from conformal.materials import Material
+
+    if not (isinstance(op, HalfSpaceInfluence) and isinstance(grid, PlanarGrid)):
+        return None, creep0
+    mx, my = pn.shape
+    fy = 2 if my >= 8 else 1
+    mxc, myc = -(-mx // 2), -(-my // fy)
+
+    def block_mean(a):
+        pad = np.zeros(a.shape[:-2] + (2 * mxc, fy * myc))
+        pad[..., :mx, :my] = a
+        return pad.reshape(a.shape[:-2] + (mxc, 2, myc, fy)).mean(axis=(-3, -1))
+
+    cgrid = PlanarGrid(mxc, myc, 2 * grid.dx, fy * grid.dy, grid.xl, grid.yl)
+    cop = HalfSpaceInfluence.for_grid(mxc, myc, cgrid.dx, cgrid.dy, Material.identical(op.G, op.nu))
+    pnc, wc = block_mean(pn), block_mean(w)
+    carea = np.full(cgrid.shape, cgrid.area)
+    FNc = float((pnc * carea).sum())
+    FN = float((pn * area).sum())
+    rows = [(k, f * FNc / FN) for k, f in force_rows]
+    st, slip, *_ , L = _solve_grid(cop, cgrid, pnc, wc, carea, steady, mu_s, mu_k, rows, creep0,
+                                   max(NESTED_TOL, 0.0), maxit, None)
+    pc = np.zeros((2, mxc * myc))
+    pc[:, L.idx] = st.p
+    pc = pc.reshape(2, mxc, myc)
+    if PROLONG_LINEAR:
+        from scipy.ndimage import map_coordinates
+        cx = (np.arange(mx) + 0.5) / 2 - 0.5
+        cy = (np.arange(my) + 0.5) / fy - 0.5
+        CX, CY = np.meshgrid(cx, cy, indexing="ij")
+        pf = np.stack([map_coordinates(pc[k], [CX, CY], order=1, mode="nearest") for k in (0, 1)])
+    else:
+        pf = np.repeat(np.repeat(pc, 2, axis=1), fy, axis=2)[:, :mx, :my]
+    return np.where(pn > 0, pf, 0.0), st.creep
