@@ -5,10 +5,31 @@ S1002 on UIC60 1:40, 10 kN per wheel, yaw 2.4 mrad/mm, CONTACT's roll and pitch 
 
 1. checks the geometry alone: at CONTACT's solved wheelset height Z_WS, our contact reference
    point, contact angle and approach (no solver involved);
-2. solves the case itself: our wheelset height from the vertical load, patches on planar grids
-   (0.2 mm elements as CONTACT by default) with the exact half-space theory.  While the exact
-   tangential solver is missing (conformal/solvers/tangential.py), the height is balanced with
-   the half-space *normal* problem only and no creep forces are reported.
+2. solves the case itself: our wheelset height from the vertical load (normal and tangential
+   forces), patches on planar grids (0.2 mm elements as CONTACT by default) with the exact
+   half-space theory; creepages at the patch reference point against CONTACT's CKSI, CETA, CPHI.
+
+Force metric (the same as tests/test_manchester.py): |F - F_CONTACT| <= max(1 % |F_CONTACT|,
+0.002 mu FN_CONTACT).  A relative error alone is meaningless for forces near zero: FX = 0.28 N at
+y_ws = 0 is the balance of xi against the lateral spin term, and a creepage difference of
+1.35e-6 (a rolling radius 0.6 um different) moves it by 5 N, so the floor is 0.002 mu FN = 6 N.
+The 1 % covers the 4-digit print and the flange contact angle (below).  The looser metric
+max(3 %, 0.01 mu FN) would have passed the 3.2 % FX error at 0.5 mm that the wheel material
+point of the creepages caused (conformal.geometry.patches.Patch.creep_point).  The summary
+prints per force the largest |error| in N, in % and in units of mu FN, and the largest
+error / tolerance.
+
+Known differences (measured; per-case errors and creepages are in the CSV):
+* right 5.0 mm, FX (4.5 %, 0.012 mu FN, the only case over the tolerance): CONTACT combines a gauge-corner and a tread lobe 6.8 mm
+  apart along the profile (between its D_COMB = 4 and D_SEP = 8 mm) into one patch.  With the
+  same geometry (reference point, angle, approach and creepages agree at CONTACT's Z_WS) our
+  single planar half-space patch puts 1100 N on the tread lobe, whose rigid slip xi - phi y has
+  the opposite sign (y = 9.6 mm); CONTACT's FX needs about 1300 N there (as if the tread lobe were
+  1 um deeper); the two lobes solved without elastic interaction give -741 N, with full
+  interaction -796 N, CONTACT -763 N.
+* flange contact (>= 6.5 mm): FN, FS within 0.45 %; the contact angle of our reference normal
+  differs by up to 0.0032 rad (reference point 0.02 mm further down the gauge face) and FN = FZ /
+  (cos d + (FS/FN) sin d) with CONTACT's angle gives CONTACT's FN (15440 N at 6.5 mm).
 
 Writes CSV and PNG to --out and prints the maxima.
 
@@ -34,6 +55,14 @@ sys.path.insert(0, str(ROOT))
 from conformal.geometry.patches import find_patches  # noqa: E402
 from conformal.geometry.wheelrail import place_scene, problems_from_wheel_rail, solve_wheel_rail  # noqa: E402
 from conformal.scene import load_scene  # noqa: E402
+
+#: force tolerance against CONTACT (module docstring): max(REL_TOL |F_CONTACT|, MU_FN_TOL mu FN)
+REL_TOL, MU_FN_TOL = 0.01, 0.002
+
+
+def force_tolerance(F_ref: float, FN_ref: float, mu: float) -> float:
+    """Allowed |F - F_CONTACT| (N) of a patch force (module docstring)."""
+    return max(REL_TOL * abs(F_ref), MU_FN_TOL * mu * FN_ref)
 
 REF = ROOT / "tests" / "reference" / "contact_cases.json"
 SCENE = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"
@@ -81,6 +110,8 @@ def main(argv=None):
                 info, FN, FX, FS = main_p.extra, main_p.FN, main_p.FX, main_p.FY
                 z, n_p, FZ = r.extra["z_ws"], len(r.patches), r.extra["FZ_track"]
                 conv = r.converged
+                row.update(xi=info["xi_patch"], eta=info["eta_patch"], phi=info["phi_patch"],
+                           ref_xi=p_ref["CKSI"], ref_eta=p_ref["CETA"], ref_phi=p_ref["CPHI"])
             else:
                 probs = problems_from_wheel_rail(sc)
                 main_p = max(probs, key=lambda p: p.normal_force)
@@ -93,8 +124,12 @@ def main(argv=None):
                        FZ_track=FZ, n_patches=n_p, converged=conv)
             row["err_y_rail"] = row["y_rail"] - row["ref_y_rail"]
             row["err_geo_y_rail"] = row["geo_y_rail"] - row["ref_y_rail"]
+            mu = sc.friction.mu
             for k in ("FN", "FX", "FS"):
                 row[f"rel_{k}"] = row[k] / row[f"ref_{k}"] - 1.0 if row[f"ref_{k}"] else math.nan
+                row[f"err_{k}"] = row[k] - row[f"ref_{k}"]
+                row[f"err_{k}_muFN"] = row[f"err_{k}"] / (mu * row["ref_FN"])
+                row[f"ratio_{k}"] = abs(row[f"err_{k}"]) / force_tolerance(row[f"ref_{k}"], row["ref_FN"], mu)
             rows.append(row)
             print(f"{side:5s} {inp['Y_WS_mm']:4.1f}  y_rail {row['y_rail']:8.3f} (CONTACT {row['ref_y_rail']:8.3f}, "
                   f"geometry at CONTACT's Z_WS {row['geo_y_rail']:8.3f})  delta {row['delta']:7.4f} "
@@ -116,9 +151,23 @@ def main(argv=None):
     print(f"own balance: max |y_rail - CONTACT| = {pos_err:.4f} mm ({worst['side']} {worst['y_ws']} mm), "
           f"element size {args.element_size} mm, total {sum(r['wall_s'] for r in rows):.1f} s")
     if full:
+        print(f"  forces: tolerance max({REL_TOL:.0%} |F_CONTACT|, {MU_FN_TOL} mu FN_CONTACT); "
+              "ratio = |F - F_CONTACT| / tolerance")
         for k in ("FN", "FX", "FS"):
-            e = [abs(r[f"rel_{k}"]) for r in rows if math.isfinite(r[f"rel_{k}"])]
-            print(f"  max |{k} / CONTACT - 1| = {max(e) * 100:.2f} %  (median {np.median(e) * 100:.2f} %)")
+            w = max(rows, key=lambda r: abs(r[f"err_{k}"]))
+            wr = max(rows, key=lambda r: r[f"ratio_{k}"])
+            others = max(r[f"ratio_{k}"] for r in rows if r is not wr)
+            print(f"  {k}: max |error| {abs(w[f'err_{k}']):6.1f} N ({w['side']} {w['y_ws']} mm: "
+                  f"{100 * abs(w[f'rel_{k}']):.2f} %, {abs(w[f'err_{k}_muFN']):.4f} mu FN); max ratio "
+                  f"{wr[f'ratio_{k}']:.2f} ({wr['side']} {wr['y_ws']} mm), next {others:.2f}; "
+                  f"{sum(r[f'ratio_{k}'] > 1 for r in rows)} of {len(rows)} cases over")
+        for k in ("xi", "eta", "phi"):
+            rs = [r for r in rows if r[f"ref_{k}"]]
+            rel = [abs(r[k] / r[f"ref_{k}"] - 1) for r in rs]
+            w = rs[int(np.argmax(rel))]
+            print(f"  creepage {k} at our own height: max relative error {max(rel) * 100:.2f} % ({w['side']} "
+                  f"{w['y_ws']} mm: {w[k]:.4g} vs {w[f'ref_{k}']:.4g}), median {np.median(rel) * 100:.3f} %; "
+                  f"max |error| {max(abs(r[k] - r[f'ref_{k}']) for r in rows):.2g}")
     else:
         print("  forces: exact tangential solver not available; height balanced with normal forces only")
     print(f"wrote {out / 'manchester_a22.csv'} and {out / 'manchester_a22.png'}")
@@ -144,16 +193,17 @@ def _plot(rows, path, full):
         ax[1, 0].plot(y, [r["delta"] for r in rs], mk + "-", ms=3, label=side)
         if full:
             for k, c in (("FN", "C0"), ("FX", "C1"), ("FS", "C2")):
-                ax[1, 1].plot(y, [100 * r[f"rel_{k}"] for r in rs], mk + "-", color=c, ms=3, label=f"{k} {side}")
+                ax[1, 1].plot(y, [r[f"ratio_{k}"] for r in rs], mk + "-", color=c, ms=3, label=f"{k} {side}")
         else:
             ax[1, 1].plot(y, [r["z_ws"] - r["ref_z_ws"] for r in rs], mk + "-", ms=3, label=f"z_ws {side}")
     ax[0, 0].set_ylabel("contact position on the rail y_r [mm]")
     ax[0, 1].set_ylabel("y_r - CONTACT [mm]")
     ax[0, 1].axhspan(-0.5, 0.5, color="0.9")
     ax[1, 0].set_ylabel("contact angle [rad]")
-    ax[1, 1].set_ylabel("force / CONTACT - 1 [%]" if full else "z_ws - CONTACT [mm]")
+    ax[1, 1].set_ylabel(f"|F - CONTACT| / max({REL_TOL:.0%} |F|, {MU_FN_TOL} mu FN)" if full
+                        else "z_ws - CONTACT [mm]")
     if full:
-        ax[1, 1].axhspan(-3, 3, color="0.9")
+        ax[1, 1].axhspan(0, 1, color="0.9")
     for a in ax.flat:
         a.set_xlabel("lateral shift y_ws [mm]")
         a.grid(alpha=0.3)

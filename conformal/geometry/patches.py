@@ -58,6 +58,18 @@ class Patch:
         """Contact angle (rad) of the reference normal (CONTACT's DELTCP, side frame)."""
         return float(math.atan2(-self.normal[1], self.normal[2]))
 
+    @property
+    def creep_point(self) -> np.ndarray:
+        """The wheel material point whose velocity defines the patch's creepages: the reference
+        point moved by the patch's penetration along the normal, i.e. the rail reference point as
+        a point of the wheel in its just-touching position (the approach is the solver's rigid
+        displacement).  This is CONTACT's convention: at CONTACT's wheelset heights it reproduces
+        the Manchester benchmark's xi to 6e-8 at y_ws = 0 (-5.665e-5) and 3e-7 at 0.5 mm
+        (4.948e-4), where the wheel surface point on the normal line (``wheel_point``, overlap
+        pen(P) < penetration on wide patches) is 1.4e-6 and 1.5e-5 off; the latter made FX 3 %
+        too small at 0.5 mm (tests/test_wheelrail.py, studies/manchester_a22.py)."""
+        return self.point + self.penetration * self.normal
+
 
 # ----------------------------------------------------------------------------- lobes
 def locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop):
@@ -301,19 +313,21 @@ def curved_distance(wheel: WheelSurface, rail: RailSurface, patch: Patch, x: np.
 
 def curved_grid_for_patch(wheel: WheelSurface, rail: RailSurface, patch: Patch, *,
                           element_size: float | None = None, n: int = 40, scale: float = 1.1,
-                          side: str = "right", margin: float = 5.0
+                          side: str = "right", margin: float = 5.0, sizes: tuple[float, float] | None = None
                           ) -> tuple[CurvedGrid, np.ndarray, float]:
     """Curved potential contact grid (x, s) for the patch, h along the local normals (min 0) and
-    the approach.  Uniform elements in x and in s (``element_size`` or n x n)."""
+    the approach.  Uniform elements in x and in s (``element_size``, ``sizes`` = (dx, ds), or n x n)."""
     x0, x1 = (v - patch.x_ref for v in patch.x_range)
     s0, s1 = patch.s_range
     cx, cs = 0.5 * (x0 + x1), 0.5 * (s0 + s1)
     hx, hs = 0.5 * (x1 - x0) * scale, max(0.5 * (s1 - s0) * scale, 1e-3)
     if element_size is not None:
-        hx, hs = hx + element_size, hs + element_size
-        mx = max(1, int(math.ceil(2 * hx / element_size)))
-        ms = max(1, int(math.ceil(2 * hs / element_size)))
-        dx = ds = element_size
+        sizes = (element_size, element_size)
+    if sizes is not None:
+        dx, ds = sizes
+        hx, hs = hx + dx, hs + ds
+        mx = max(1, int(math.ceil(2 * hx / dx)))
+        ms = max(1, int(math.ceil(2 * hs / ds)))
     else:
         mx = ms = n
         dx, ds = 2 * hx / n, 2 * hs / n

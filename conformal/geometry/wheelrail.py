@@ -313,8 +313,8 @@ def _kinematics_for(scene: Scene, pair: WheelRailPair, z: float, patch: Patch):
     geo = scene.geometry
     pitch = k.pitch_velocity if k.pitch_velocity is not None else -k.speed / geo.wheel_radius
     motion = WheelsetMotion(k.speed, pitch, k.yaw_rate, k.roll_rate, k.lateral_velocity).mirrored(pair.side)
-    # the wheel material point: the wheel surface on the normal line of the reference point
-    c = creepages(pair.frame(z), motion, patch.wheel_point, patch.normal)
+    # the wheel material point: the reference point in the just-touching wheel (CONTACT's convention)
+    c = creepages(pair.frame(z), motion, patch.creep_point, patch.normal)
     m = pair.mirror
     kin = replace(k, xi=float(c.xi), eta=float(m * c.eta), phi=float(m * c.phi), velocity=float(c.velocity))
     return kin, c
@@ -442,6 +442,10 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8) -> Result:
     forces (iterated), and the combined result with track-frame totals."""
     from conformal.solve import solve_problem
 
+    if scene.model.theory == "conformal":   # one curved grid per wheel (conformal.solvers.conformal)
+        from conformal.solvers.conformal import solve_wheel_rail_conformal
+
+        return solve_wheel_rail_conformal(scene)
     pl = place_scene(scene)
     theory = scene.model.theory
     geo_extra = _geometry_extra(scene, pl)
