@@ -1,7 +1,9 @@
 """The ``conformal`` command.
 
-    conformal solve SCENE.toml [--json OUT.json] [--plot OUT.png] [--theory NAME]
+    conformal solve SCENE.toml [--json OUT.json] [--plot OUT.png] [--theory NAME] [--vtu OUT.vtu]
     conformal demo [--out DIR]
+    conformal precompute SCENE.toml --sweep shift=0:10:0.5 [--workers N] [--scheduler ADDRESS|local]
+    conformal cache list|clear [--cache DIR]
     conformal sweep SCENE.toml [--shift START:STOP:STEP] [--out DIR]
 
 Bad input ends with exit code 2 and one line on stderr naming the key and the problem.
@@ -11,6 +13,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from importlib import resources
 from pathlib import Path
 
@@ -25,10 +28,14 @@ def _write_json(summary: dict, path: str | None) -> None:
         Path(path).write_text(text + "\n", encoding="utf-8")
 
 
-def _solve_and_report(scene, json_path: str | None, plot_path: str | None) -> int:
+def _solve_and_report(scene, json_path: str | None, plot_path: str | None, vtu_path: str | None = None) -> int:
     from conformal.solve import solve_scene
 
     result = solve_scene(scene)
+    if vtu_path:
+        from conformal.plots import export_result_vtu
+
+        export_result_vtu(result, vtu_path)
     if plot_path:
         from conformal.plots import plot_result
 
@@ -47,7 +54,7 @@ def cmd_solve(args) -> int:
         if args.theory not in THEORIES:
             raise InputError(f"--theory: must be one of {', '.join(THEORIES)}, got {args.theory!r}")
         scene = scene.with_model(theory=args.theory)
-    return _solve_and_report(scene, args.json, args.plot)
+    return _solve_and_report(scene, args.json, args.plot, args.vtu)
 
 
 def demo_scene_path() -> Path:
@@ -91,6 +98,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--json", metavar="OUT.json", help="also write the JSON summary to this file")
     s.add_argument("--plot", metavar="OUT.png", help="write a PNG of the tractions")
     s.add_argument("--theory", help="override [model] theory")
+    s.add_argument("--vtu", metavar="OUT.vtu", help="write the tractions on the curved surfaces for ParaView "
+                   "(theory \"conformal\"; also OUT_rail.vtu, OUT_wheel.vtu)")
     s.set_defaults(func=cmd_solve)
 
     w = sub.add_parser("sweep", help="wheel-rail geometry versus lateral shift: CSV and PNG")
@@ -102,7 +111,61 @@ def build_parser() -> argparse.ArgumentParser:
     d = sub.add_parser("demo", help="solve the built-in demo scene, write JSON and PNG")
     d.add_argument("--out", default="out", help="output folder (default: out)")
     d.set_defaults(func=cmd_demo)
+
+    pc = sub.add_parser("precompute", help="compute and cache FE influence numbers for a sweep of positions")
+    pc.add_argument("scene", help="wheel-rail scene file (TOML); [model] fe_* keys set the FE model")
+    pc.add_argument("--sweep", required=True, metavar="KEY=START:STOP:STEP",
+                    help="positions, e.g. shift=0:10:0.5 (keys: shift, yaw, roll)")
+    pc.add_argument("--workers", type=int, default=None, help="parallel local processes (default: cores/2)")
+    pc.add_argument("--scheduler", metavar="ADDRESS",
+                    help="Dask scheduler address, or 'local' for a local Dask cluster (needs dask)")
+    pc.add_argument("--cache", metavar="DIR", help="cache folder (default: $CONFORMAL_CACHE or the user cache)")
+    pc.add_argument("--dry-run", action="store_true", help="only list what would be computed")
+    pc.add_argument("--no-progress", action="store_true", help="no progress bar")
+    pc.set_defaults(func=cmd_precompute)
+
+    ca = sub.add_parser("cache", help="list or clear the cache of FE influence numbers")
+    ca.add_argument("action", choices=("list", "clear"))
+    ca.add_argument("--cache", metavar="DIR", help="cache folder (default: $CONFORMAL_CACHE or the user cache)")
+    ca.set_defaults(func=cmd_cache)
     return p
+
+
+def cmd_precompute(args) -> int:
+    from conformal.influence.cache import Cache
+    from conformal.jobs import parse_sweep, precompute
+    from conformal.scene import load_scene
+
+    if args.workers is not None and args.workers < 1:
+        raise InputError(f"--workers: must be >= 1, got {args.workers}")
+    sweep = parse_sweep(args.sweep)
+    scene = load_scene(args.scene)
+    cache = Cache(args.cache)
+    rep = precompute(scene, sweep, cache=cache, workers=args.workers, scheduler=args.scheduler,
+                     progress=not args.no_progress, dry_run=args.dry_run)
+    for v, why in rep.positions_failed:
+        print(f"conformal: {sweep.key} = {v:g}: no contact grid ({why})", file=sys.stderr)
+    for label, why in rep.failed:
+        print(f"conformal: {label}: failed: {why}", file=sys.stderr)
+    print(("dry run: " if args.dry_run else "") + rep.summary() + f"; cache: {cache.folder}")
+    return 1 if rep.failed else 0
+
+
+def cmd_cache(args) -> int:
+    from conformal.influence.cache import Cache
+
+    cache = Cache(args.cache)
+    if args.action == "clear":
+        n = cache.clear()
+        print(f"removed {n} files from {cache.folder}")
+        return 0
+    entries = cache.entries()
+    total = sum(e.size for e in entries)
+    for e in entries:
+        when = time.strftime("%Y-%m-%d %H:%M", time.localtime(e.created))
+        print(f"{e.key[:16]}  {e.size / 2**20:8.1f} MiB  {when}  {e.summary if e.ok else 'UNREADABLE'}")
+    print(f"{len(entries)} entries, {total / 2**20:.1f} MiB in {cache.folder}")
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,0 +1,837 @@
+"""FE influence numbers of wheel and rail bodies (scikit-fem, linear elasticity, P1/P2 tetrahedra).
+
+For each body (:class:`~conformal.meshing.bodies.BodyModel`, meshed by
+:func:`~conformal.meshing.gmsh_body.mesh_body`) the influence numbers are computed on ONE loaded
+column of contact elements (the one at x = 0; the rail is an extrusion and the wheel a body of
+revolution, so they depend only on the offset ix - jx, DESIGN.md §4) and observed on the 2 mx - 1
+columns around it.  The result is the kernel of :class:`~conformal.influence.curved.CurvedInfluence`:
+
+    K[kx, I, J, i, j],  shape (2 mx - 1, ms, ms, 3, 3),  kx = ix - jx + mx - 1,
+
+the displacement u_i of element (ix, I) per unit traction p_j on element (jx, J), components
+(0, 1, 2) = (x, s, n) in the contact frame of each element (x rolling, s along the profile,
+n the common normal pointing into body 1, the rail).  On a wheel the frame turns with the wheel
+(rolling frame of the observed element).  For one body the kernel is that body's displacement
+per unit traction acting ON it, both in the common frame; the two-body numbers of the contact
+(u = u_rail - u_wheel for tractions p on the rail) are then K_rail + K_wheel (:func:`combine`).
+
+Collocation (``collocation``): ``"centre"`` (the displacement at the element centre: CONTACT's
+convention and that of conformal.influence.halfspace; default) or ``"average"`` (averaged over
+the element; with ``conform = "all"`` the average is the exact facet integral, the transpose of
+the load operator, and the direct method's matrix is exactly symmetric: reciprocity).
+
+Two methods (``method``):
+
+``"direct"``
+    Plain FE: unit tractions on the loaded elements (the surface mesh must conform to them,
+    ``conform = "column"`` or ``"all"``), far faces clamped, one factorisation, 3 ms right-hand
+    sides as one block.  The traction jumps at the element edges make the field singular there,
+    and the self terms converge slowly (51 x 39 grid, P2, h = d/4 at the loaded column: 4 %
+    error in 45 s; studies/fe_influence_speed_error.py).
+
+``"split"`` (default)
+    The displacement is split as u = u_hs + u_c (in the spirit of Li's decomposition): u_hs is
+    the analytic 3-D field of a half-space loaded on the tangent rectangle of the loaded element
+    (conformal.influence.fe_halfspace3d), u_c an FE correction whose clamped faces carry -u_hs
+    and whose free surface carries the residual traction p - sigma(u_hs) n: zero on a flat
+    surface, a curvature term of relative size d/R on a curved one.  The singular near field is
+    exact and the mesh only carries the smooth correction, so P1 on a coarse mesh suffices (flat
+    limit: the error is the truncation of the body, 0.2 % after the offset at body size 1).  On a
+    curved surface the mesh must conform to the loaded column (``conform = "column"``): the
+    half-space traction of the flat rectangle turns from p to 0 in a layer as thin as the depth
+    of the surface below the tangent plane (d^2/8R), and quadrature points must not fall into it.
+    Points above the tangent plane (a concave surface) are evaluated at depth 0+.
+
+Defaults (MeshSpec): split, P1, h = 2 d on the observed patch, d/2 at the loaded column, growth
+0.35, body margin 1 x the patch size, pypardiso; chosen from the study's Pareto front (flat 0.2 %,
+R13 gauge corner 0.6 % against P2, 51 x 39 wheel + rail in about 20 s here).
+
+Influence numbers are cached by conformal.influence.cache; bump ``FE_VERSION`` whenever a change
+here changes the numbers.
+"""
+from __future__ import annotations
+
+import math
+import resource
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import scipy.sparse as sp
+
+from conformal.errors import ConformalError, InputError
+from conformal.influence.fe_halfspace3d import _gauss_rectangle_stress, rectangle_displacement, rectangle_stress
+from conformal.meshing.bodies import BodyModel, StripPatch
+from conformal.meshing.gmsh_body import BodyMesh, MeshSpec, mesh_body, surface_frame, surface_point
+
+FE_VERSION = "1"
+SPLU_ORDERING = "COLAMD"
+METHODS = ("split", "direct")
+SOLVERS = ("auto", "pardiso", "splu", "amg")
+COLLOCATIONS = ("centre", "average")
+
+
+class FESolveError(ConformalError):
+    """The FE solve failed: out of memory, too many unknowns, or the solver did not converge."""
+
+
+@dataclass(frozen=True)
+class FESettings:
+    """Everything that controls the FE influence numbers besides body, grid and material."""
+
+    method: str = "split"
+    mesh: MeshSpec = MeshSpec()
+    solver: str = "auto"
+    collocation: str = "centre"
+    n_average: int = 6          # Gauss points per direction for "average" collocation
+    max_dofs: int = 1_500_000
+    amg_tol: float = 1e-10
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise InputError(f"[model] fe_method: must be one of {', '.join(METHODS)}, got {self.method!r}")
+        if self.solver not in SOLVERS:
+            raise InputError(f"[model] fe_solver: must be one of {', '.join(SOLVERS)}, got {self.solver!r}")
+        if self.collocation not in COLLOCATIONS:
+            raise InputError(f"[model] fe_collocation: must be one of {', '.join(COLLOCATIONS)}, "
+                             f"got {self.collocation!r}")
+        if self.method == "direct" and self.mesh.conform == "none":
+            raise InputError("[model] fe_conform: the direct method needs a mesh that conforms to the "
+                             "loaded elements (\"column\" or \"all\")")
+
+    def key(self) -> dict:
+        """Settings that change the numbers (the solver choice does not, beyond round-off)."""
+        return {"method": self.method, "mesh": self.mesh.key(), "collocation": self.collocation,
+                "n_average": self.n_average if self.collocation == "average" else None,
+                "amg_tol": self.amg_tol if self.solver == "amg" else None}
+
+
+@dataclass(frozen=True, eq=False)
+class BodyInfluence:
+    """The FE influence kernel of one body (see the module docstring for the layout)."""
+
+    kernel: np.ndarray
+    kind: str
+    patch: StripPatch
+    G: float
+    nu: float
+    settings: FESettings
+    stats: dict = field(default_factory=dict)
+
+
+# ----------------------------------------------------------------------------- FE space
+_DUNAVANT4 = (  # degree-4 rule on the triangle: barycentric points and weights (sum 1)
+    np.array([[0.445948490915965, 0.445948490915965, 0.108103018168070],
+              [0.445948490915965, 0.108103018168070, 0.445948490915965],
+              [0.108103018168070, 0.445948490915965, 0.445948490915965],
+              [0.091576213509771, 0.091576213509771, 0.816847572980459],
+              [0.091576213509771, 0.816847572980459, 0.091576213509771],
+              [0.816847572980459, 0.091576213509771, 0.091576213509771]]),
+    np.array([0.223381589678011] * 3 + [0.109951743655322] * 3))
+
+
+def _trace_shape(lam: np.ndarray, order: int) -> np.ndarray:
+    """Lagrange shape functions of a triangle (trace of P1/P2 tets) at barycentric points (..., 3).
+    P2 order: vertices 0, 1, 2, then edges (0,1), (1,2), (0,2)."""
+    if order == 1:
+        return lam
+    l0, l1, l2 = lam[..., 0], lam[..., 1], lam[..., 2]
+    return np.stack([l0 * (2 * l0 - 1), l1 * (2 * l1 - 1), l2 * (2 * l2 - 1),
+                     4 * l0 * l1, 4 * l1 * l2, 4 * l0 * l2], axis=-1)
+
+
+@dataclass(frozen=True, eq=False)
+class _Space:
+    basis: object
+    dofmap: np.ndarray       # (3, n_scalar): dof of component c at scalar node g
+    n_scalar: int
+    edge_key: np.ndarray     # sorted keys of the mesh edges (P2)
+    edge_id: np.ndarray
+    nverts: int
+    order: int
+
+    def scalar_nodes(self, tris: np.ndarray) -> np.ndarray:
+        """Scalar nodes of surface triangles (F, 3 or 6)."""
+        if self.order == 1:
+            return tris
+        n = self.nverts
+        out = [tris]
+        for a, b in ((0, 1), (1, 2), (0, 2)):
+            lo, hi = np.minimum(tris[:, a], tris[:, b]), np.maximum(tris[:, a], tris[:, b])
+            key = lo.astype(np.int64) * n + hi
+            pos = np.searchsorted(self.edge_key, key)
+            if np.any(pos >= self.edge_key.size) or np.any(self.edge_key[np.minimum(pos, self.edge_key.size - 1)] != key):
+                raise FESolveError("surface triangle edge not found in the tetrahedral mesh")
+            out.append((self.nverts + self.edge_id[pos])[:, None])
+        return np.concatenate(out, axis=1)
+
+
+def _space(bm: BodyMesh, order: int) -> tuple[object, _Space]:
+    from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, MeshTet
+
+    m = MeshTet(bm.points.T.copy(), bm.tets.T.copy())
+    elem = ElementTetP2() if order == 2 else ElementTetP1()
+    basis = Basis(m, ElementVector(elem), intorder=2 if order == 2 else 1)
+    nv = m.nvertices
+    if order == 2:
+        dofmap = np.concatenate([basis.nodal_dofs, basis.edge_dofs], axis=1)
+        key = m.edges[0].astype(np.int64) * nv + m.edges[1]
+        srt = np.argsort(key)
+        edge_key, edge_id = key[srt], srt
+    else:
+        dofmap = basis.nodal_dofs
+        edge_key = edge_id = np.zeros(0, dtype=np.int64)
+    return m, _Space(basis, dofmap, dofmap.shape[1], edge_key, edge_id, nv, order)
+
+
+def _clamped_dofs(m, space: _Space, bm: BodyMesh) -> np.ndarray:
+    """All dofs on the clamped faces (vertex and, for P2, edge dofs of the clamped triangles)."""
+    clamped = bm.clamped_tris
+    if len(clamped) == 0:
+        raise FESolveError("the body has no clamped face")
+    nodes = space.scalar_nodes(np.sort(clamped, axis=1))
+    return np.unique(space.dofmap[:, np.unique(nodes)].ravel())
+
+
+# ----------------------------------------------------------------------------- surface maps
+@dataclass(frozen=True, eq=False)
+class _Surface:
+    """Quadrature on the free surface and interpolation of the FE trace in (x, s).
+
+    Two rules: 6 points per facet (``points``, ``P6``) near a loaded element, the centroid
+    (``centroids``, ``P1``) elsewhere.  P6 and P1 map values at the points to the load vector:
+    F_a = sum_q w_q phi_a(q) t(q), as (n_scalar, points) CSC matrices (column slices per facet).
+    """
+
+    points: np.ndarray       # (F*6, 3)
+    uv: np.ndarray           # (F*6, 2) their (x, s)
+    normal6: np.ndarray      # (F*6, 3) outward unit normals
+    P6: sp.csc_matrix
+    centroids: np.ndarray    # (F, 3)
+    normal: np.ndarray       # (F, 3)
+    diameter: np.ndarray     # (F,) longest edge
+    P1: sp.csc_matrix
+    tris: np.ndarray
+    tri_uv: np.ndarray       # (F, 3, 2)
+
+
+def _rule_matrix(space: "_Space", nodes: np.ndarray, lam: np.ndarray, w: np.ndarray, area: np.ndarray):
+    """(n_scalar, F*q) matrix of w_q |T| phi_a(q) for a quadrature rule (lam (q, 3), w (q,))."""
+    q = lam.shape[0]
+    F = nodes.shape[0]
+    phi = _trace_shape(lam, space.order)                 # (q, a)
+    rows = np.repeat(nodes[:, None, :], q, axis=1).ravel()
+    cols = np.repeat(np.arange(F * q), nodes.shape[1])
+    vals = (phi[None, :, :] * (area[:, None] * w[None, :])[:, :, None]).ravel()
+    return sp.csc_matrix((vals, (rows, cols)), shape=(space.n_scalar, F * q))
+
+
+def _free_surface(bm: BodyMesh, space: _Space) -> _Surface:
+    tris = bm.free_tris
+    X = bm.points[tris]                                  # (F, 3, 3)
+    nrm = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+    area = 0.5 * np.linalg.norm(nrm, axis=1)
+    nrm /= (2 * area)[:, None]
+    tri_uv = bm.uv[tris]
+    # orient outwards: the common normal n points into body 1 (rail/block: out = -n; wheel: out = +n)
+    cen_uv = tri_uv.mean(axis=1)
+    n_common = surface_frame(bm.body, bm.extent, cen_uv[:, 0], cen_uv[:, 1])[:, 2]
+    sign = -1.0 if bm.body.below else 1.0
+    flip = np.einsum("ij,ij->i", nrm, sign * n_common) < 0
+    nrm[flip] *= -1
+    lam, w = _DUNAVANT4
+    q = lam.shape[0]
+    nodes = space.scalar_nodes(tris)
+    diameter = np.max(np.linalg.norm(X - np.roll(X, 1, axis=1), axis=2), axis=1)
+    return _Surface(points=np.einsum("qk,fkd->fqd", lam, X).reshape(-1, 3),
+                    uv=np.einsum("qk,fkd->fqd", lam, tri_uv).reshape(-1, 2),
+                    normal6=np.repeat(nrm, q, axis=0),
+                    P6=_rule_matrix(space, nodes, lam, w, area),
+                    centroids=X.mean(axis=1), normal=nrm, diameter=diameter,
+                    P1=_rule_matrix(space, nodes, np.full((1, 3), 1.0 / 3.0), np.ones(1), area),
+                    tris=tris, tri_uv=tri_uv)
+
+
+def _trace_interpolation(surf: _Surface, space: _Space, uv: np.ndarray) -> sp.csr_matrix:
+    """(M, n_scalar) matrix evaluating the FE trace at surface points given by (x, s)."""
+    from matplotlib.tri import Triangulation
+
+    nodes_uv = np.zeros((surf.tris.max() + 1, 2))
+    nodes_uv[surf.tris.ravel()] = surf.tri_uv.reshape(-1, 2)
+    tri = Triangulation(nodes_uv[:, 0], nodes_uv[:, 1], triangles=surf.tris)
+    finder = tri.get_trifinder()
+    f = finder(uv[:, 0], uv[:, 1])
+    if np.any(f < 0):
+        bad = uv[f < 0][0]
+        raise FESolveError(f"observation point (x, s) = ({bad[0]:.4f}, {bad[1]:.4f}) lies outside the "
+                           "meshed surface")
+    A = surf.tri_uv[f]                                   # (M, 3, 2)
+    T = np.stack([A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]], axis=-1)   # (M, 2, 2)
+    l12 = np.linalg.solve(T, (uv - A[:, 0])[..., None])[..., 0]
+    lam = np.column_stack([1 - l12.sum(axis=1), l12])
+    phi = _trace_shape(lam, space.order)
+    nodes = space.scalar_nodes(surf.tris[f])
+    rows = np.repeat(np.arange(len(uv)), nodes.shape[1])
+    return sp.csr_matrix((phi.ravel(), (rows, nodes.ravel())), shape=(len(uv), space.n_scalar))
+
+
+# ----------------------------------------------------------------------------- half-space part
+@dataclass(frozen=True, eq=False)
+class _Loads:
+    """The loaded column: centres, frames and the local (inward) half-space frames."""
+
+    centres: np.ndarray      # (ms, 3)
+    frames: np.ndarray       # (ms, 3, 3) rows t_x, t_s, n (common)
+    local: np.ndarray        # (ms, 3, 3) rows e1, e2, e3 = inward normal
+    B: np.ndarray            # (3, 3) common load components -> local ones
+    widths: np.ndarray       # (ms,) element widths along s
+    x0: float = 0.0          # rolling coordinate of the loaded column's centre
+
+    def in_column(self, uv: np.ndarray, dx: float, J: int, edges: np.ndarray) -> np.ndarray:
+        """Points (x, s) inside loaded element J."""
+        return (np.abs(uv[:, 0] - self.x0) < 0.5 * dx) & (uv[:, 1] > edges[J]) & (uv[:, 1] < edges[J + 1])
+
+
+def _loads(bm: BodyMesh, x0: float = 0.0) -> _Loads:
+    patch = bm.patch
+    s = patch.s_centres
+    c = surface_point(bm.body, bm.extent, np.full_like(s, x0), s)
+    F = surface_frame(bm.body, bm.extent, np.full_like(s, x0), s)
+    sig = 1.0 if bm.body.below else -1.0
+    B = np.diag([1.0, sig, sig])
+    local = np.einsum("ab,jbc->jac", B, F)
+    return _Loads(c, F, local, B, patch.s_widths, float(x0))
+
+
+def _hs_displacement(loads: _Loads, X: np.ndarray, dx: float, G: float, nu: float, J: int) -> np.ndarray:
+    """u_hs of load row J at global points X (..., 3): (..., 3 global comps, 3 common loads)."""
+    R = loads.local[J]
+    q = (X - loads.centres[J]) @ R.T
+    u = rectangle_displacement(q, dx, float(loads.widths[J]), G=G, nu=nu)
+    return np.einsum("ki,...kl,lj->...ij", R, u, loads.B)
+
+
+def _residual_load(loads: _Loads, surf: _Surface, space: _Space, patch: StripPatch, G: float, nu: float,
+                   J: int, near: float = 3.0) -> np.ndarray:
+    """Load vectors (3, n_scalar, 3 common loads) of the residual traction p chi_J - sigma(u_hs) n.
+
+    Facets within ``near`` element sizes of the loaded rectangle (in its plane) use the 6-point rule
+    and the closed-form stress; the surface mesh must conform to the loaded element there, so that
+    no quadrature point falls into the thin layer (width = the depth of the curved surface below
+    the tangent plane, ~d^2/8R) where the half-space traction of the flat rectangle turns from p
+    to 0.  Farther facets use their centroid and point forces (2 x 2 Gauss up to 10 sizes, 1 beyond).
+    """
+    dx, ds = patch.dx, float(loads.widths[J])
+    h = max(dx, ds)
+    R = loads.local[J]
+    qc = (surf.centroids - loads.centres[J]) @ R.T
+    gap = np.maximum(np.abs(qc[:, 0]) - 0.5 * dx, np.abs(qc[:, 1]) - 0.5 * ds) - 0.5 * surf.diameter
+    is_near = gap < near * h
+    out = np.zeros((3, space.n_scalar, 3))
+    # near facets: 6 points each, closed form
+    fn = np.flatnonzero(is_near)
+    if fn.size:
+        idx = (fn[:, None] * 6 + np.arange(6)[None, :]).ravel()
+        X = surf.points[idx]
+        qn = (X - loads.centres[J]) @ R.T
+        sig = rectangle_stress(qn, dx, ds, G=G, nu=nu, near=None)              # (Q, 3, 3, 3)
+        t = -_to_common(np.einsum("qkls,ql->qks", sig, surf.normal6[idx] @ R.T), R, loads.B)
+        t[loads.in_column(surf.uv[idx], dx, J, patch.edges)] += loads.frames[J].T
+        P = surf.P6[:, idx]
+        for c in range(3):
+            out[c] += P @ t[:, c, :]
+    # far facets: centroid rule, point forces
+    for ng, sel in ((2, (~is_near) & (gap < 10 * h)), (1, gap >= 10 * h)):
+        ff = np.flatnonzero(sel)
+        if not ff.size:
+            continue
+        qf = qc[ff]
+        sig = _gauss_rectangle_stress(qf[:, 0], qf[:, 1], np.maximum(qf[:, 2], 0.0), dx, ds, nu, ng)
+        t = -_to_common(np.einsum("qkls,ql->qks", sig, surf.normal[ff] @ R.T), R, loads.B)
+        P = surf.P1[:, ff]
+        for c in range(3):
+            out[c] += P @ t[:, c, :]
+    return out
+
+
+def _to_common(v_loc: np.ndarray, R: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Vectors per local load (Q, 3 local comps, 3 local loads) -> global comps, common loads."""
+    return np.einsum("ki,qkl,lj->qij", R, v_loc, B)
+
+
+def _flat(body: BodyModel) -> bool:
+    p = body.profile
+    return (not body.revolved) and np.ptp(p.z) < 1e-12 * max(1.0, np.ptp(p.y))
+
+
+# ----------------------------------------------------------------------------- solvers
+def _peak_rss_gib() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2 ** 20
+
+
+# Peak memory per unknown of assembly + direct factorisation + 3 ms right-hand sides, measured
+# here (pypardiso): P1, 69k unknowns, 1.5 GiB; P2, 437k unknowns, 11 GiB -> about 25 kB each.
+BYTES_PER_DOF = 25e3
+
+
+def _available_memory() -> float | None:
+    """Bytes of memory available to a new allocation (Linux /proc/meminfo), None if unknown."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    return None
+
+
+def _check_memory(ndofs: int, solver: str) -> None:
+    avail = _available_memory()
+    need = ndofs * BYTES_PER_DOF * (0.3 if solver == "amg" else 1.0)
+    if avail is not None and need > 0.9 * avail:
+        raise FESolveError(f"the FE model ({ndofs} unknowns) needs about {need / 2**30:.1f} GiB with the "
+                           f"{solver} solver, {avail / 2**30:.1f} GiB are available; coarsen the mesh "
+                           "([model] fe_h_patch, fe_growth, fe_order = 1) or use fe_solver = \"amg\"")
+
+
+def _amg_available() -> bool:
+    try:
+        import pyamg  # noqa: F401
+    except Exception:
+        return False
+    return True
+
+
+def _pardiso_available() -> bool:
+    try:
+        import pypardiso  # noqa: F401
+    except Exception:
+        return False
+    return True
+
+
+class _Factor:
+    """A factorised SPD matrix solving block right-hand sides."""
+
+    def __init__(self, A: sp.csr_matrix, solver: str, amg_tol: float = 1e-10, near_null=None):
+        self.kind = solver
+        self.A = A
+        self.iterations = 0
+        if solver == "pardiso":
+            import pypardiso
+
+            self._ps = pypardiso.PyPardisoSolver(mtype=2)
+            self._ps.set_statistical_info_off()
+            self._U = sp.triu(A, format="csr")
+            self._U.sort_indices()
+            self._ps.factorize(self._U)
+        elif solver == "splu":
+            from scipy.sparse.linalg import splu
+
+            self._lu = splu(A.tocsc(), permc_spec=SPLU_ORDERING)
+        else:
+            import pyamg
+
+            self._ml = pyamg.smoothed_aggregation_solver(A, B=near_null, symmetry="symmetric",
+                                                         strength="symmetric")
+            self._tol = amg_tol
+
+    def solve(self, B: np.ndarray) -> np.ndarray:
+        if self.kind == "pardiso":
+            X = self._ps.solve(self._U, np.asfortranarray(B))
+            self._ps.free_memory(everything=True)
+            return X.reshape(B.shape)
+        if self.kind == "splu":
+            return self._lu.solve(B)
+        X = np.empty_like(B)
+        for k in range(B.shape[1]):
+            res: list = []
+            X[:, k] = self._ml.solve(B[:, k], tol=self._tol, accel="cg", maxiter=500, residuals=res)
+            self.iterations = max(self.iterations, len(res))
+            if res and res[-1] > self._tol * max(res[0], 1e-300) * 10:
+                raise FESolveError(f"AMG-CG did not converge for right-hand side {k}: relative residual "
+                                   f"{res[-1] / res[0]:.2e} after {len(res)} iterations")
+        return X
+
+
+def _rigid_modes(points: np.ndarray, comp: np.ndarray) -> np.ndarray:
+    """Rigid-body modes (3 translations, 3 rotations) at dofs of component ``comp`` located at
+    ``points`` (n, 3): the near null space for smoothed-aggregation AMG."""
+    n = len(points)
+    B = np.zeros((n, 6))
+    B[np.arange(n), comp] = 1.0
+    x, y, z = points.T
+    rot = {3: ((0, -y), (1, x)), 4: ((1, -z), (2, y)), 5: ((2, -x), (0, z))}
+    for col, pairs in rot.items():
+        for c, v in pairs:
+            B[comp == c, col] = v[comp == c]
+    return B
+
+
+# ----------------------------------------------------------------------------- main
+def _exact_averages(surf: _Surface, space: _Space, patch: StripPatch, x0: float) -> sp.csr_matrix:
+    """(n_obs, n_scalar): the exact mean of the FE trace over each observed element, from the
+    facets inside it (conforming mesh).  It is the transpose of the element load operator divided
+    by the element area, so the direct method's matrix is exactly symmetric (reciprocity)."""
+    F = len(surf.tris)
+    S = sp.csr_matrix((np.ones(6 * F), (np.arange(6 * F), np.repeat(np.arange(F), 6))), shape=(6 * F, F))
+    facet_int = (surf.P6 @ S).tocsc()                      # (n_scalar, F): integral of phi_a over T
+    cen = surf.tri_uv.mean(axis=1)
+    kx = np.floor((cen[:, 0] - x0 - patch.x_edges[0]) / patch.dx).astype(int)
+    I = np.searchsorted(patch.edges, cen[:, 1]) - 1
+    ok = (kx >= 0) & (kx < patch.n_columns) & (I >= 0) & (I < patch.ms)
+    elem = kx * patch.ms + I
+    E = sp.csr_matrix((np.ones(ok.sum()), (np.flatnonzero(ok), elem[ok])), shape=(F, patch.n_columns * patch.ms))
+    M = (facet_int @ E).T.tocsr()                          # (n_obs, n_scalar)
+    # area of each element = integral of 1 = sum of the trace shape functions' integrals
+    area = np.asarray(M.sum(axis=1)).ravel()
+    if np.any(area <= 0):
+        raise FESolveError("an observed element holds no surface facet (mesh does not conform)")
+    return sp.diags(1.0 / area) @ M
+
+
+def _observation_points(bm: BodyMesh, settings: FESettings, x0: float = 0.0):
+    """(x, s) of the observation points and the weights that average them per element."""
+    patch = bm.patch
+    xc, sc, ws = patch.x_centres + x0, patch.s_centres, patch.s_widths
+    if settings.collocation == "centre":
+        X, S = np.meshgrid(xc, sc, indexing="ij")
+        return np.column_stack([X.ravel(), S.ravel()]), np.ones(1)
+    g, w = np.polynomial.legendre.leggauss(settings.n_average)
+    gx = xc[:, None, None, None] + 0.5 * patch.dx * g[None, None, :, None]
+    gs = sc[None, :, None, None] + 0.5 * ws[None, :, None, None] * g[None, None, None, :]
+    GX, GS = np.broadcast_arrays(gx, gs)
+    return np.column_stack([GX.ravel(), GS.ravel()]), 0.25 * np.outer(w, w).ravel()
+
+
+def body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
+                   settings: FESettings = FESettings(), *, mesh: BodyMesh | None = None,
+                   progress=None, load_column: int = 0) -> BodyInfluence:
+    """FE influence kernel (2mx-1, ms, ms, 3, 3) of one body (see the module docstring).
+
+    G, nu: this body's shear modulus (N/mm²) and Poisson ratio.  ``mesh``: a mesh made earlier
+    for the same body, patch and ``settings.mesh`` (else it is made here).  ``load_column``:
+    load the column ``load_column`` elements away from x = 0 instead (observed columns move
+    with it; needs ``conform = "all"``): by the invariance along x the kernel must not change,
+    which is what the tests check.
+    """
+    from skfem import asm
+    from skfem.models.elasticity import linear_elasticity
+
+    if not (G > 0 and math.isfinite(G)):
+        raise InputError(f"material: G must be > 0, got {G}")
+    if not -1.0 < nu < 0.5:
+        raise InputError(f"material: nu must lie in (-1, 0.5), got {nu}")
+    if settings.method == "split" and settings.mesh.conform == "none" and not _flat(body):
+        raise InputError("[model] fe_conform: the split method on a curved body needs a mesh that conforms "
+                         "to the loaded column (\"column\" or \"all\")")
+    if load_column and settings.mesh.conform != "all":
+        raise InputError("load_column: loading another column needs a mesh with conform = \"all\"")
+    stats: dict = {}
+    t0 = time.perf_counter()
+    bm = mesh if mesh is not None else mesh_body(body, patch, settings.mesh)
+    stats.update({f"mesh_{k}": v for k, v in bm.stats.items()})
+    t_mesh = time.perf_counter()
+    order = settings.mesh.order
+    m, space = _space(bm, order)
+    ndofs = space.basis.N
+    stats["dofs"] = int(ndofs)
+    if ndofs > settings.max_dofs:
+        raise FESolveError(f"the FE model has {ndofs} unknowns, more than max_dofs = {settings.max_dofs}; "
+                           "coarsen the mesh ([model] fe_h_patch, fe_growth) or raise the limit")
+    lam = 2.0 * G * nu / (1.0 - 2.0 * nu)
+    try:
+        K = asm(linear_elasticity(lam, G), space.basis).tocsr()
+    except MemoryError:
+        raise FESolveError(f"out of memory assembling the stiffness matrix ({ndofs} unknowns)") from None
+    t_asm = time.perf_counter()
+    D = _clamped_dofs(m, space, bm)
+    free = np.setdiff1d(np.arange(ndofs), D)
+    surf = _free_surface(bm, space)
+    x0 = load_column * patch.dx
+    loads = _loads(bm, x0)
+    ms, nl = patch.ms, 3 * patch.ms
+    dx = patch.dx
+
+    # right-hand sides (n_scalar x loads per component) and Dirichlet values
+    Fc = np.zeros((3, space.n_scalar, nl))
+    UD = np.zeros((D.size, nl))
+    if settings.method == "direct":
+        for J in range(ms):
+            T = np.zeros((surf.uv.shape[0], 3, 3))
+            T[loads.in_column(surf.uv, dx, J, patch.edges)] = loads.frames[J].T   # unit traction p_j
+            for c in range(3):
+                Fc[c, :, 3 * J:3 * J + 3] = surf.P6 @ T[:, c, :]
+    else:
+        flat = _flat(body)
+        Xd = space.basis.doflocs.T[D]                 # (nD, 3) positions of the clamped dofs
+        comp = np.zeros(D.size, dtype=int)
+        for c in range(3):
+            comp[np.isin(D, space.dofmap[c])] = c
+        for J in range(ms):
+            UD[:, 3 * J:3 * J + 3] = -_hs_displacement(loads, Xd, dx, G, nu, J)[np.arange(D.size), comp]
+            if flat:
+                continue                              # sigma(u_hs) n = p on a flat surface: no residual
+            Fc[:, :, 3 * J:3 * J + 3] = _residual_load(loads, surf, space, patch, G, nu, J)
+            if progress:
+                progress(J + 1, ms)
+    F = np.zeros((ndofs, nl))
+    for c in range(3):
+        F[space.dofmap[c]] = Fc[c]
+    t_rhs = time.perf_counter()
+
+    # solve K_ff U_f = F_f - K_fD U_D
+    solver = settings.solver
+    if solver == "auto":
+        solver = "pardiso" if _pardiso_available() else "splu"
+    if solver == "pardiso" and not _pardiso_available():
+        raise InputError("[model] fe_solver: pypardiso is not installed (pip install pypardiso), "
+                         "use \"splu\" or \"amg\"")
+    if solver == "amg" and not _amg_available():
+        raise InputError("[model] fe_solver: pyamg is not installed (pip install pyamg), use \"splu\"")
+    _check_memory(ndofs, solver)
+    Kff = K[free][:, free].tocsr()
+    rhs = F[free] - K[free][:, D] @ UD
+    near_null = None
+    if solver == "amg":
+        comp_all = np.zeros(ndofs, dtype=int)
+        for c in range(3):
+            comp_all[space.dofmap[c]] = c
+        near_null = _rigid_modes(space.basis.doflocs.T[free], comp_all[free])
+    try:
+        fac = _Factor(Kff, solver, settings.amg_tol, near_null)
+        t_fac = time.perf_counter()
+        Uf = fac.solve(rhs)
+    except MemoryError:
+        raise FESolveError(f"out of memory in the {solver} solve ({ndofs} unknowns); coarsen the mesh "
+                           "([model] fe_h_patch, fe_growth) or use fe_solver = \"amg\"") from None
+    except FESolveError:
+        raise
+    except Exception as exc:  # pypardiso raises PyPardisoError (e.g. error -2: not enough memory)
+        if solver != "pardiso":
+            raise
+        raise FESolveError(f"pypardiso failed ({ndofs} unknowns): {exc}") from None
+    U = np.zeros((ndofs, nl))
+    U[free] = Uf
+    U[D] = UD
+    t_solve = time.perf_counter()
+
+    # observation: FE part by trace interpolation (+ half-space part for the split method)
+    obs_uv, wts = _observation_points(bm, settings, x0)
+    per = wts.size
+    nc = patch.n_columns
+    exact = settings.collocation == "average" and settings.mesh.conform == "all"
+    if exact:
+        Q = _exact_averages(surf, space, patch, x0)
+        u = np.stack([Q @ U[space.dofmap[c]] for c in range(3)], axis=1).reshape(nc, ms, 3, ms, 3)
+    else:
+        Q = _trace_interpolation(surf, space, obs_uv)
+        u = np.stack([Q @ U[space.dofmap[c]] for c in range(3)], axis=1)     # (M, 3 comps, loads)
+        u = np.einsum("kIpcJj,p->kIcJj", u.reshape(nc, ms, per, 3, ms, 3), wts)  # (kx, I, comp, J, j)
+    if settings.method == "split":
+        Xo = surface_point(body, bm.extent, obs_uv[:, 0], obs_uv[:, 1])
+        uh = np.empty((len(obs_uv), 3, 3 * ms))
+        for J in range(ms):
+            uh[:, :, 3 * J:3 * J + 3] = _hs_displacement(loads, Xo, dx, G, nu, J)
+        u += np.einsum("kIpcJj,p->kIcJj", uh.reshape(nc, ms, per, 3, ms, 3), wts)
+    frames = surface_frame(body, bm.extent, x0 + patch.x_centres[:, None], patch.s_centres[None, :])
+    kernel = np.einsum("kIic,kIcJj->kIJij", frames, u)
+    t_obs = time.perf_counter()
+    stats.update({"method": settings.method, "order": order, "solver": solver,
+                  "mesh_s": t_mesh - t0, "assemble_s": t_asm - t_mesh, "rhs_s": t_rhs - t_asm,
+                  "factor_s": t_fac - t_rhs, "solve_s": t_solve - t_fac, "observe_s": t_obs - t_solve,
+                  "total_s": t_obs - t0, "peak_rss_gib": _peak_rss_gib(), "amg_iterations": fac.iterations})
+    return BodyInfluence(kernel, body.kind, patch, G, nu, settings, stats)
+
+
+def combine(body1: BodyInfluence, body2: BodyInfluence) -> np.ndarray:
+    """Two-body kernel u = u(body 1) - u(body 2) per unit traction on body 1 (the rail).
+
+    Each body's kernel is its own displacement per unit traction acting on it, in the common
+    frame; body 2 carries -p and its displacement enters with a minus sign, so the two add.
+    """
+    if body1.kernel.shape != body2.kernel.shape:
+        raise InputError(f"FE kernels of different grids: {body1.kernel.shape} and {body2.kernel.shape}")
+    return body1.kernel + body2.kernel
+
+
+# ----------------------------------------------------------------------------- cache
+def body_key(body: BodyModel, patch: StripPatch, G: float, nu: float, settings: FESettings) -> dict:
+    """Everything that determines a body's FE kernel (the cache key inputs)."""
+    return {"what": "fe-body-influence", "fe_version": FE_VERSION, "body": body.key(), "patch": patch.key(),
+            "G": float(G), "nu": float(nu), "settings": settings.key()}
+
+
+def cached_body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
+                          settings: FESettings = FESettings(), *, cache=None) -> BodyInfluence:
+    """:func:`body_influence` through the NPZ cache (``cache``: a Cache, a folder, None = default,
+    False = no cache)."""
+    from conformal.influence.cache import Cache
+
+    if cache is False:
+        return body_influence(body, patch, G, nu, settings)
+    c = cache if isinstance(cache, Cache) else Cache(cache)
+    inputs = body_key(body, patch, G, nu, settings)
+    result: dict = {}
+
+    def compute():
+        r = body_influence(body, patch, G, nu, settings)
+        result["r"] = r
+        stats = dict(r.stats, summary=f"{body.kind} {body.profile.name}: {patch.n_columns}x{patch.ms} "
+                     f"dx={patch.dx:.4g} G={G:g} nu={nu:g} {settings.method} P{settings.mesh.order}")
+        return {"kernel": r.kernel}, stats
+
+    arrays, hit = c.get_or_compute(inputs, compute)
+    if not hit:
+        return result["r"]
+    meta = c.meta(c.key(inputs)) or {}
+    stats = dict(meta.get("stats", {}), cache_hit=True)
+    return BodyInfluence(arrays["kernel"], body.kind, patch, G, nu, settings, stats)
+
+
+# ----------------------------------------------------------------------------- wheel and rail
+def _edge_points(grid) -> np.ndarray:
+    """Rail-profile-frame points (y, z) of the grid's s-edges (x = 0)."""
+    return np.stack([np.interp(grid.s_edges, grid.rail_curve_s, grid.rail_curve[:, 0]),
+                     np.interp(grid.s_edges, grid.rail_curve_s, grid.rail_curve[:, 1])], axis=1)
+
+
+def rail_body_from_grid(grid, rail_points: np.ndarray | None = None, name: str = "rail"
+                        ) -> tuple[BodyModel, StripPatch]:
+    """The rail body and its patch for a :class:`~conformal.grid.CurvedGrid`.
+
+    ``rail_points``: the whole rail profile (rail-profile frame) to give the FE body room beyond
+    the grid's local curve (``grid.rail_curve`` reaches only a few mm past the grid).
+    """
+    pts = grid.rail_curve if rail_points is None else np.asarray(rail_points, dtype=float)
+    from conformal.meshing.bodies import Profile2D
+
+    prof = Profile2D.from_points(pts, name)
+    P = _edge_points(grid)
+    edges = prof.project(P)
+    miss = float(np.max(np.linalg.norm(prof.point(edges) - P, axis=1)))
+    if miss > 0.01:
+        raise InputError(f"rail body: the grid does not lie on the given rail profile ({miss:.3f} mm off)")
+    return BodyModel("rail", prof), StripPatch(grid.mx, grid.dx, tuple(float(v) for v in edges))
+
+
+def _wheel_axes(grid) -> np.ndarray:
+    """Columns: forward, axle, down of the wheel, in the rail-profile frame (x, y, z)."""
+    a = np.asarray(grid.wheel_axle, dtype=float)
+    d = np.asarray(grid.wheel_down, dtype=float)
+    f = np.cross(a, d)
+    return np.column_stack([f / np.linalg.norm(f), a / np.linalg.norm(a), d / np.linalg.norm(d)])
+
+
+def wheel_body_from_grid(grid, wheel_points: np.ndarray | None = None, name: str = "wheel"
+                         ) -> tuple[BodyModel, StripPatch, np.ndarray]:
+    """The wheel body (in its own frame: y along the axle, z = increase of radius, down), its
+    patch (the grid's s-edges projected onto the wheel profile), and the rotations (ms, 3, 3) from
+    the wheel's element frames to the rail's element frames (about x: the small angle between
+    the wheel and rail normals across the patch, and the roll of the wheelset against the rail)."""
+    from conformal.meshing.bodies import Profile2D
+
+    pts = grid.wheel_profile if wheel_points is None else np.asarray(wheel_points, dtype=float)
+    prof = Profile2D.from_points(pts, name)
+    M = _wheel_axes(grid)
+    P = np.column_stack([np.zeros(grid.ms + 1), _edge_points(grid)])           # rail frame
+    q = (P - np.asarray(grid.wheel_centre, dtype=float)) @ M                      # wheel axes
+    yz = np.column_stack([q[:, 1], q[:, 2] - grid.wheel_radius])                # (y_w, z_w)
+    edges = prof.project(yz)
+    miss = float(np.max(np.linalg.norm(prof.point(edges) - yz, axis=1)))
+    if miss > 10.0:
+        raise InputError(f"wheel body: the wheel profile lies {miss:.1f} mm from the rail grid (wrong or "
+                         "mirrored wheel profile?)")
+    if np.any(np.diff(edges) <= 0):
+        raise InputError("wheel body: the grid's elements do not map to increasing positions on the "
+                         "wheel profile (the wheel profile does not face the rail grid)")
+    body = BodyModel("wheel", prof, axle_z=-float(grid.wheel_radius))
+    patch = StripPatch(grid.mx, grid.dx, tuple(float(v) for v in edges))
+    # element frames: wheel (own axes) -> rail-profile frame -> rail element frames
+    from conformal.meshing.bodies import body_extent
+
+    ext = body_extent(body, patch, 1e-3)
+    Fw = surface_frame(body, ext, np.zeros(patch.ms), patch.s_centres)            # (ms, 3, 3) rows
+    n = np.asarray(grid.normal, dtype=float)
+    Fr = np.zeros((grid.ms, 3, 3))
+    Fr[:, 0, 0] = 1.0
+    Fr[:, 1, 1], Fr[:, 1, 2] = n[:, 1], -n[:, 0]                                  # t_s = n x t_x
+    Fr[:, 2, 1], Fr[:, 2, 2] = n[:, 0], n[:, 1]
+    rot = np.einsum("Iab,bc,Idc->Iad", Fr, M, Fw)
+    return body, patch, rot
+
+
+def rotate_kernel(kernel: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    """K'[k, I, J] = rot_I K[k, I, J] rot_J^T (components into other element frames)."""
+    return np.einsum("Iab,kIJbc,Jdc->kIJad", rot, kernel, rot)
+
+
+def wheel_rail_kernel(grid, material, settings: FESettings = FESettings(), *, cache=None,
+                      rail_points: np.ndarray | None = None, wheel_points: np.ndarray | None = None,
+                      names: tuple[str, str] = ("rail", "wheel")) -> tuple[np.ndarray, dict]:
+    """Two-body FE kernel (2mx-1, ms, ms, 3, 3) for a curved grid: rail (body 1: G1, nu1) plus
+    wheel (body 2: G2, nu2), in the rail's element frames (CurvedInfluence.from_kernel takes it).
+
+    Returns (kernel, info) with the statistics of both bodies (times, unknowns, cache hits).
+    """
+    rail, rpatch = rail_body_from_grid(grid, rail_points, name=names[0])
+    wheel, wpatch, rot = wheel_body_from_grid(grid, wheel_points, name=names[1])
+    kr = cached_body_influence(rail, rpatch, material.G1, material.nu1, settings, cache=cache)
+    kw = cached_body_influence(wheel, wpatch, material.G2, material.nu2, settings, cache=cache)
+    kernel = kr.kernel + rotate_kernel(kw.kernel, rot)
+    return kernel, {"rail": kr.stats, "wheel": kw.stats}
+
+
+def scene_profiles(scene) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Whole rail and wheel profiles (points, 0.1 mm apart) of a wheel-rail scene, so that the FE
+    bodies get room beyond the grid's local curves; (None, None) if they cannot be had."""
+    try:
+        from conformal.geometry.wheelrail import profile_curves
+
+        wc, rc = profile_curves(scene.geometry, scene.base_dir)
+        return rc.sample(0.1)[1], wc.sample(0.1)[1]
+    except (ImportError, AttributeError, TypeError):
+        return None, None
+
+
+def influence_for_grid(scene, grid, *, cache=None):
+    """The FE influence operator (CurvedInfluence) of a wheel-rail scene's curved grid, with the
+    scene's [model] fe_* settings, through the cache (``conformal precompute`` fills the same
+    entries).  Returns (operator, info)."""
+    from conformal.influence.curved import CurvedInfluence
+
+    rail_pts, wheel_pts = scene_profiles(scene)
+    geo = scene.geometry
+    kernel, info = wheel_rail_kernel(grid, scene.material, settings_from_options(scene.model.options),
+                                     cache=cache, rail_points=rail_pts, wheel_points=wheel_pts,
+                                     names=(str(geo.rail_profile), str(geo.wheel_profile)))
+    return CurvedInfluence.from_kernel(kernel), info
+
+
+# ----------------------------------------------------------------------------- settings
+_OPTION_KEYS = {"fe_method": "method", "fe_order": "order", "fe_h_patch": "h_patch", "fe_h_load": "h_load",
+                "fe_growth": "growth", "fe_h_max": "h_max", "fe_conform": "conform",
+                "fe_body_size": "body_size", "fe_solver": "solver", "fe_collocation": "collocation"}
+
+
+def settings_from_options(options) -> FESettings:
+    """FESettings from a scene's [model] keys fe_method, fe_order, fe_h_patch, fe_h_load, fe_growth,
+    fe_h_max, fe_conform, fe_body_size, fe_solver, fe_collocation (defaults for missing keys)."""
+    opts = {k: v for k, v in dict(options or {}).items() if str(k).startswith("fe_")}
+    unknown = sorted(set(opts) - set(_OPTION_KEYS))
+    if unknown:
+        raise InputError(f"[model] {unknown[0]}: unknown FE key (known: {', '.join(sorted(_OPTION_KEYS))})")
+    mesh_kw, top_kw = {}, {}
+    for k, v in opts.items():
+        name = _OPTION_KEYS[k]
+        if name in ("method", "solver", "collocation", "conform"):
+            if not isinstance(v, str):
+                raise InputError(f"[model] {k}: must be a string, got {v!r}")
+        elif name == "order":
+            if isinstance(v, bool) or not isinstance(v, int):
+                raise InputError(f"[model] {k}: must be 1 or 2, got {v!r}")
+        elif isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise InputError(f"[model] {k}: must be a number, got {v!r}")
+        (top_kw if name in ("method", "solver", "collocation") else mesh_kw)[name] = v
+    return FESettings(mesh=replace(MeshSpec(), **mesh_kw), **top_kw)

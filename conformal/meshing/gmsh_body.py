@@ -1,0 +1,384 @@
+"""Tetrahedral meshes of quasi-quarter-space bodies with gmsh (OpenCASCADE kernel).
+
+The cross-section (surface curve between s_lo and s_hi, closed by two vertical cuts and a bottom
+line) is extruded along x (rail, block) or revolved about the axle (wheel).  The surface curve is
+split at every grid edge s_l, so the swept surface falls apart into one strip per grid row; grid
+edges across x are imprinted as curves (``conform``):
+
+* ``"all"``: every column edge of the observed region: each contact element is a face of its own
+  and the surface mesh conforms to the grid (needed for exact element loads and averages);
+* ``"column"``: only the edges of the loaded column and of the observed region;
+* ``"none"``: only the edges of the observed region (enough for the split method, whose loads are
+  analytic).
+
+The mesh size is ``h_patch`` on the observed patch (``h_load`` on the loaded column, if given) and
+grows linearly with the distance from it (gradient ``growth``) up to ``h_max``; gmsh's Distance
+field from the grid's row edges drives it.  gmsh is not thread-safe: one model per process, always
+finalised (also on errors).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from conformal.errors import ConformalError, InputError
+from conformal.meshing.bodies import BodyExtent, BodyModel, StripPatch, body_extent
+
+SAMPLING = 0
+CONFORM = ("all", "column", "none")
+
+
+class MeshingError(ConformalError):
+    """gmsh could not build or mesh the body (the message says which step and why)."""
+
+
+@dataclass(frozen=True)
+class MeshSpec:
+    """Mesh parameters.  Sizes are relative to the contact element size h_e = min(dx, ds).
+
+    order: 1 (linear) or 2 (quadratic tetrahedra) -- used by the FE solve, stored here so that one
+    spec describes the whole discretisation.
+    """
+
+    # defaults chosen from studies/fe_influence_speed_error.py (split method): P1 with h = 2 d on
+    # the observed patch and d/2 at the loaded column; see the study's report for the numbers
+    order: int = 1
+    h_patch: float = 2.0
+    h_load: float | None = 0.5
+    growth: float = 0.35
+    h_max: float = 0.2          # largest element, relative to the body margin (depth)
+    conform: str = "column"
+    body_size: float = 1.0      # margin around the patch, in patch sizes (see body_extent)
+    optimize: bool = True
+
+    def __post_init__(self):
+        if self.order not in (1, 2):
+            raise InputError(f"[model] fe_order: must be 1 or 2, got {self.order}")
+        if self.conform not in CONFORM:
+            raise InputError(f"[model] fe_conform: must be one of {', '.join(CONFORM)}, got {self.conform!r}")
+        for name in ("h_patch", "growth", "h_max", "body_size"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise InputError(f"[model] fe_{name}: must be > 0, got {v!r}")
+        if self.h_load is not None and not (math.isfinite(self.h_load) and self.h_load > 0):
+            raise InputError(f"[model] fe_h_load: must be > 0, got {self.h_load!r}")
+
+    def key(self) -> dict:
+        return {"order": self.order, "h_patch": self.h_patch, "h_load": self.h_load, "growth": self.growth,
+                "h_max": self.h_max, "conform": self.conform, "body_size": self.body_size,
+                "optimize": self.optimize}
+
+
+@dataclass(frozen=True, eq=False)
+class BodyMesh:
+    """A linear tetrahedral mesh of one body and what the FE solve needs to know about it.
+
+    points (N, 3) mm, tets (T, 4) node indices; free_tris (F, 3): triangles of the free (profile)
+    surface; clamped_tris (C, 3): triangles of the cut faces (clamped); uv (N, 2): rolling coordinate x and
+    arc length s of the nodes on the free surface (NaN elsewhere).
+    """
+
+    body: BodyModel
+    patch: StripPatch
+    extent: BodyExtent
+    spec: MeshSpec
+    points: np.ndarray
+    tets: np.ndarray
+    free_tris: np.ndarray
+    clamped_tris: np.ndarray
+    uv: np.ndarray
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def n_nodes(self) -> int:
+        return len(self.points)
+
+    @property
+    def clamped_nodes(self) -> np.ndarray:
+        return np.unique(self.clamped_tris)
+
+    def to_meshio(self):
+        """The mesh as a meshio.Mesh (tetra + free-surface triangles) for inspection."""
+        import meshio
+
+        return meshio.Mesh(self.points, [("tetra", self.tets), ("triangle", self.free_tris)])
+
+    def write(self, path) -> None:
+        """Write the mesh with meshio (format from the suffix, e.g. .vtu, .msh, .xdmf)."""
+        self.to_meshio().write(str(path))
+
+
+# ----------------------------------------------------------------------------- coordinates
+def cross_section_coordinates(body: BodyModel, extent: BodyExtent, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rolling coordinate x (arc length at the reference radius for a wheel) and the point
+    (y, z) in the cross-section plane, for points p (..., 3) of the body."""
+    p = np.asarray(p, dtype=float)
+    if not body.revolved:
+        return p[..., 0], p[..., 1:3]
+    dz = p[..., 2] - body.axle_z
+    theta = np.arctan2(p[..., 0], dz)
+    r = np.hypot(p[..., 0], dz)
+    yz = np.stack([p[..., 1], body.axle_z + r], axis=-1)
+    return theta * extent.x_ref_radius, yz
+
+
+def surface_point(body: BodyModel, extent: BodyExtent, x, s) -> np.ndarray:
+    """3-D point of the surface at rolling coordinate x and arc length s."""
+    yz = body.profile.point(s)
+    x = np.asarray(x, dtype=float)
+    if not body.revolved:
+        return np.stack(np.broadcast_arrays(x, yz[..., 0], yz[..., 1]), axis=-1)
+    theta = x / extent.x_ref_radius
+    r = yz[..., 1] - body.axle_z
+    return np.stack(np.broadcast_arrays(r * np.sin(theta), yz[..., 0], body.axle_z + r * np.cos(theta)), axis=-1)
+
+
+def surface_frame(body: BodyModel, extent: BodyExtent, x, s) -> np.ndarray:
+    """Contact frame (t_x, t_s, n) of the surface at (x, s), rows of shape (..., 3, 3).
+
+    n is the common normal: it points into body 1 (down, z > 0 side of the rail surface), i.e.
+    into a rail or block body and out of a wheel; t_s = n x t_x along increasing s.
+    """
+    t = body.profile.tangent(s)                    # (..., 2) = (dy/ds, dz/ds)
+    x = np.asarray(x, dtype=float)
+    shape = np.broadcast(x, t[..., 0]).shape
+    F = np.zeros(shape + (3, 3))
+    if not body.revolved:
+        theta = np.zeros(shape)
+    else:
+        theta = np.broadcast_to(x / extent.x_ref_radius, shape)
+    c, si = np.cos(theta), np.sin(theta)
+    ty, tz = np.broadcast_to(t[..., 0], shape), np.broadcast_to(t[..., 1], shape)
+    # cross-section vectors at theta = 0: t_s = (0, ty, tz), n = (0, -tz, ty); rotate about y
+    F[..., 0, :] = np.stack([c, np.zeros(shape), -si], axis=-1)
+    F[..., 1, :] = np.stack([tz * si, ty, tz * c], axis=-1)
+    F[..., 2, :] = np.stack([ty * si, -tz, ty * c], axis=-1)
+    return F
+
+
+# ----------------------------------------------------------------------------- gmsh model
+def _cut_positions(patch: StripPatch, conform: str) -> np.ndarray:
+    xe = patch.x_edges
+    if conform == "all":
+        return xe
+    cuts = [xe[0], xe[-1]]
+    if conform == "column":
+        cuts += [-0.5 * patch.dx, 0.5 * patch.dx]
+    return np.unique(np.array(cuts))
+
+
+def _build(gmsh, body: BodyModel, patch: StripPatch, ext: BodyExtent, spec: MeshSpec):
+    occ = gmsh.model.occ
+    prof = body.profile
+    e = patch.edges
+    breaks = [ext.s_lo] if ext.s_lo < e[0] - 1e-9 else []
+    breaks = np.array(breaks + list(e) + ([ext.s_hi] if ext.s_hi > e[-1] + 1e-9 else []))
+    pieces = prof.pieces(breaks)
+    x0 = 0.0 if body.revolved else ext.x_lo
+
+    def pt(y, z):
+        return occ.addPoint(x0, float(y), float(z))
+
+    corner = [pt(*pieces[0][0])]
+    curves, grid_curves = [], []
+    first_grid = 1 if ext.s_lo < e[0] - 1e-9 else 0
+    for k, piece in enumerate(pieces):
+        inner = [pt(*q) for q in piece[1:-1]]
+        end = pt(*piece[-1])
+        tags = [corner[-1]] + inner + [end]
+        c = occ.addLine(tags[0], tags[1]) if len(tags) == 2 else occ.addSpline(tags)
+        curves.append(c)
+        if first_grid <= k < first_grid + patch.ms:
+            grid_curves.append(c)
+        corner.append(end)
+    y_hi, y_lo = pieces[-1][-1][0], pieces[0][0][0]
+    p_bhi = pt(y_hi, ext.z_bottom)
+    p_blo = pt(y_lo, ext.z_bottom)
+    curves += [occ.addLine(corner[-1], p_bhi), occ.addLine(p_bhi, p_blo), occ.addLine(p_blo, corner[0])]
+    loop = occ.addCurveLoop(curves)
+    face = occ.addPlaneSurface([loop])
+
+    # imprint curves: copies of the grid part of the surface curve at the cut positions
+    imprint = []
+    for xc in _cut_positions(patch, spec.conform):
+        cp = occ.copy([(1, c) for c in grid_curves])
+        if body.revolved:
+            occ.rotate(cp, 0, 0, body.axle_z, 0, 1, 0, xc / ext.x_ref_radius)
+        else:
+            occ.translate(cp, xc - x0, 0, 0)
+        imprint += cp
+    if body.revolved:
+        occ.rotate([(2, face)], 0, 0, body.axle_z, 0, 1, 0, ext.theta_lo)
+        out = occ.revolve([(2, face)], 0, 0, body.axle_z, 0, 1, 0, ext.theta_hi - ext.theta_lo)
+    else:
+        out = occ.extrude([(2, face)], ext.x_hi - ext.x_lo, 0, 0)
+    vols = [t for t in out if t[0] == 3]
+    occ.fragment(vols, imprint)
+    occ.synchronize()
+
+
+def _curve_midpoint(gmsh, tag: int) -> np.ndarray:
+    lo, hi = gmsh.model.getParametrizationBounds(1, tag)
+    return np.array(gmsh.model.getValue(1, tag, [0.5 * (lo[0] + hi[0])]))
+
+
+def _threshold(f, tag: int, distance: int, h0: float, h_max: float, growth: float) -> None:
+    """h = min(h_max, h0 + growth * distance): a linear Threshold field (native, fast)."""
+    f.add("Threshold", tag)
+    f.setNumber(tag, "InField", distance)
+    f.setNumber(tag, "SizeMin", h0)
+    f.setNumber(tag, "SizeMax", h_max)
+    f.setNumber(tag, "DistMin", 0.0)
+    f.setNumber(tag, "DistMax", max((h_max - h0) / growth, 1e-9))
+    f.setNumber(tag, "Sigmoid", 0)
+
+
+def _size_field(gmsh, body, patch, ext, spec, h_e):
+    """Distance fields from the row edges of the observed patch and of the loaded column."""
+    x_obs = 0.5 * patch.n_columns * patch.dx
+    e = patch.edges
+    tol = 1e-6 * max(1.0, patch.size)
+    obs_curves, col_curves = [], []
+    for _, c in gmsh.model.getEntities(1):
+        m = _curve_midpoint(gmsh, c)
+        x, yz = cross_section_coordinates(body, ext, m)
+        s = body.profile.project(yz)
+        on_surface = np.linalg.norm(body.profile.point(s) - yz) < tol
+        if not on_surface or s < e[0] - tol or s > e[-1] + tol or abs(x) > x_obs + tol:
+            continue
+        obs_curves.append(c)
+        if abs(x) < 0.5 * patch.dx + tol:
+            col_curves.append(c)
+    h_patch = spec.h_patch * h_e
+    h_max = max(spec.h_max * ext.depth, h_patch)
+    f = gmsh.model.mesh.field
+    length = max(patch.n_columns * patch.dx, e[-1] - e[0])
+    f.add("Distance", 1)
+    f.setNumbers(1, "CurvesList", obs_curves)
+    f.setNumber(1, "Sampling", SAMPLING or int(min(2000, max(20, 2 * length / h_patch))))
+    _threshold(f, 2, 1, h_patch, h_max, spec.growth)
+    last = 2
+    if spec.h_load is not None and col_curves:
+        h_load = spec.h_load * h_e
+        f.add("Distance", 3)
+        f.setNumbers(3, "CurvesList", col_curves)
+        f.setNumber(3, "Sampling", int(min(2000, max(20, 4 * (e[-1] - e[0]) / h_load))))
+        _threshold(f, 4, 3, h_load, h_max, spec.growth)
+        f.add("Min", 5)
+        f.setNumbers(5, "FieldsList", [2, 4])
+        last = 5
+    f.setAsBackgroundMesh(last)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", h_max)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", min(h_patch, spec.h_load * h_e if spec.h_load else h_patch))
+    return len(obs_curves), len(col_curves)
+
+
+def _extract(gmsh, body: BodyModel, ext: BodyExtent, h_element: float):
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    order = np.argsort(tags)
+    tags = tags[order]
+    pts = coords.reshape(-1, 3)[order]
+    types, _, conn = gmsh.model.mesh.getElements(3)
+    tets = []
+    for t, c in zip(types, conn):
+        if t != 4:
+            raise MeshingError(f"gmsh returned volume elements of type {t}, expected linear tetrahedra")
+        tets.append(c.reshape(-1, 4))
+    tets = np.searchsorted(tags, np.concatenate(tets))
+    used = np.unique(tets)
+    # surface entities: free (every node on the surface curve) or clamped.  gmsh's spline through
+    # the profile points departs from the polyline by up to h_p^2 / (8 R) (1e-4 mm for 0.1 mm
+    # points on R13); nodes inside a cut face lie at least a mesh size away from the curve.
+    tol = 1e-2 * h_element
+    free, clamped = [], []
+    for _, s in gmsh.model.getBoundary(gmsh.model.getEntities(3), oriented=False):
+        types, _, conn = gmsh.model.mesh.getElements(2, s)
+        tri = np.searchsorted(tags, np.concatenate([c for t, c in zip(types, conn) if t == 2]).reshape(-1, 3))
+        nodes = np.unique(tri)
+        _, yz = cross_section_coordinates(body, ext, pts[nodes])
+        sp = body.profile.project(yz)
+        dist = np.linalg.norm(body.profile.point(sp) - yz, axis=-1)
+        (free if dist.max() < tol else clamped).append(tri)
+    if not free:
+        raise MeshingError("no free surface found in the body mesh")
+    # compact numbering (gmsh keeps geometry points that carry no tetrahedron)
+    new = -np.ones(len(pts), dtype=np.int64)
+    new[used] = np.arange(used.size)
+    pts = pts[used]
+    tets = new[tets]
+    free = new[np.concatenate(free)]
+    clamped = new[np.concatenate(clamped)] if clamped else np.zeros((0, 3), dtype=np.int64)
+    return pts, tets, free, clamped
+
+
+def _orient(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """Tetrahedra with positive volume (node order swapped where needed)."""
+    a, b, c, d = (points[tets[:, k]] for k in range(4))
+    vol = np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a)
+    tets = tets.copy()
+    neg = vol < 0
+    tets[neg, 0], tets[neg, 1] = tets[neg, 1], tets[neg, 0].copy()
+    return tets
+
+
+def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
+              extent: BodyExtent | None = None, *, threads: int = 2) -> BodyMesh:
+    """Build and mesh one body for a patch (gmsh, OpenCASCADE).  Raises MeshingError on failure."""
+    import gmsh
+
+    ext = extent or body_extent(body, patch, spec.body_size)
+    h_e = min(patch.dx, float(patch.s_widths.min()))
+    t0 = time.perf_counter()
+    if gmsh.isInitialized():
+        gmsh.finalize()
+    # interruptible=False: no SIGINT handler, so that meshing also works in worker threads (Dask)
+    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.option.setNumber("General.NumThreads", threads)
+        gmsh.model.add("conformal_body")
+        step = "building the geometry"
+        try:
+            _build(gmsh, body, patch, ext, spec)
+            step = "setting the mesh size"
+            n_obs, n_col = _size_field(gmsh, body, patch, ext, spec, h_e)
+            if n_obs == 0:
+                raise MeshingError("the patch edges were not found on the body surface")
+            # measured on a 51 x 39 patch: HXT without gmsh's full optimiser meshes in 3-4 s
+            # (Delaunay 4-6 s, HXT + optimiser 10-20 s); a cheap pass on tets with quality
+            # gamma < 0.2 then removes the slivers (min gamma 0.07 instead of 1e-24).
+            for name, value in (("Mesh.MeshSizeFromPoints", 0), ("Mesh.MeshSizeFromCurvature", 0),
+                                ("Mesh.MeshSizeExtendFromBoundary", 0), ("Mesh.Algorithm", 6),
+                                ("Mesh.Algorithm3D", 10), ("Mesh.Optimize", 0),
+                                ("Mesh.LcIntegrationPrecision", 1e-3), ("Mesh.ElementOrder", 1)):
+                gmsh.option.setNumber(name, value)
+            t1 = time.perf_counter()
+            step = "meshing"
+            gmsh.model.mesh.generate(3)
+            if spec.optimize:
+                gmsh.option.setNumber("Mesh.OptimizeThreshold", 0.2)
+                gmsh.model.mesh.optimize("")
+            t2 = time.perf_counter()
+            step = "reading the mesh"
+            pts, tets, free, clamped = _extract(gmsh, body, ext, h_e)
+        except MeshingError:
+            raise
+        except Exception as exc:  # gmsh raises plain Exceptions with its last error message
+            raise MeshingError(f"gmsh failed while {step} ({body.kind} body, {patch.ms} x "
+                               f"{patch.n_columns} patch): {exc}") from None
+    finally:
+        gmsh.finalize()
+    if len(tets) == 0:
+        raise MeshingError(f"gmsh produced no tetrahedra for the {body.kind} body")
+    tets = _orient(pts, tets)
+    uv = np.full((len(pts), 2), np.nan)
+    fn = np.unique(free)
+    x, yz = cross_section_coordinates(body, ext, pts[fn])
+    uv[fn, 0] = x
+    uv[fn, 1] = body.profile.project(yz)
+    stats = {"geometry_s": t1 - t0, "mesh_s": t2 - t1, "nodes": len(pts), "tets": len(tets),
+             "free_tris": len(free), "clamped_tris": len(clamped), "h_element": h_e}
+    return BodyMesh(body, patch, ext, spec, pts, tets, free, clamped, uv, stats)

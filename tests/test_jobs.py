@@ -1,0 +1,132 @@
+"""Precomputation jobs (conformal.jobs) and ``conformal precompute``: sweep parsing, caching of
+every position, resumption after an interruption, optional Dask."""
+from __future__ import annotations
+
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from conformal.cli import main
+from conformal.errors import InputError
+from conformal.influence.cache import Cache
+from conformal.jobs import parse_sweep, plan, precompute, run
+
+SCENE = textwrap.dedent("""\
+    name = "sweep"
+    [material]
+    G = 82000.0
+    nu = 0.28
+    [friction]
+    mu = 0.3
+    [geometry]
+    kind = "wheel_rail"
+    wheel_profile = "S1002"
+    rail_profile = "UIC60"
+    lateral_shift = 0.0
+    [load]
+    wheel_load = 50000.0
+    [grid]
+    n = 6
+    [model]
+    theory = "conformal"
+    fe_body_size = 0.7
+    """)
+
+
+@pytest.fixture
+def scene_file(tmp_path):
+    p = tmp_path / "sweep.toml"
+    p.write_text(SCENE)
+    return p
+
+
+def test_parse_sweep():
+    s = parse_sweep("shift=0:10:0.5")
+    assert s.key == "shift" and len(s.values) == 21 and s.values[-1] == 10.0 and s.values[1] == 0.5
+    assert parse_sweep("yaw=0.001,0.002").values == (0.001, 0.002)
+    for bad, msg in (("shift", "KEY=start"), ("speed=0:1:1", "unknown key"), ("shift=0:1:-1", "does not lead"),
+                     ("shift=a:b:c", "cannot read"), ("shift=0:1e9:1e-3", "more than")):
+        with pytest.raises(InputError, match=msg):
+            parse_sweep(bad)
+
+
+@pytest.mark.slow
+def test_precompute_caches_every_position_and_resumes(scene_file, tmp_path, capsys):
+    """Two positions x (rail, wheel) = 4 FE bodies; a second run computes nothing; after losing
+    one file (an interrupted job) only that one is redone."""
+    cache = tmp_path / "cache"
+    assert main(["precompute", str(scene_file), "--sweep", "shift=0:1:1", "--cache", str(cache),
+                 "--workers", "1", "--no-progress"]) == 0
+    assert "4 computed" in capsys.readouterr().out
+    entries = Cache(cache).entries()
+    assert len(entries) == 4 and all(e.ok for e in entries)
+    k = Cache(cache).load(entries[0].key)["kernel"]
+    assert k.ndim == 5 and k.shape[3:] == (3, 3) and k.shape[1] == k.shape[2] == 6
+    assert main(["precompute", str(scene_file), "--sweep", "shift=0:1:1", "--cache", str(cache),
+                 "--no-progress"]) == 0
+    assert "4 already cached, 0 computed" in capsys.readouterr().out
+    entries[-1].path.unlink()
+    assert main(["precompute", str(scene_file), "--sweep", "shift=0:1:1", "--cache", str(cache),
+                 "--no-progress", "--dry-run"]) == 0
+    assert "3 already cached" in capsys.readouterr().out
+    assert main(["precompute", str(scene_file), "--sweep", "shift=0:1:1", "--cache", str(cache),
+                 "--no-progress"]) == 0
+    assert "3 already cached, 1 computed" in capsys.readouterr().out
+
+
+def test_interrupted_job_leaves_only_complete_entries(scene_file, tmp_path, monkeypatch):
+    """An item interrupted mid-way (KeyboardInterrupt) writes nothing; finished items stay."""
+    from conformal import jobs
+    from conformal.scene import load_scene
+
+    scene = load_scene(scene_file)
+    cache = Cache(tmp_path / "cache")
+    items, failed = plan(scene, parse_sweep("shift=0"), cache=cache)
+    assert len(items) == 2 and not failed and not any(it.cached for it in items)
+    real = jobs.compute_item
+    calls = []
+
+    def interrupt_second(item, folder):
+        calls.append(item.label)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(item, folder)
+
+    monkeypatch.setattr(jobs, "compute_item", interrupt_second)
+    with pytest.raises(KeyboardInterrupt):
+        run(items, cache_folder=str(cache.folder), workers=1, progress=False)
+    assert len(cache.entries()) == 1 and not list(cache.folder.glob(".*.tmp"))
+    items2, _ = plan(scene, parse_sweep("shift=0"), cache=cache)
+    assert sum(it.cached for it in items2) == 1
+
+
+def test_dask_missing_is_a_clear_error(scene_file, tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "dask.distributed", None)     # import fails as if not installed
+    code = main(["precompute", str(scene_file), "--sweep", "shift=0", "--cache", str(tmp_path / "c"),
+                 "--scheduler", "local", "--no-progress"])
+    assert code == 2
+    assert "Dask is not installed" in capsys.readouterr().err
+
+
+def test_precompute_bad_input(scene_file, tmp_path, capsys):
+    assert main(["precompute", str(scene_file), "--sweep", "shift=0:1", "--cache", str(tmp_path)]) == 2
+    assert "--sweep" in capsys.readouterr().err
+    planar = tmp_path / "planar.toml"
+    planar.write_text(SCENE.replace('kind = "wheel_rail"\nwheel_profile = "S1002"\nrail_profile = "UIC60"\n'
+                                    'lateral_shift = 0.0', 'kind = "quadratic"\nA = 0.001\nB = 0.001')
+                      .replace("wheel_load", "normal_force"))
+    assert main(["precompute", str(planar), "--sweep", "shift=0", "--cache", str(tmp_path)]) == 2
+    assert "wheel_rail" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_local_dask_cluster(scene_file, tmp_path):
+    pytest.importorskip("dask.distributed")
+    from conformal.scene import load_scene
+
+    rep = precompute(load_scene(scene_file), parse_sweep("shift=0"), cache=tmp_path / "c", workers=1,
+                     scheduler="local", progress=False)
+    assert rep.done == 2 and not rep.failed
+    assert len(Cache(tmp_path / "c").entries()) == 2
