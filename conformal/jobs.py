@@ -214,14 +214,7 @@ def run(items: list[Item], *, cache_folder: str, workers: int = 1, scheduler: st
                 from dask.distributed import as_completed
 
                 futs = {client.submit(compute_item, it, cache_folder, pure=False): it for it in todo}
-                for fut in as_completed(futs):
-                    it = futs[fut]
-                    try:
-                        fut.result()
-                        rep.done += 1
-                    except Exception as exc:  # noqa: BLE001 - reported per item
-                        rep.failed.append((it.label, f"{type(exc).__name__}: {exc}"))
-                    bar.update(it.label)
+                _collect(futs, as_completed(futs), rep, bar)
             finally:
                 client.close()
                 if cluster is not None:
@@ -241,18 +234,24 @@ def run(items: list[Item], *, cache_folder: str, workers: int = 1, scheduler: st
             # spawn: gmsh and MKL threads do not survive fork safely; one gmsh model per process
             with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn")) as ex:
                 futs = {ex.submit(compute_item, it, cache_folder): it for it in todo}
-                for fut in cf_completed(futs):
-                    it = futs[fut]
-                    try:
-                        fut.result()
-                        rep.done += 1
-                    except Exception as exc:  # noqa: BLE001 - reported per item
-                        rep.failed.append((it.label, f"{type(exc).__name__}: {exc}"))
-                    bar.update(it.label)
+                _collect(futs, cf_completed(futs), rep, bar)
     finally:
         bar.close()
         rep.wall_s = time.perf_counter() - t0
     return rep
+
+
+def _collect(futures: dict, completed, rep: "JobReport", bar) -> None:
+    """Wait for parallel items (Dask or process-pool futures) as they complete; count each as done
+    or failed with its error (one item's failure does not stop the others)."""
+    for fut in completed:
+        it = futures[fut]
+        try:
+            fut.result()
+            rep.done += 1
+        except Exception as exc:  # noqa: BLE001 - reported per item
+            rep.failed.append((it.label, f"{type(exc).__name__}: {exc}"))
+        bar.update(it.label)
 
 
 def precompute(scene, sweep: Sweep, *, cache=None, workers: int | None = None, scheduler: str | None = None,
