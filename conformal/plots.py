@@ -75,7 +75,10 @@ def _draw_ellipse(fig, ax, result: Result, label: str) -> None:
 
 
 def plot_result(result: Result, path: str | Path, title: str | None = None) -> Path:
-    """Write a PNG of the result's traction maps (one row per contact patch)."""
+    """Write a PNG of the result's traction maps (one row per contact patch); a conformal result
+    (curved grid) gets :func:`plot_conformal_result` (3-D view and developed maps)."""
+    if _curved_field(result) is not None:
+        return plot_conformal_result(result, path, title)
     parts = list(result.patches) or [result]
     plt, fig, axes = _figure(len(parts), 3)
     for row, part in enumerate(parts):
@@ -88,10 +91,15 @@ def plot_result(result: Result, path: str | Path, title: str | None = None) -> P
             axes[row][2].axis("off")
     if title:
         fig.suptitle(title)
+    return _save(plt, fig, path, 110)
+
+
+def _save(plt, fig, path: str | Path, dpi: int) -> Path:
+    """Lay out, write the PNG (its folder made) and close the figure."""
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return path
 
@@ -169,3 +177,223 @@ def plot_surfaces_3d(path: str | Path, contact: "object", *, bodies: list | None
     plotter.screenshot(str(path))
     plotter.close()
     return path
+
+
+# ----------------------------------------------------------------------------- conformal results (curved grids)
+def _curved_field(result: Result):
+    """The CurvedTractionField of a conformal result, or None."""
+    f = result.field
+    return f if f is not None and getattr(f, "curved", None) is not None else None
+
+
+def curved_strip_points(grid) -> np.ndarray:
+    """Corner points (mx+1, ms+1, 3) of a curved grid on the rail surface (rail-profile frame:
+    x rolling, y lateral, z down), the profile interpolated at the element edges along s."""
+    y = np.interp(grid.s_edges, grid.rail_curve_s, grid.rail_curve[:, 0])
+    z = np.interp(grid.s_edges, grid.rail_curve_s, grid.rail_curve[:, 1])
+    return strip_points(grid.xl + np.arange(grid.mx + 1) * grid.dx, y, z)
+
+
+def rail_surface_points(grid, x_margin: float = 5.0, nx: int = 30) -> np.ndarray:
+    """The rail around the grid: its local profile curve extruded along x, (nx, n, 3)."""
+    x = np.linspace(grid.xl - x_margin, grid.xl + grid.mx * grid.dx + x_margin, nx)
+    return strip_points(x, grid.rail_curve[:, 0], grid.rail_curve[:, 1])
+
+
+def wheel_surface_points(grid, x_margin: float = 5.0, nx: int = 30, x_range: tuple | None = None) -> np.ndarray:
+    """The wheel around the grid: its profile revolved about the axle over the rolling range of the
+    grid (or ``x_range``), (nx, k, 3) in the rail-profile frame (CurvedGrid wheel fields)."""
+    a = np.asarray(grid.wheel_axle, float)
+    d = np.asarray(grid.wheel_down, float)
+    f = np.cross(a, d)
+    R = float(grid.wheel_radius)
+    x0, x1 = x_range or (grid.xl - x_margin, grid.xl + grid.mx * grid.dx + x_margin)
+    x = np.linspace(x0, x1, nx)
+    t = np.arcsin(np.clip(x / R, -1.0, 1.0))[:, None, None]
+    yw, zw = grid.wheel_profile[:, 0][None, :, None], grid.wheel_profile[:, 1][None, :, None]
+    return (np.asarray(grid.wheel_centre, float) + yw * a + (R + zw) * (np.cos(t) * d + np.sin(t) * f))
+
+
+def _tangents(grid) -> tuple[np.ndarray, np.ndarray]:
+    """(t_s, n) per column as 3-D vectors (ms, 3) in the rail-profile frame; t_s = n x e_x."""
+    n = np.c_[np.zeros(grid.ms), grid.normal]
+    t = np.c_[np.zeros(grid.ms), grid.normal[:, 1], -grid.normal[:, 0]]
+    return t, n
+
+
+def _boundary_segments(P: np.ndarray, status: np.ndarray, a: int, b: int) -> np.ndarray:
+    """Cell edges (k, 2, 3) between cells of status a and b on a strip with corners P."""
+    segs = []
+    s0, s1 = status[:-1, :], status[1:, :]           # neighbours along x: edge at x index i+1
+    i, j = np.nonzero(((s0 == a) & (s1 == b)) | ((s0 == b) & (s1 == a)))
+    segs += [np.stack([P[i + 1, j], P[i + 1, j + 1]], axis=1)]
+    s0, s1 = status[:, :-1], status[:, 1:]           # neighbours along s: edge at s index j+1
+    i, j = np.nonzero(((s0 == a) & (s1 == b)) | ((s0 == b) & (s1 == a)))
+    segs += [np.stack([P[i, j + 1], P[i + 1, j + 1]], axis=1)]
+    return np.concatenate(segs, axis=0)
+
+
+def _polylines(segs: np.ndarray):
+    import pyvista as pv
+
+    if len(segs) == 0:
+        return None
+    pts = segs.reshape(-1, 3)
+    lines = np.c_[np.full(len(segs), 2), np.arange(0, 2 * len(segs), 2), np.arange(1, 2 * len(segs), 2)]
+    return pv.PolyData(pts, lines=lines.ravel())
+
+
+def conformal_meshes(result: Result) -> dict:
+    """pyvista meshes of a conformal result, all in the rail-profile frame of the side: ``strip``
+    (the curved grid with cell data pn, px, ps, pt, status, delta, h, un and the 3-D tangential
+    traction vector ``traction``), ``rail``, ``wheel`` (surfaces around the contact) and the
+    ``slip_boundary`` / ``contact_boundary`` lines (None where there are none)."""
+    f = _curved_field(result)
+    if f is None:
+        raise ValueError("conformal_meshes: the result has no curved traction field (theory \"conformal\")")
+    g = f.curved
+    P = curved_strip_points(g)
+    pn, px, ps = f.side_frame("pn"), f.side_frame("px"), f.side_frame("py")
+    status = f.side_frame("status")
+    t, n = _tangents(g)
+    T = px[..., None] * np.array([1.0, 0.0, 0.0]) + ps[..., None] * t[None, :, :]
+    cells = {"pn": pn, "px": px, "ps": ps, "pt": np.hypot(px, ps), "status": status.astype(float),
+             "delta_deg": np.degrees(f.side_frame("delta")), "h": f.side_frame("h"),
+             "un": f.side_frame("un") if f.un is not None else np.zeros_like(pn), "traction": T}
+    # lifted off the rail surface towards the wheel (drawn on top of it, no z-fighting)
+    size = max(np.ptp(P[..., 1]), np.ptp(P[..., 2]), g.dx * g.mx)
+    n_edges = np.r_[n, n[-1:]][None, :, :]
+    Pl = P - 0.008 * size * n_edges
+    return {"strip": strip_mesh(P - 0.004 * size * n_edges, cells), "rail": strip_mesh(rail_surface_points(g)),
+            "wheel": strip_mesh(wheel_surface_points(g)), "points": P,
+            "slip_boundary": _polylines(_boundary_segments(Pl, status, ADHESION, SLIP)),
+            "contact_boundary": _polylines(np.concatenate([_boundary_segments(Pl, status, 0, ADHESION),
+                                                           _boundary_segments(Pl, status, 0, SLIP)]))}
+
+
+def render_conformal_3d(result: Result, *, scalar: str = "pn", window: tuple[int, int] = (1000, 800),
+                        title: str = "") -> np.ndarray:
+    """Off-screen pyvista image (RGB array) of a conformal result: rail (grey) and wheel
+    (translucent) around the contact, the contact strip coloured by ``scalar`` (pn, pt, ...),
+    tangential traction vectors (black arrows) and the slip/adhesion boundary (red) and the edge
+    of the contact area (white).  The wheel is cut at the trailing edge of the grid and seen from
+    ahead, so that the contact face it covers is visible."""
+    import pyvista as pv
+
+    pv.OFF_SCREEN = True
+    m = conformal_meshes(result)
+    g = result.field.curved
+    strip = m["strip"]
+    pl = pv.Plotter(off_screen=True, window_size=list(window))
+    pl.set_background("white")
+    pl.add_mesh(m["rail"], color="#b0b0b0", smooth_shading=True)
+    L = max(g.mx * g.dx, float(g.s_edges[-1] - g.s_edges[0]), 10.0)
+    cut = strip_mesh(wheel_surface_points(g, x_range=(g.xl - 1.5 * L, g.xl)))
+    pl.add_mesh(cut, color="#d9b38c", opacity=0.55, smooth_shading=True)
+    label = {"pn": "p_n [N/mm²]", "pt": "|p_t| [N/mm²]"}.get(scalar, scalar)
+    contact = strip.threshold(0.5, scalars="status")
+    pl.add_mesh(strip, color="#e8e8e8", show_edges=True, edge_color="#909090", line_width=0.5)
+    if contact.n_cells:
+        pl.add_mesh(contact, scalars=scalar, cmap="viridis", show_edges=True, edge_color="#404040",
+                    line_width=0.5, scalar_bar_args={"title": label, "color": "black"})
+        T = np.asarray(contact.cell_data["traction"])
+        tmax = float(np.abs(T).max())
+        if tmax > 0:
+            cen = contact.cell_centers()
+            cen["traction"] = T
+            size = 1.5 * max(g.dx, float(g.ds.mean()))
+            pl.add_mesh(cen.glyph(orient="traction", scale="traction", factor=size / tmax), color="black")
+    for key, colour in (("slip_boundary", "red"), ("contact_boundary", "white")):
+        if m[key] is not None:
+            pl.add_mesh(m[key], color=colour, line_width=4)
+    # camera: from the wheel side of the reference normal, turned towards the rolling direction
+    c = np.asarray(strip.center)
+    k = int(np.argmin(np.abs(g.s - g.s_ref)))
+    n = np.r_[0.0, g.normal[k]]
+    t = np.r_[0.0, g.normal[k, 1], -g.normal[k, 0]]
+    view = -1.0 * n + 0.9 * np.array([1.0, 0.0, 0.0]) + 0.35 * t
+    pl.camera.focal_point = c
+    pl.camera.position = c + 2.2 * L * view / np.linalg.norm(view)
+    pl.camera.up = (0.0, 0.0, -1.0)        # z is down in the rail-profile frame
+    if title:
+        pl.add_text(title, font_size=10, color="black")
+    img = pl.screenshot(return_img=True)
+    pl.close()
+    return img
+
+
+def plot_conformal_result(result: Result, path: str | Path, title: str | None = None) -> Path:
+    """One PNG of a conformal result: the 3-D view of rail, wheel and tractions (pyvista), the
+    developed maps (pressure, tangential traction, adhesion/slip) and the pressure and contact
+    angle along the profile."""
+    f = _curved_field(result)
+    img = render_conformal_3d(result, window=(1100, 850))
+    plt, fig, _ = _figure(1, 1)
+    plt.close(fig)
+    fig = plt.figure(figsize=(17, 9.5))
+    gs = fig.add_gridspec(3, 3, width_ratios=[2.2, 1, 1], height_ratios=[1, 1, 1])
+    ax3 = fig.add_subplot(gs[:, 0])
+    ax3.imshow(img)
+    ax3.axis("off")
+    ax3.set_title(f"{title or result.extra.get('label', '')}: FN {result.FN:.5g} N, FX {result.FX:.4g} N, "
+                  f"FS {result.FY:.4g} N, pmax {result.pmax:.4g} N/mm²", fontsize=10)
+    maps = [fig.add_subplot(gs[0, 1]), fig.add_subplot(gs[1, 1]), fig.add_subplot(gs[2, 1])]
+    _draw_field(fig, maps, result, "developed")
+    for a in maps:
+        a.set_ylabel("s - s_ref [mm]")
+    g = f.curved
+    ax = fig.add_subplot(gs[0:2, 2])
+    P = curved_strip_points(g)
+    ax.plot(g.rail_curve[:, 0], g.rail_curve[:, 1], color="grey", lw=2, label="rail")
+    W = wheel_surface_points(g, nx=3)[1]
+    ax.plot(W[:, 1], W[:, 2], color="#b07030", lw=1.5, label="wheel (x = 0)")
+    cols = np.flatnonzero((f.side_frame("status") != 0).any(axis=0))
+    if cols.size:
+        ax.plot(P[0, cols[0]:cols[-1] + 2, 1], P[0, cols[0]:cols[-1] + 2, 2], color="red", lw=4, label="contact")
+    ax.invert_yaxis()
+    ax.set_aspect("equal")
+    ax.set_xlabel("y [mm] (rail profile)")
+    ax.set_ylabel("z [mm] (down)")
+    ax.legend(fontsize=8)
+    ax.set_title(f"contact angle {np.degrees(g.delta.min()):.1f} .. {np.degrees(g.delta.max()):.1f} deg on the grid",
+                 fontsize=9)
+    ax = fig.add_subplot(gs[2, 2])
+    sc = g.s - g.s_ref
+    pn = f.side_frame("pn")
+    ax.plot(sc, pn.max(axis=0), color="C0", label="max over x of p_n")
+    ax.set_xlabel("s - s_ref [mm] (side frame)")
+    ax.set_ylabel("p_n [N/mm²]")
+    ax2 = ax.twinx()
+    ax2.plot(sc, np.degrees(g.delta), color="C3", ls="--", label="contact angle")
+    ax2.set_ylabel("delta [deg]", color="C3")
+    ax.legend(fontsize=8, loc="upper left")
+    return _save(plt, fig, path, 100)
+
+
+def export_conformal_vtu(result: Result, path: str | Path) -> list[Path]:
+    """VTU files of a conformal result for ParaView (meshio): ``path`` holds the contact strip with
+    the per-element data of :func:`conformal_meshes`; ``<stem>_rail.vtu`` and ``<stem>_wheel.vtu``
+    the surfaces around it.  All in the rail-profile frame of the side (x rolling, y lateral,
+    z down), mm and N/mm²."""
+    m = conformal_meshes(result)
+    f = _curved_field(result)
+    g = f.curved
+    P = m["points"]
+    cells = {k: np.asarray(m["strip"].cell_data[k]).reshape(g.ms, g.mx, *np.shape(m["strip"].cell_data[k])[1:])
+             .swapaxes(0, 1) for k in m["strip"].cell_data.keys()}
+    path = Path(path)
+    out = [export_vtu(path, P, cells)]
+    for name, pts in (("rail", rail_surface_points(g)), ("wheel", wheel_surface_points(g))):
+        out.append(export_vtu(path.with_name(f"{path.stem}_{name}.vtu"), pts, {}))
+    return out
+
+
+def export_result_vtu(result: Result, path: str | Path) -> list[Path]:
+    """``conformal solve --vtu``: the VTU files of a conformal result (:func:`export_conformal_vtu`);
+    other theories have no curved surface to export (InputError says so)."""
+    from conformal.errors import InputError
+
+    if _curved_field(result) is None:
+        raise InputError(f"--vtu: needs [model] theory = \"conformal\" (tractions on the curved surfaces); "
+                         f"this result is {result.theory!r}")
+    return export_conformal_vtu(result, path)

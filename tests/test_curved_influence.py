@@ -44,3 +44,19 @@ def test_angle_correction_rotates_normal_load_into_lateral_displacement():
     assert K0[0, 1, 0, 1, 2] == 0.0 and K0[0, 1, 0, 2, 2] > 0
     # rotated by 45 degrees on each side: u_n and u_s both get a share
     assert abs(K1[0, 1, 0, 1, 2]) > 0.1 * K0[0, 1, 0, 2, 2]
+
+
+@pytest.mark.parametrize("delta", [np.zeros(5), np.linspace(0.0, 1.2, 5)])
+def test_coupling_products_are_the_off_diagonal_blocks(delta):
+    """apply_coupling_nt / _tn are the n-t blocks of apply (the Panagiotopoulos loop uses them)."""
+    op = _strip(delta=delta)
+    p = np.random.default_rng(3).random((3, 7, 5))
+    full_n = op.apply(np.stack([p[0], p[1], 0 * p[2]]))[2]
+    full_t = op.apply(np.stack([0 * p[0], 0 * p[1], p[2]]))[:2]
+    scale = np.abs(op.apply(p)).max()
+    assert op.coupled
+    np.testing.assert_allclose(op.apply_coupling_nt(p[0], p[1]), full_n, rtol=0, atol=1e-14 * scale)
+    np.testing.assert_allclose(op.apply_coupling_tn(p[2]), full_t, rtol=0, atol=1e-14 * scale)
+    # quasi-identical bodies on a flat strip: no coupling at all, exactly as the planar operator
+    flat = _strip(material=Material.steel())
+    assert not flat.coupled and not np.any(flat.apply_coupling_nt(p[0], p[1]))

@@ -63,15 +63,39 @@ def curved_halfspace_kernel(mx: int, dx: float, s_centres: np.ndarray, s_widths:
     s_centres, s_widths, delta = (np.asarray(v, dtype=float) for v in (s_centres, s_widths, delta))
     ms = s_centres.size
     kx = np.arange(-(mx - 1), mx)[:, None, None] * dx
-    ds = (s_centres[:, None] - s_centres[None, :])[None, :, :]
-    K = np.empty((2 * mx - 1, ms, ms, 3, 3))
-    for J in range(ms):  # the loaded element's width differs per J on a non-uniform grid
-        K[:, :, J] = rectangle_influence(kx[:, :, 0] + 0 * ds[:, :, J], ds[:, :, J] + 0 * kx[:, :, 0],
-                                         dx, float(s_widths[J]), G=material.G, nu=material.nu, K=material.K)
+    w0 = float(s_widths[0])
+    uniform = np.allclose(s_widths, w0, rtol=1e-12, atol=0) and np.allclose(np.diff(s_centres), w0, rtol=1e-9, atol=0)
+    if ms > 1 and uniform:
+        # uniform strip: the numbers depend on the offset I - J only (Toeplitz along s too)
+        offs = np.arange(-(ms - 1), ms) * w0
+        T = rectangle_influence(kx[:, :, 0] + 0 * offs[None, :], offs[None, :] + 0 * kx[:, :, 0], dx, w0,
+                                G=material.G, nu=material.nu, K=material.K)   # (2mx-1, 2ms-1, 3, 3)
+        I = np.arange(ms)
+        K = T[:, I[:, None] - I[None, :] + ms - 1]
+    else:
+        ds = (s_centres[:, None] - s_centres[None, :])[None, :, :]
+        K = np.empty((2 * mx - 1, ms, ms, 3, 3))
+        for J in range(ms):  # the loaded element's width differs per J on a non-uniform grid
+            K[:, :, J] = rectangle_influence(kx[:, :, 0] + 0 * ds[:, :, J], ds[:, :, J] + 0 * kx[:, :, 0],
+                                             dx, float(s_widths[J]), G=material.G, nu=material.nu, K=material.K)
     if angle_correction and np.ptp(delta) > 0:
-        half = _rotation_x(0.5 * (delta[:, None] - delta[None, :]))  # (ms, ms, 3, 3)
-        K = np.einsum("IJab,kIJbc,IJcd->kIJad", half, K, half)
+        K = _rotate_pairs(K, 0.5 * (delta[:, None] - delta[None, :]))
     return K
+
+
+def _rotate_pairs(K: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """R(angle_IJ) K[k, I, J] R(angle_IJ) for rotations about x (the half-angle correction of
+    :func:`curved_halfspace_kernel`), written out on the (s, n) components: the same as
+    einsum("IJab,kIJbc,IJcd->kIJad", R, K, R) at a fraction of its cost."""
+    c, s = np.cos(angle), np.sin(angle)
+    Kc = np.ascontiguousarray(K.transpose(3, 4, 0, 1, 2))     # component-major: fast elementwise work
+    M = Kc.copy()                                  # M = K R: columns 1, 2 mix
+    M[:, 1] = c * Kc[:, 1] + s * Kc[:, 2]
+    M[:, 2] = -s * Kc[:, 1] + c * Kc[:, 2]
+    out = M.copy()                                 # R M: rows 1, 2 mix
+    out[1] = c * M[1] - s * M[2]
+    out[2] = s * M[1] + c * M[2]
+    return np.ascontiguousarray(out.transpose(2, 3, 4, 0, 1))
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,7 +137,10 @@ class CurvedInfluence:
         op._fhat["full"] = fk.transpose(0, 3, 1, 4, 2).reshape(fk.shape[0], 3 * ms, 3 * ms)
         op._fhat["nn"] = fk[..., 2, 2]
         op._fhat["tt"] = fk[..., :2, :2].transpose(0, 3, 1, 4, 2).reshape(fk.shape[0], 2 * ms, 2 * ms)
+        op._fhat["nt"] = fk[..., 2:, :2].transpose(0, 3, 1, 4, 2).reshape(fk.shape[0], ms, 2 * ms)
+        op._fhat["tn"] = fk[..., :2, 2:].transpose(0, 3, 1, 4, 2).reshape(fk.shape[0], 2 * ms, ms)
         op._fhat["M"] = M
+        op._fhat["coupled"] = bool(np.any(kernel[..., 2, :2] != 0.0) or np.any(kernel[..., :2, 2] != 0.0))
         return op
 
     @property
@@ -141,6 +168,24 @@ class CurvedInfluence:
     def apply_tangential(self, px: np.ndarray, ps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         u = self._convolve(self._fhat["tt"], np.stack([px, ps]).astype(float))
         return u[0], u[1]
+
+    @property
+    def coupled(self) -> bool:
+        """True where normal and tangential components interact (A_nt != 0): dissimilar materials,
+        contact angles that vary across the strip, or FE numbers of curved bodies."""
+        return self._fhat["coupled"]
+
+    def apply_coupling_nt(self, px: np.ndarray, ps: np.ndarray) -> np.ndarray:
+        """u_n due to (p_x, p_s): A_nx p_x + A_ns p_s."""
+        if not self.coupled:
+            return np.zeros((self.mx, self.ms))
+        return self._convolve(self._fhat["nt"], np.stack([px, ps]).astype(float))[0]
+
+    def apply_coupling_tn(self, pn: np.ndarray) -> np.ndarray:
+        """(u_x, u_s) due to p_n, shape (2, mx, ms): A_xn p_n, A_sn p_n."""
+        if not self.coupled:
+            return np.zeros((2, self.mx, self.ms))
+        return self._convolve(self._fhat["tn"], np.asarray(pn, dtype=float)[None])
 
     def self_influence(self) -> np.ndarray:
         """Self terms A_ii of each element along s, shape (ms, 3, 3)."""

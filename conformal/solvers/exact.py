@@ -17,6 +17,8 @@ rolling, s = relative slip) or frictional work dxdy/1000 sum p_t.S_t (J, shift, 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 
@@ -90,6 +92,14 @@ def _relative_change(new: np.ndarray, old: np.ndarray, scale: float) -> float:
     return float(np.abs(new - old).sum()) / max(scale, 1e-300)
 
 
+def maxout_option(model) -> int:
+    """[model] maxout: the most normal/tangential alternations (default MAXOUT)."""
+    maxout = dict(model.options).get("maxout", MAXOUT)
+    if isinstance(maxout, bool) or not isinstance(maxout, int) or maxout < 1:
+        raise InputError(f"[model] maxout: must be a whole number >= 1, got {maxout!r}")
+    return maxout
+
+
 def _tangential(op, grid, pn, problem, extra_u, tol, maxit, p_start):
     from conformal.solvers.tangential import solve_tangential
 
@@ -99,41 +109,48 @@ def _tangential(op, grid, pn, problem, extra_u, tol, maxit, p_start):
                             extra_u=extra_u, tol=tol, maxit=maxit, p_start=p_start)
 
 
-def solve(problem: ContactProblem) -> Result:
-    """Solve one contact problem with the exact half-space theory."""
-    grid, h = problem.require_grid("theory \"exact\"")
-    if problem.model.influence != "halfspace":
-        raise InputError(f"[model] influence: theory \"exact\" uses half-space influence numbers, got "
-                         f"{problem.model.influence!r} (finite-element influence numbers: theory \"conformal\")")
-    _check_kinematics(problem)
-    opts = dict(problem.model.options)
-    maxout = opts.get("maxout", MAXOUT)
-    if isinstance(maxout, bool) or not isinstance(maxout, int) or maxout < 1:
-        raise InputError(f"[model] maxout: must be a whole number >= 1, got {maxout!r}")
-    tol, maxit = problem.model.tol, problem.model.maxit
-    mat = problem.material
-    op = HalfSpaceInfluence.for_grid(grid.mx, grid.my, grid.dx, grid.dy, mat)
-    load = dict(normal_force=problem.normal_force, approach=problem.approach)
+@dataclass(frozen=True, eq=False)
+class Stages:
+    """The outcome of :func:`alternate`: the last normal and tangential solutions (``tang`` None
+    when no tangential problem was solved), the history of the alternations (``outer``: relative
+    changes and inner iteration counts), whether they converged, and the inner iterations spent."""
 
-    normal = solve_normal(op, grid, h, tol=tol, maxit=maxit, **load)
+    normal: NormalSolution
+    tang: Any
+    outer: list
+    converged: bool
+    normal_iterations: int
+    tangential_iterations: int
+
+
+def alternate(op, normal_stage: Callable, tangential_stage: Callable, *, tangential: bool, tol: float,
+              maxout: int, load_coupled: bool = False) -> Stages:
+    """The normal and the tangential problem, alternated until both stop changing (Panagiotopoulos).
+
+    ``normal_stage(extra_un, p_start, tang)`` solves the normal problem with the coupling
+    displacement A_nt p_t (None at first), a starting pressure, and the current tangential solution
+    (None at first; a curved grid's load balance, seed Eq. 46, depends on it);
+    ``tangential_stage(pn, extra_u, p_start)`` the tangential problem with A_tn p_n.  One pass
+    (Johnson's process) where the problems decouple: op.coupled False (quasi-identical bodies on a
+    planar grid) and ``load_coupled`` False.  Shared by the exact (planar) and the conformal
+    (curved) theories."""
+    normal = normal_stage(None, None, None)
     tang = None
     outer: list[dict] = []
     n_iter, t_iter = normal.iterations, 0
-    outer_converged = True
-    if _needs_tangential(problem, op):
+    converged = True
+    if tangential:
         extra_u = op.apply_coupling_tn(normal.pn) if op.coupled else None
-        tang = _tangential(op, grid, normal.pn, problem, extra_u, tol, maxit, None)
+        tang = tangential_stage(normal.pn, extra_u, None)
         t_iter += tang.iterations
-        if op.coupled:  # Panagiotopoulos: alternate until the pressure and the traction settle
-            outer_converged = False
+        if op.coupled or load_coupled:  # Panagiotopoulos: alternate until pressure and traction settle
+            converged = False
             for it in range(2, maxout + 1):
                 pn_old, px_old, py_old = normal.pn, tang.px, tang.py
-                extra_un = op.apply_coupling_nt(tang.px, tang.py)
-                normal = solve_normal(op, grid, h, tol=tol, maxit=maxit, extra_un=extra_un,
-                                      p_start=pn_old, **load)
-                extra_u = op.apply_coupling_tn(normal.pn)
-                tang = _tangential(op, grid, normal.pn, problem, extra_u, tol, maxit,
-                                   np.stack([px_old, py_old]))
+                extra_un = op.apply_coupling_nt(tang.px, tang.py) if op.coupled else None
+                normal = normal_stage(extra_un, pn_old, tang)
+                extra_u = op.apply_coupling_tn(normal.pn) if op.coupled else None
+                tang = tangential_stage(normal.pn, extra_u, np.stack([px_old, py_old]))
                 n_iter += normal.iterations
                 t_iter += tang.iterations
                 scale = float(np.abs(normal.pn).sum())
@@ -142,70 +159,139 @@ def solve(problem: ContactProblem) -> Result:
                 outer.append({"iteration": it, "pressure_change": dn, "traction_change": dt,
                               "normal_iterations": normal.iterations, "tangential_iterations": tang.iterations})
                 if max(dn, dt) < tol:
-                    outer_converged = True
+                    converged = True
                     break
-    return _result(problem, grid, h, op, normal, tang, outer, outer_converged, n_iter, t_iter)
+    return Stages(normal, tang, outer, converged, n_iter, t_iter)
 
 
-def _result(problem, grid, h, op, normal: NormalSolution, tang, outer, outer_converged, n_iter, t_iter) -> Result:
-    dA = grid.area
-    kin = problem.kinematics
-    zeros = np.zeros(grid.shape)
-    if tang is None:  # frictionless / no creepage and K = 0: no tangential traction, no slip
+def solve(problem: ContactProblem) -> Result:
+    """Solve one contact problem with the exact half-space theory."""
+    grid, h = problem.require_grid("theory \"exact\"")
+    if problem.model.influence != "halfspace":
+        raise InputError(f"[model] influence: theory \"exact\" uses half-space influence numbers, got "
+                         f"{problem.model.influence!r} (finite-element influence numbers: theory \"conformal\")")
+    _check_kinematics(problem)
+    maxout = maxout_option(problem.model)
+    tol, maxit = problem.model.tol, problem.model.maxit
+    mat = problem.material
+    op = HalfSpaceInfluence.for_grid(grid.mx, grid.my, grid.dx, grid.dy, mat)
+    load = dict(normal_force=problem.normal_force, approach=problem.approach)
+
+    def normal_stage(extra_un, p_start, tang):
+        return solve_normal(op, grid, h, tol=tol, maxit=maxit, extra_un=extra_un, p_start=p_start, **load)
+
+    def tangential_stage(pn, extra_u, p_start):
+        return _tangential(op, grid, pn, problem, extra_u, tol, maxit, p_start)
+
+    stages = alternate(op, normal_stage, tangential_stage, tangential=_needs_tangential(problem, op), tol=tol,
+                       maxout=maxout)
+    return _result(problem, grid, h, op, stages)
+
+
+@dataclass(frozen=True, eq=False)
+class Tractions:
+    """Per-element arrays of a solved problem (grid shape): tractions, slip, displacement
+    differences (u_n with the coupling A_nt p_t of the final traction), status, and the tangential
+    residual and convergence (0 and True without a tangential problem)."""
+
+    px: np.ndarray
+    py: np.ndarray
+    sx: np.ndarray
+    sy: np.ndarray
+    un: np.ndarray
+    ux: np.ndarray
+    uy: np.ndarray
+    status: np.ndarray
+    residual: float
+    converged: bool
+
+
+def tractions(op, stages: Stages) -> Tractions:
+    normal, tang = stages.normal, stages.tang
+    zeros = np.zeros(normal.pn.shape)
+    if tang is None:  # frictionless / no creepage and no coupling: no tangential traction, no slip
         px, py, sx, sy, ux, uy = zeros, zeros, zeros.copy(), zeros.copy(), zeros.copy(), zeros.copy()
         status = np.where(normal.contact, ADHESION, EXTERIOR).astype(np.int8)
-        xi, eta = kin.xi, kin.eta
         t_res, t_conv = 0.0, True
     else:
         px, py, sx, sy, ux, uy = tang.px, tang.py, tang.sx, tang.sy, tang.ux, tang.uy
         status = np.where(normal.contact, tang.status, EXTERIOR).astype(np.int8)
-        xi, eta = tang.xi, tang.eta
         t_res, t_conv = float(tang.residual), bool(tang.converged)
     un = normal.un
     if op.coupled and tang is not None:  # the coupling A_nt p_t of the final tangential traction
         un = op.apply_normal(normal.pn) + op.apply_coupling_nt(px, py)
-    field = TractionField(grid=grid, pn=normal.pn, px=px, py=py, status=status, sx=sx, sy=sy,
-                          un=un, ux=ux, uy=uy)
+    return Tractions(px, py, sx, sy, un, ux, uy, status, t_res, t_conv)
+
+
+def _area_sum(values: np.ndarray, dA) -> float:
+    """sum values dA with dA one area (planar) or per column (curved)."""
+    return dA * float(values.sum()) if np.ndim(dA) == 0 else float((values * dA).sum())
+
+
+def solution_extra(problem, stages: Stages, tr: Tractions, dA) -> dict:
+    """Result.extra entries common to the grid theories: CONTACT's totals (elastic energy,
+    frictional power or work), iterations, residuals, element counts."""
+    normal, kin = stages.normal, problem.kinematics
+    extra = {
+        "elastic_energy": _area_sum(normal.pn * tr.un + tr.px * tr.ux + tr.py * tr.uy, dA) / 2000.0,   # J
+        "normal_iterations": stages.normal_iterations,
+        "tangential_iterations": stages.tangential_iterations,
+        "normal_residual": normal.residual,
+        "tangential_residual": tr.residual,
+        "gap_residual": normal.gap_residual,
+        "n_adhesion": int(np.count_nonzero(tr.status == ADHESION)),
+        "n_potential": int(normal.pn.size),
+    }
+    dissipation = _area_sum(tr.px * tr.sx + tr.py * tr.sy, dA)   # N mm per unit rolled / per shift
+    if kin.rolling == "shift":
+        extra["frictional_work"] = dissipation / 1000.0                              # J
+    else:
+        extra["frictional_power"] = kin.velocity / 1000.0 * dissipation              # W
+    return extra
+
+
+def convergence_warnings(stages: Stages, tr: Tractions, tol: float, coupling: str) -> list[str]:
+    """Warnings for the parts that did not converge (``coupling``: what couples the problems)."""
+    normal, warnings = stages.normal, []
+    if not normal.converged:
+        warnings.append(f"normal problem: not converged after {normal.iterations} iterations "
+                        f"(relative change {normal.residual:.3g} > tol {tol:g})")
+    if not tr.converged:
+        warnings.append(f"tangential problem: not converged (residual {tr.residual:.3g})")
+    if not stages.converged:
+        warnings.append(f"normal-tangential coupling ({coupling}): not converged after "
+                        f"{1 + len(stages.outer)} alternations; raise [model] maxout")
+    return warnings
+
+
+def _result(problem, grid, h, op, stages: Stages) -> Result:
+    dA = grid.area
+    kin = problem.kinematics
+    normal, tang = stages.normal, stages.tang
+    tr = tractions(op, stages)
+    xi, eta = (kin.xi, kin.eta) if tang is None else (tang.xi, tang.eta)
+    field = TractionField(grid=grid, pn=normal.pn, px=tr.px, py=tr.py, status=tr.status, sx=tr.sx, sy=tr.sy,
+                          un=tr.un, ux=tr.ux, uy=tr.uy)
     FN, FX, FY, MZ = field.totals()
     a, b = _patch_extent(grid, normal.contact)
     patch_fn = _patches(grid, normal.pn, normal.contact)
-    energy = dA / 2000.0 * float((normal.pn * un + px * ux + py * uy).sum())   # J
-    dissipation = dA * float((px * sx + py * sy).sum())                        # N mm per unit rolled / per shift
-    extra: dict = {
-        "elastic_energy": energy,
-        "normal_iterations": n_iter,
-        "tangential_iterations": t_iter,
-        "normal_residual": normal.residual,
-        "tangential_residual": t_res,
-        "gap_residual": normal.gap_residual,
-        "n_adhesion": field.n_adhesion,
-        "n_potential": grid.size,
+    extra = solution_extra(problem, stages, tr, dA)
+    extra.update({
         "n_patches": len(patch_fn),
         "patch_FN": patch_fn,
         "FX_rel": FX / (problem.friction.mu_static * FN) if FN > 0 else None,
         "FY_rel": FY / (problem.friction.mu_static * FN) if FN > 0 else None,
         "FN_over_G": FN / problem.material.G,
         "grid": {"mx": grid.mx, "my": grid.my, "dx": grid.dx, "dy": grid.dy, "xl": grid.xl, "yl": grid.yl},
-    }
-    if kin.rolling == "shift":
-        extra["frictional_work"] = dissipation / 1000.0                              # J
-    else:
-        extra["frictional_power"] = kin.velocity / 1000.0 * dissipation              # W
+    })
     if op.coupled:
-        extra["outer_iterations"] = 1 + len(outer)
-        extra["outer"] = outer
+        extra["outer_iterations"] = 1 + len(stages.outer)
+        extra["outer"] = stages.outer
     warnings = []
     edge = _edge_warning(grid, normal.contact)
     if edge:
         warnings.append(edge)
-    if not normal.converged:
-        warnings.append(f"normal problem: not converged after {normal.iterations} iterations "
-                        f"(relative change {normal.residual:.3g} > tol {problem.model.tol:g})")
-    if not t_conv:
-        warnings.append(f"tangential problem: not converged (residual {t_res:.3g})")
-    if not outer_converged:
-        warnings.append(f"normal-tangential coupling (K = {op.K:.4g}): not converged after "
-                        f"{1 + len(outer)} alternations; raise [model] maxout")
+    warnings += convergence_warnings(stages, tr, problem.model.tol, f"K = {op.K:.4g}")
     if warnings:
         extra["warnings"] = warnings
     if problem.hertz is not None:
@@ -213,5 +299,6 @@ def _result(problem, grid, h, op, normal: NormalSolution, tang, outer, outer_con
         extra["hertz"] = {"a": hz.a, "b": hz.b, "pmax": hz.pmax, "approach": hz.approach, "FN": hz.FN}
     return Result(theory="exact", FN=FN, FX=FX, FY=FY, MZ=MZ, a=a, b=b, pmax=normal.pmax,
                   approach=normal.approach, xi=xi, eta=eta, phi=kin.phi,
-                  converged=bool(normal.converged and t_conv and outer_converged),
-                  iterations=n_iter + t_iter, residual=max(normal.residual, t_res), field=field, extra=extra)
+                  converged=bool(normal.converged and tr.converged and stages.converged),
+                  iterations=stages.normal_iterations + stages.tangential_iterations,
+                  residual=max(normal.residual, tr.residual), field=field, extra=extra)

@@ -2,11 +2,20 @@
 
 Find the pressure p_n >= 0 on the potential contact grid such that the deformed gap
 
-    e_I = h_I - approach + sum_J A_zz(I, J) p_n(J) + extra_I  >= 0,    p_n(I) e_I = 0,
+    e_I = h_I - approach w_I + sum_J A_zz(I, J) p_n(J) + extra_I  >= 0,    p_n(I) e_I = 0,
 
-with either the normal force FN = dxdy sum p_n (seed Eq. 46, planar: cos delta = 1) or the approach
-prescribed.  ``extra`` is an additional normal displacement difference, e.g. the coupling term
-A_zt p_t of dissimilar bodies (K != 0) in the Panagiotopoulos process.
+with either the load sum_I w_I p_n(I) dA_I (seed Eq. 46) or the approach prescribed.  ``extra`` is
+an additional normal displacement difference, e.g. the coupling term A_zt p_t of dissimilar bodies
+(K != 0) in the Panagiotopoulos process.
+
+The same code serves planar and curved grids.  On a planar grid every element has the area dxdy
+and w_I = 1, so the load is the normal force FN = dxdy sum p_n (the seed's cos delta = 1).  On a
+curved grid (conformal contact, conformal.solvers.conformal) the rigid approach acts along a load
+direction d and projects onto the normal of element I as w_I = d . n_I = cos(delta_I - delta_d);
+the load is the force along d, sum_I p_n(I) cos(delta_I - delta_d) dA_I (seed Eq. 46, whose
+tangential part the caller subtracts from the prescribed force).  The approach is the Lagrange
+multiplier of that load, so the same weights w enter the gap and the load (an energy-conjugate
+pair), and inner products carry the element areas.
 
 Solver: projected conjugate gradients of Polonsky & Keer (1999), i.e. CG on the current contact
 set, restarted when the set grows, with the pressure projected onto p >= 0 (and rescaled to FN when
@@ -50,8 +59,8 @@ class NormalSolution:
 
     pn : pressure on body 1 (N/mm²), >= 0.
     un : normal displacement difference at the element centres (mm), A_zz pn plus ``extra_un``.
-    approach : the approach (mm), prescribed or solved.
-    FN : dxdy sum pn (N).
+    approach : the approach (mm), prescribed or solved (along the load direction, see the module).
+    FN : sum pn dA (N), the sum of the normal tractions.
     contact : the elements in contact (pn > 0).
     iterations, residual, converged : the projected-CG iteration count, the final relative change
         of the pressure (the stopping criterion) and whether it fell below the tolerance.
@@ -69,6 +78,7 @@ class NormalSolution:
     converged: bool
     gap_residual: float = 0.0
     preconditioned: bool = False
+    load: float | None = None     # sum w pn dA (N), the force along the load direction (= FN if planar)
 
     @property
     def n_contact(self) -> int:
@@ -78,9 +88,9 @@ class NormalSolution:
     def pmax(self) -> float:
         return float(self.pn.max())
 
-    def gap(self, h: np.ndarray) -> np.ndarray:
-        """Deformed gap e = h - approach + un (mm)."""
-        return h - self.approach + self.un
+    def gap(self, h: np.ndarray, weights: np.ndarray | float = 1.0) -> np.ndarray:
+        """Deformed gap e = h - approach w + un (mm)."""
+        return h - self.approach * np.asarray(weights) + self.un
 
 
 def _check_array(name: str, a, shape) -> np.ndarray:
@@ -125,22 +135,112 @@ def fft_preconditioner(op: HalfSpaceInfluence) -> Callable[[np.ndarray], np.ndar
     return apply
 
 
+def _preconditioner(op) -> Callable[[np.ndarray], np.ndarray] | None:
+    """The normal-problem preconditioner of an operator: the FFT one of the planar half-space, or
+    the operator's own ``normal_preconditioner()`` (curved strips), else none."""
+    if isinstance(op, HalfSpaceInfluence):
+        return fft_preconditioner(op)
+    make = getattr(op, "normal_preconditioner", None)
+    return make() if make is not None else None
+
+
+def _positive_weights(name: str, w, shape) -> np.ndarray | float:
+    """Per-element weights as an array of the grid's shape, or the scalar 1.0 where they are all
+    one (planar grids keep exactly the arithmetic of the planar solver)."""
+    if w is None:
+        return 1.0
+    w = np.broadcast_to(np.asarray(w, dtype=float), shape)
+    if not (np.all(np.isfinite(w)) and np.all(w > 0)):
+        raise InputError(f"{name}: must be finite and > 0 on every element")
+    return 1.0 if np.all(w == 1.0) else np.array(w)
+
+
+def element_areas(grid) -> tuple[float, np.ndarray | float]:
+    """(dA_ref, a): a reference element area (mm²) and the relative areas a = dA / dA_ref (the
+    scalar 1.0 on a planar grid; per element on a curved grid, whose areas dx ds_j may vary)."""
+    area = np.asarray(grid.area, dtype=float)
+    if area.ndim == 0:
+        return float(area), 1.0
+    full = np.broadcast_to(area, grid.shape)
+    ref = float(full.mean())
+    if np.allclose(full, ref, rtol=1e-12, atol=0.0):  # equal areas: the planar arithmetic
+        return ref, 1.0
+    return ref, _positive_weights("[grid] element areas", full / ref, grid.shape)
+
+
+def _self_zz(op, shape) -> np.ndarray | float:
+    """A_zz of each element on itself: a scalar (planar) or an array of the grid's shape (curved
+    strips: one value per column along s)."""
+    S = np.asarray(op.self_influence())
+    return float(S[Z, Z]) if S.ndim == 2 else np.broadcast_to(S[:, Z, Z], shape)
+
+
+def _e_star(op, material: Material | None, dA: float, a_self) -> float:
+    """Contact modulus for the starting guesses: the operator's, the material's, or from the self
+    term of a square element, A_zz = 4 asinh(1) d / (pi E*) (only a first guess)."""
+    if hasattr(op, "G"):
+        return op.G / (1.0 - op.nu)
+    if material is not None:
+        return material.E_star
+    return 4.0 * math.asinh(1.0) * math.sqrt(dA) / (math.pi * float(np.max(a_self)))
+
+
+class _Weighted:
+    """Inner products and projections of the weighted problem: <x, y> = sum a x y (a: relative
+    element areas), the load sum a w p, and the approach as the weighted least-squares multiplier
+    of the gap on the contact set, <g, w>_act / <w, w>_act.  With a = w = 1 (planar grids) these
+    are the plain sums and the mean over the contact set."""
+
+    def __init__(self, a=1.0, w=1.0):
+        self.a, self.w = a, w
+        self.aw = a * w
+        self.unit = np.isscalar(a) and np.isscalar(w) and a == 1.0 and w == 1.0
+
+    def load(self, p: np.ndarray) -> float:
+        return float(np.multiply(p, self.aw).sum())
+
+    def norm(self, p: np.ndarray) -> float:
+        """sum a |p|."""
+        return float(np.multiply(np.abs(p), self.a).sum())
+
+    def on(self, actf: np.ndarray) -> tuple[np.ndarray, float]:
+        """(a w on the contact set, <w, w>_act)."""
+        wa = actf * self.aw
+        return wa, float(np.multiply(wa, self.w).sum())
+
+    def approach(self, g: np.ndarray, act: np.ndarray) -> float:
+        if self.unit:
+            return float(np.mean(g[act]))
+        wa, ww = self.on(act.astype(float))
+        return _dot(g, wa) / ww
+
+    def first_touch(self, h: np.ndarray) -> float:
+        """The approach at which the first element touches: min h / w."""
+        return float(np.min(h / self.w))
+
+
 def solve_normal(op: HalfSpaceInfluence | None, grid: PlanarGrid, h: np.ndarray, *,
                  normal_force: float | None = None, approach: float | None = None,
                  extra_un: np.ndarray | None = None, material: Material | None = None,
                  tol: float = 1e-6, maxit: int = 1000, p_start: np.ndarray | None = None,
-                 precondition: bool | None = None) -> NormalSolution:
+                 precondition: bool | None = None, weights: np.ndarray | None = None) -> NormalSolution:
     """Solve the normal contact problem on ``grid`` for the undeformed distance ``h``.
 
     Parameters
     ----------
-    op : the influence operator of the grid, or None to build it from ``material``.
-    grid : the potential contact grid; ``h`` has its shape (mx, my) (mm, before the approach).
-    normal_force, approach : exactly one of them (N, mm).
+    op : the influence operator of the grid, or None to build the half-space one from ``material``.
+        Any operator with ``apply_normal``, ``self_influence``, ``mx``, ``my`` serves (the curved
+        strips of conformal.influence.curved).
+    grid : the potential contact grid, planar or curved (``grid.area``: element area, a scalar or
+        one per column); ``h`` has its shape (mm, before the approach; on a curved grid it may be
+        < 0: the signed distance at a reference position of the bodies).
+    normal_force, approach : exactly one of them (N, mm): the load sum w pn dA, or the approach.
     extra_un : additional normal displacement difference (mm), e.g. A_zt p_t for K != 0.
     tol, maxit : stop when sum|dp| / sum p < tol; at most maxit iterations.
     p_start : a starting pressure (e.g. the previous outer iteration), optional.
     precondition : use the FFT preconditioner (default: from PRECONDITION_FROM elements on).
+    weights : w, the projection of the approach direction onto each element's normal (module
+        docstring), > 0; default 1 (planar).
 
     Raises
     ------
@@ -164,46 +264,51 @@ def solve_normal(op: HalfSpaceInfluence | None, grid: PlanarGrid, h: np.ndarray,
     h_eff = h if extra_un is None else h + _check_array("extra_un", extra_un, grid.shape)
     if precondition is None:
         precondition = grid.size >= PRECONDITION_FROM
-    pc = fft_preconditioner(op) if precondition else None
-    dA = grid.area
+    pc = _preconditioner(op) if precondition else None
+    dA, a = element_areas(grid)
+    w = _positive_weights("[model] load direction: weights w", weights, grid.shape)
+    weighted = _Weighted(a, w)
+    a_self = _self_zz(op, grid.shape)
+    E_star = _e_star(op, material, dA, a_self)
 
     if normal_force is not None:
         FN = _check_positive("[load] normal_force", normal_force)
         if p_start is not None and np.any(np.asarray(p_start) > 0):
             p0 = np.maximum(_check_array("p_start", p_start, grid.shape), 0.0)
         else:
-            p0 = initial_pressure(h_eff, FN, op.G / (1.0 - op.nu), dA)
-        p0 = p0 * (FN / (p0.sum() * dA))
-        p, u, k, eps = _pk_force(op.apply_normal, pc, op.self_influence()[Z, Z], h_eff, FN / dA, p0, tol, int(maxit))
+            p0 = initial_pressure(h_eff, FN, E_star, dA)
+        p0 = p0 * (FN / (weighted.load(p0) * dA))
+        p, u, k, eps = _pk_force(op.apply_normal, pc, a_self, h_eff, FN / dA, p0, tol, int(maxit), weighted)
         if pc is not None and not eps < tol:  # safety net: the plain Polonsky-Keer iteration
             pc = None
-            p, u, k2, eps = _pk_force(op.apply_normal, None, op.self_influence()[Z, Z], h_eff, FN / dA, p0,
-                                      tol, int(maxit))
+            p, u, k2, eps = _pk_force(op.apply_normal, None, a_self, h_eff, FN / dA, p0,
+                                      tol, int(maxit), weighted)
             k += k2
         act = p > 0
-        delta = float(np.mean((u + h_eff)[act]))
+        delta = weighted.approach(u + h_eff, act)
     else:
         delta = float(approach)
         if not math.isfinite(delta):
             raise InputError(f"[load] approach: must be a finite number, got {approach!r}")
-        hmin = float(h_eff.min())
+        hmin = weighted.first_touch(h_eff)
         if delta <= hmin:
             raise NoContactError(f"no contact: the approach {delta:.6g} mm does not exceed the smallest "
                                  f"undeformed distance {hmin:.6g} mm (gap {hmin - delta:.6g} mm)")
-        p, u, k, eps = _solve_for_approach(op, pc, h_eff, delta, dA, tol, int(maxit), p_start)
+        args = (a_self, E_star, h_eff, delta, dA, tol, int(maxit), p_start, weighted)
+        p, u, k, eps = _solve_for_approach(op, pc, *args)
         if pc is not None and not eps < tol:  # safety net: the plain Polonsky-Keer iteration
             pc = None
-            p, u, k2, eps = _solve_for_approach(op, None, h_eff, delta, dA, tol, int(maxit), p_start)
+            p, u, k2, eps = _solve_for_approach(op, None, *args)
             k += k2
         act = p > 0
     un = u if extra_un is None else u + extra_un
-    e = h - delta + un
+    e = h - delta * w + un
     scale = max(abs(delta), float(np.ptp(h_eff[act])) if act.any() else 0.0, 1e-300)
     gap_res = max(float(np.abs(e[act]).max()) if act.any() else 0.0,
                   float(np.maximum(-e[~act], 0.0).max()) if (~act).any() else 0.0) / scale
-    return NormalSolution(pn=p, un=un, approach=delta, FN=float(p.sum() * dA), contact=act, iterations=k,
-                          residual=eps, converged=bool(eps < tol), gap_residual=gap_res,
-                          preconditioned=pc is not None)
+    return NormalSolution(pn=p, un=un, approach=delta, FN=float(np.multiply(p, a).sum() * dA), contact=act,
+                          iterations=k, residual=eps, converged=bool(eps < tol), gap_residual=gap_res,
+                          preconditioned=pc is not None, load=weighted.load(p) * dA)
 
 
 def initial_pressure(h: np.ndarray, FN: float, E_star: float, dA: float) -> np.ndarray:
@@ -227,7 +332,7 @@ def initial_pressure(h: np.ndarray, FN: float, E_star: float, dA: float) -> np.n
     return np.full(h.shape, FN / (dA * h.size))
 
 
-def _solve_for_approach(op, pc, h, delta, dA, tol, maxit, p_start):
+def _solve_for_approach(op, pc, a_self, E_star, h, delta, dA, tol, maxit, p_start, weighted):
     """Prescribed approach: the force-prescribed iteration inside a secant iteration on FN.
 
     The approach above first contact, d = approach - min h, grows monotonically with FN (as
@@ -235,16 +340,14 @@ def _solve_for_approach(op, pc, h, delta, dA, tol, maxit, p_start):
     inner solve starts from the previous pressure.  A direct projected CG with the approach
     prescribed was measured to oscillate for many iterations from a poor first guess.
     Returns (p, u, total inner iterations, relative approach mismatch)."""
-    a_self = op.self_influence()[Z, Z]
-    hmin = float(h.min())
+    hmin = weighted.first_touch(h)
     d_target = delta - hmin
     if p_start is not None and np.any(np.asarray(p_start) > 0):
         p = np.maximum(np.asarray(p_start, dtype=float), 0.0)
-        FN = float(p.sum() * dA)
+        FN = weighted.load(p) * dA
     else:  # E* r d, between flat punch (2 E* a d) and Hertz (4/3 E* a d, a = r / sqrt 2)
-        E_star = op.G / (1.0 - op.nu)
-        r = math.sqrt(np.count_nonzero(h < delta) * dA / math.pi)
-        FN = max(E_star * r * d_target, d_target / a_self * dA)
+        r = math.sqrt(np.count_nonzero(h < delta * weighted.w) * dA / math.pi)
+        FN = max(E_star * r * d_target, d_target / float(np.max(a_self)) * dA)
         p = None
     history: list[tuple[float, float]] = []
     total, mismatch = 0, math.inf
@@ -252,11 +355,11 @@ def _solve_for_approach(op, pc, h, delta, dA, tol, maxit, p_start):
     for _ in range(60):
         if p is None or p.sum() <= 0:
             p = np.full(h.shape, FN / (dA * h.size))
-        p = p * (FN / (p.sum() * dA))
-        p, u, k, eps = _pk_force(op.apply_normal, pc, a_self, h, FN / dA, p, inner_tol, maxit)
+        p = p * (FN / (weighted.load(p) * dA))
+        p, u, k, eps = _pk_force(op.apply_normal, pc, a_self, h, FN / dA, p, inner_tol, maxit, weighted)
         total += k
         act = p > 0
-        d = float(np.mean((u + h)[act])) - hmin
+        d = weighted.approach(u + h, act) - hmin
         mismatch = abs(d - d_target) / d_target
         if mismatch < tol or total >= maxit:
             break
@@ -276,21 +379,25 @@ def _dot(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.multiply(a, b).sum())
 
 
-def _direction(ga, act, na, pc, project_mean):
+def _direction(ga, actf, wa, ww, weighted, pc):
     """Preconditioned steepest-descent direction z on the contact set (zero elsewhere)."""
     if pc is None:
         return ga
     z = pc(ga)
-    z *= act
-    if project_mean:  # keep the load: zero sum over the contact set
-        z -= act * (z.sum() / na)
+    z *= actf
+    # keep the load: <z, w>_act = 0 (planar: zero sum over the contact set)
+    z -= (actf * weighted.w) * (_dot(z, wa) / ww)
     return z
 
 
-def _pk_force(A, pc, a_self, h, load, p, tol, maxit):
-    """Polonsky-Keer with the load sum(p) = load prescribed (load = FN / dxdy).
+def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None):
+    """Polonsky-Keer with the load sum(a w p) = load prescribed (load = FN / dA_ref; planar:
+    sum(p) = FN / dxdy).  On the contact set the gap is g - lambda w with lambda the weighted mean
+    of g (:class:`_Weighted`); inner products carry the relative areas a.
 
     Returns (p, u = A p, iterations, last relative change)."""
+    weighted = weighted or _Weighted()
+    a, w = weighted.a, weighted.w
     u = A(p)
     t = np.zeros_like(p)
     G_old, restart = 1.0, True
@@ -299,16 +406,18 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit):
         act = p > 0
         na = int(np.count_nonzero(act))
         if na == 0:  # cannot happen with a positive load; guard anyway
-            p = np.where(h == h.min(), 1.0, 0.0)
-            p *= load / p.sum()
+            hw = h / w
+            p = np.where(hw == hw.min(), 1.0, 0.0)
+            p *= load / weighted.load(p)
             u = A(p)
             continue
         g = u + h
         actf = act.astype(float)
-        g -= _dot(g, actf) / na   # mean over the contact set = the approach
+        wa, ww = weighted.on(actf)
+        g -= w * (_dot(g, wa) / ww)   # the (weighted) mean over the contact set = the approach
         ga = g * actf
-        z = _direction(ga, actf, na, pc, True)
-        G = float(_dot(ga, z))
+        z = _direction(ga, actf, wa, ww, weighted, pc)
+        G = float(_dot(ga * a, z))
         if restart:
             t = z.copy()
         else:
@@ -317,11 +426,11 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit):
             t *= actf
         G_old = G
         r = A(t)
-        rt = float(_dot(r, t)) - float(_dot(r, actf)) / na * float(t.sum())
+        rt = float(_dot(r * a, t)) - float(_dot(r, wa)) / ww * weighted.load(t)
         if not rt > 0.0:   # t = 0: the gap is already uniform on the contact set
             eps = 0.0 if G == 0.0 else eps
             break
-        tau = float(_dot(ga, t)) / rt
+        tau = float(_dot(ga * a, t)) / rt
         p_new = p - tau * t
         u_new = u - tau * r
         neg = p_new < 0.0
@@ -332,14 +441,15 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit):
         if overlap.any():
             # Polonsky-Keer's -tau g; with the preconditioner tau is no longer a compliance, so
             # close each gap as if the element were alone: -g / A_zz(0, 0)
-            p_new[overlap] = -g[overlap] * (tau if pc is None else 1.0 / a_self)
+            p_new[overlap] = -g[overlap] * (tau if pc is None else 1.0 / (a_self if np.isscalar(a_self)
+                                                                           else a_self[overlap]))
             changed, restart = True, True
         else:
             restart = False
-        s = load / p_new.sum()
+        s = load / weighted.load(p_new)
         p_new *= s
         u = A(p_new) if changed else u_new * s
-        eps = float(np.abs(p_new - p).sum()) / load
+        eps = weighted.norm(p_new - p) / (load if weighted.unit else weighted.norm(p_new))
         p = p_new
         if eps < tol:
             break

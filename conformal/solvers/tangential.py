@@ -533,6 +533,18 @@ class _Newton:
 
 
 # ----------------------------------------------------------------------------- entry point
+def column_rigid_slip(grid, xi, eta, phi, steady: bool) -> np.ndarray:
+    """Rigid slip (2, mx, my) from the creepages of the columns at x = 0 (seed Eq. 47; CONTACT's
+    W/dq with chi = 0): w = (xi, eta + phi (x + dx/6)) in steady rolling, (xi, eta + phi x) for a
+    shift.  xi, eta, phi broadcast against the grid: scalars, one value per column along y (or s),
+    or per element.  On a planar grid the column value of xi is xi - phi y (the spin turns the
+    longitudinal slip across the patch); on a curved grid every column has its own creepages, from
+    the wheelset motion with the local contact angle (conformal.solvers.conformal)."""
+    X = grid.x[:, None]
+    dq6 = grid.dx / 6.0 if steady else 0.0
+    return np.stack([np.broadcast_to(xi, grid.shape), np.broadcast_to(eta + phi * (X + dq6), grid.shape)])
+
+
 def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: float,
                      mu_static: float, mu_kinetic: float, rolling: str = "steady",
                      fx_rel: float | None = None, fy_rel: float | None = None,
@@ -602,8 +614,7 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
 
     # rigid slip (seed Eq. 47; CONTACT's W/dq with chi = 0)
     X, Y = grid.mesh()
-    dq6 = grid.dx / 6.0 if steady else 0.0
-    w = np.stack([xi - phi * Y, eta + phi * (X + dq6)])
+    w = column_rigid_slip(grid, xi - phi * Y, eta, phi, steady)
     if rigid_slip is not None:
         w = w + _field("rigid_slip", np.asarray(rigid_slip, dtype=float), (2,) + shape)
     if extra_u is not None:
