@@ -21,9 +21,8 @@ import os
 import sys
 import time
 from dataclasses import dataclass, field, replace
-from typing import Callable, Iterable
+from typing import Callable
 
-import numpy as np
 
 from conformal.errors import ConformalError, InputError
 

@@ -118,3 +118,19 @@ def test_cli_good_scene_prints_json(tmp_path, capsys, theory):
         assert d["MZ"] is None and d["FX"] < 0
     else:
         assert d["n_contact"] is None and math.isfinite(d["MZ"])
+
+
+def test_demo_solves_the_flange_scene_and_balances_the_wheel_load(tmp_path, capsys):
+    """`conformal demo` (README command 1): conformal contact of S1002 on UIC60 at the flange root.
+    The vertical force on the rail must equal the prescribed 10 kN wheel load (seed Eq. 46) and
+    the patch must lie on the curved gauge corner (contact angles spread over more than 10 deg)."""
+    import json
+
+    from conformal.cli import main
+
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    summary = json.loads((tmp_path / "demo.json").read_text())
+    assert summary["theory"] == "conformal" and summary["converged"]
+    assert summary["FZ_track"] == pytest.approx(10000.0, rel=1e-4)
+    assert summary["contact_angle_spread_deg"] > 10.0
+    assert (tmp_path / "demo.png").stat().st_size > 10_000

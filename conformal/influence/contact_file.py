@@ -41,7 +41,6 @@ import io
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TextIO
 
 import numpy as np
 

@@ -42,6 +42,7 @@ from typing import Callable
 
 import numpy as np
 
+from conformal.solvers import checks
 from conformal.errors import InputError, NoContactError
 from conformal.grid import PlanarGrid
 from conformal.influence.halfspace import Z, HalfSpaceInfluence
@@ -91,25 +92,6 @@ class NormalSolution:
     def gap(self, h: np.ndarray, weights: np.ndarray | float = 1.0) -> np.ndarray:
         """Deformed gap e = h - approach w + un (mm)."""
         return h - self.approach * np.asarray(weights) + self.un
-
-
-def _check_array(name: str, a, shape) -> np.ndarray:
-    a = np.asarray(a, dtype=float)
-    if a.shape != tuple(shape):
-        raise InputError(f"{name}: expected an array of shape {tuple(shape)}, got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise InputError(f"{name}: contains NaN or infinite values")
-    return a
-
-
-def _check_positive(name: str, v) -> float:
-    try:
-        v = float(v)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: must be a number, got {v!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise InputError(f"{name}: must be > 0, got {v!r}")
-    return v
 
 
 def fft_preconditioner(op: HalfSpaceInfluence) -> Callable[[np.ndarray], np.ndarray]:
@@ -249,7 +231,7 @@ def solve_normal(op: HalfSpaceInfluence | None, grid: PlanarGrid, h: np.ndarray,
     """
     if (normal_force is None) == (approach is None):
         raise InputError("[load] normal_force: give exactly one of normal_force (N) or approach (mm)")
-    h = _check_array("[geometry] undeformed distance h", h, grid.shape)
+    h = checks.field("[geometry] undeformed distance h", h, grid.shape)
     if op is None:
         if material is None:
             raise InputError("solve_normal: give the influence operator or the material")
@@ -261,7 +243,7 @@ def solve_normal(op: HalfSpaceInfluence | None, grid: PlanarGrid, h: np.ndarray,
         raise InputError(f"[model] tol: must be > 0, got {tol!r}")
     if int(maxit) < 1:
         raise InputError(f"[model] maxit: must be >= 1, got {maxit!r}")
-    h_eff = h if extra_un is None else h + _check_array("extra_un", extra_un, grid.shape)
+    h_eff = h if extra_un is None else h + checks.field("extra_un", extra_un, grid.shape)
     if precondition is None:
         precondition = grid.size >= PRECONDITION_FROM
     pc = _preconditioner(op) if precondition else None
@@ -272,9 +254,9 @@ def solve_normal(op: HalfSpaceInfluence | None, grid: PlanarGrid, h: np.ndarray,
     E_star = _e_star(op, material, dA, a_self)
 
     if normal_force is not None:
-        FN = _check_positive("[load] normal_force", normal_force)
+        FN = checks.number("[load] normal_force", normal_force, positive=True)
         if p_start is not None and np.any(np.asarray(p_start) > 0):
-            p0 = np.maximum(_check_array("p_start", p_start, grid.shape), 0.0)
+            p0 = np.maximum(checks.field("p_start", p_start, grid.shape), 0.0)
         else:
             p0 = initial_pressure(h_eff, FN, E_star, dA)
         p0 = p0 * (FN / (weighted.load(p0) * dA))

@@ -95,6 +95,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import fft as sfft
 
+from conformal.solvers import checks
 from conformal.errors import InputError
 from conformal.result import ADHESION, EXTERIOR, SLIP
 
@@ -140,27 +141,6 @@ class TangentialSolution:
 
 
 # ----------------------------------------------------------------------------- input checks
-def _number(name: str, v, *, positive=False, nonneg=False) -> float:
-    try:
-        v = float(v)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: must be a number, got {v!r}") from None
-    if not math.isfinite(v):
-        raise InputError(f"{name}: must be finite, got {v!r}")
-    if positive and not v > 0:
-        raise InputError(f"{name}: must be > 0, got {v!r}")
-    if nonneg and v < 0:
-        raise InputError(f"{name}: must be >= 0, got {v!r}")
-    return v
-
-
-def _field(name: str, a, shape) -> np.ndarray:
-    a = np.asarray(a, dtype=float)
-    if a.shape != tuple(shape):
-        raise InputError(f"{name}: expected an array of shape {tuple(shape)}, got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise InputError(f"{name}: contains NaN or infinite values")
-    return a
 
 
 # ----------------------------------------------------------------------------- the operator L
@@ -425,7 +405,7 @@ class _Newton:
         z = p - c * s
         nz = np.hypot(z[0], z[1])
         ia, isl = np.flatnonzero(~slip), np.flatnonzero(slip)
-        nA, nS, nF = ia.size, isl.size, len(self.force_rows)
+        nA, nS = ia.size, isl.size
         n = z[:, isl] / nz[isl]
         t = np.stack([-n[1], n[0]])
         kap = self.gk[isl] / nz[isl]
@@ -577,25 +557,25 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
     TangentialSolution; ``converged`` False with a ``message`` when the tolerance was not met.
     """
     shape = tuple(grid.shape)
-    pn = _field("pn", pn, shape)
+    pn = checks.field("pn", pn, shape)
     if np.any(pn < 0):
         raise InputError("pn: the pressure must be >= 0")
     if (op.mx, op.my) != shape:
         raise InputError(f"op: influence operator is for {op.mx} x {op.my} elements, the grid has {shape}")
     if rolling not in ("steady", "shift"):
         raise InputError(f"[kinematics] rolling: must be \"steady\" or \"shift\", got {rolling!r}")
-    xi, eta, phi = (_number(f"[kinematics] {k}", v) for k, v in (("xi", xi), ("eta", eta), ("phi", phi)))
-    mu_s = _number("[friction] mu_static", mu_static, nonneg=True)
-    mu_k = _number("[friction] mu_kinetic", mu_kinetic, nonneg=True)
+    xi, eta, phi = (checks.number(f"[kinematics] {k}", v) for k, v in (("xi", xi), ("eta", eta), ("phi", phi)))
+    mu_s = checks.number("[friction] mu_static", mu_static, nonneg=True)
+    mu_k = checks.number("[friction] mu_kinetic", mu_kinetic, nonneg=True)
     if mu_k > mu_s:
         raise InputError(f"[friction] mu_kinetic: must not exceed mu_static ({mu_k} > {mu_s})")
-    tol = _number("[model] tol", tol, positive=True)
+    tol = checks.number("[model] tol", tol, positive=True)
     if int(maxit) < 1:
         raise InputError(f"[model] maxit: must be >= 1, got {maxit}")
     targets = {}
     for key, v, k in (("fx_rel", fx_rel, 0), ("fy_rel", fy_rel, 1)):
         if v is not None:
-            targets[k] = _number(f"[kinematics] {key}", v)
+            targets[k] = checks.number(f"[kinematics] {key}", v)
     if targets and mu_k == 0.0:
         raise InputError("[kinematics] fx_rel, fy_rel: a prescribed tangential force needs friction (mu > 0)")
     if targets:
@@ -616,9 +596,9 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
     X, Y = grid.mesh()
     w = column_rigid_slip(grid, xi - phi * Y, eta, phi, steady)
     if rigid_slip is not None:
-        w = w + _field("rigid_slip", np.asarray(rigid_slip, dtype=float), (2,) + shape)
+        w = w + checks.field("rigid_slip", np.asarray(rigid_slip, dtype=float), (2,) + shape)
     if extra_u is not None:
-        eu = _field("extra_u", extra_u, (2,) + shape)
+        eu = checks.field("extra_u", extra_u, (2,) + shape)
         if steady:  # (u - u')/dx of the extra displacement; u' of the leading column: u there
             w = w + np.stack([np.concatenate([eu[k, :-1] - eu[k, 1:], np.zeros((1, my))]) for k in (0, 1)]) / grid.dx
         else:
@@ -643,7 +623,7 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
 
     force_rows = [(k, targets[k] * mu_s * FN) for k in sorted(targets)]
     if p_start is not None:
-        p_start = _field("p_start", p_start, (2,) + shape)
+        p_start = checks.field("p_start", p_start, (2,) + shape)
     st, slip, its, res, msg, L = _solve_grid(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows,
                                              np.array([xi, eta]), tol, int(maxit), p_start)
     idx = L.idx

@@ -147,7 +147,7 @@ def hertz_from_semiaxes(a: float, b: float, material: Material, *, normal_force:
     return HertzContact(a=a, b=b, A=A, B=B, FN=FN, approach=p0 * L * kd / Es, pmax=p0, E_star=Es)
 
 
-def solve(problem) -> "Result":
+def solve(problem):
     """Hertz as a model: the normal solution only (no tangential tractions)."""
     from conformal.result import Result
 
