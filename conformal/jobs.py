@@ -1,8 +1,9 @@
 """Precomputation jobs: FE influence numbers for a sweep of wheel-rail positions (DESIGN.md §6).
 
 ``conformal precompute SCENE.toml --sweep shift=0:10:0.5`` places the wheelset at every lateral
-shift of the sweep, finds the contact patches and their curved grids (conformal.geometry), and
-computes the FE influence numbers of the rail and the wheel body of every patch into the cache
+shift of the sweep, finds the curved grids the solver will use (conformal.geometry: one per patch;
+theory "conformal": one strip over all patches of the wheel), and computes the FE influence
+numbers of the rail and the wheel body of every grid into the cache
 (conformal.influence.cache).  Items already in the cache are skipped, so an interrupted job only
 redoes what is missing; an item that fails leaves nothing in the cache.
 
@@ -111,9 +112,22 @@ def _scene_at(scene, key: str, value: float):
     return replace(scene, geometry=replace(geo, **{SWEEP_KEYS[key]: value}))
 
 
+def _solver_grids(scene, per_patch) -> list[tuple]:
+    """The curved grids the solver of ``[model] theory`` will use, as (grid, ...) tuples: for the
+    conformal theory ONE strip over every patch of the wheel
+    (conformal.solvers.conformal.curved_problem_from_wheel_rail; per-patch grids would fill the
+    cache with kernels it never asks for), else one grid per patch (``per_patch(scene)``)."""
+    if scene.model.theory == "conformal":
+        from conformal.solvers.conformal import curved_problem_from_wheel_rail
+
+        return [(curved_problem_from_wheel_rail(scene).grid,)]
+    return list(per_patch(scene))
+
+
 def plan(scene, sweep: Sweep, settings=None, cache=None,
          on_position: Callable[[float, Exception], None] | None = None) -> tuple[list[Item], list]:
-    """The FE items of a sweep: (items, failed positions).  Grids come from the geometry."""
+    """The FE items of a sweep: (items, failed positions).  Grids: those the solver of
+    [model] theory will use (:func:`_solver_grids`)."""
     from conformal.geometry.wheelrail import curved_problems_from_wheel_rail
     from conformal.influence.cache import Cache
     from conformal.influence.fe import (body_key, rail_body_from_grid, scene_profiles, settings_from_options,
@@ -127,7 +141,7 @@ def plan(scene, sweep: Sweep, settings=None, cache=None,
         sc = _scene_at(scene, sweep.key, v)
         rail_pts, wheel_pts = scene_profiles(sc)
         try:
-            problems = curved_problems_from_wheel_rail(sc)
+            problems = _solver_grids(sc, curved_problems_from_wheel_rail)
         except ConformalError as exc:
             failed.append((v, str(exc)))
             if on_position:

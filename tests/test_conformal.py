@@ -272,3 +272,32 @@ def test_bad_input_messages():
     steep = replace(C.flat_strip(g), delta=np.array([0.0, 1.0, 1.7]))
     with pytest.raises(InputError, match="no longer presses"):
         C.approach_weights(steep, 0.0)
+
+
+@pytest.mark.parametrize("name", ["flange_s1002_uic60.toml", "mbench_right_y5.toml"])
+def test_curved_creepages_use_the_planar_creep_point(name):
+    """Per column the curved path takes the wheel material point of Patch.creep_point (CONTACT's
+    rule: the rail point moved by the patch's penetration along the normal).  A one-column grid
+    through the patch's reference point must then reproduce the planar creepages to round-off
+    (the wheel surface point on the normal, the old rule, was 1.1e-6 off in xi = 0.0115 on the
+    flange root and 3.2e-5 in xi = 0.0069 on the Manchester case with yaw)."""
+    from types import SimpleNamespace
+
+    from conformal.geometry.kinematics import WheelsetMotion
+    from conformal.geometry.wheelrail import _kinematics_for, balance_height, curved_creepages, place_scene
+
+    sc = load_scene(SCENES / name)
+    pl = place_scene(sc)
+    _, st, _ = balance_height(pl, sc)
+    p = st.patches[0].patch
+    rail = pl.pair.rail
+    yz = (np.asarray(p.point[1:]) - np.asarray(rail.origin)) @ rail.rotation     # rail-profile frame
+    grid = SimpleNamespace(ms=1, y=yz[:1], z=yz[1:], normal=(np.asarray(p.normal[1:]) @ rail.rotation)[None, :],
+                           s=np.array([p.s_ref]), s_ref=p.s_ref)
+    k = sc.kinematics
+    pitch = k.pitch_velocity if k.pitch_velocity is not None else -k.speed / sc.geometry.wheel_radius
+    motion = WheelsetMotion(k.speed, pitch, k.yaw_rate, k.roll_rate, k.lateral_velocity)
+    c = curved_creepages(pl.pair, st.z, motion, grid, p)
+    kin, _ = _kinematics_for(sc, pl.pair, st.z, p)
+    assert abs(kin.xi) > 1e-3                        # a real longitudinal creepage to compare
+    np.testing.assert_allclose([c.xi[0], c.eta[0], c.phi[0]], [kin.xi, kin.eta, kin.phi], rtol=0, atol=1e-12)

@@ -273,3 +273,61 @@ def test_settings_from_scene_options():
         settings_from_options({"fe_typo": 1})
     with pytest.raises(InputError, match="fe_growth"):
         settings_from_options({"fe_growth": "fast"})
+
+
+def test_worn_wheel_slender_strip_free_surface_is_whole():
+    """Worn wheel (measured profile, digitised curvature up to 0.6 /mm at the flange root) under a
+    slender strip (ds = 0.02 mm): gmsh's spline departs from the profile polyline by about 1e-3 mm
+    there, more than the old free-surface tolerance 1e-2 ds, so parts of the free surface were
+    taken for clamped faces and observation points fell into the holes (flange_worn.toml at a
+    17 mm shift: "observation point lies outside the meshed surface").  Now the free surface is
+    the whole revolved surface: its area equals (theta_hi - theta_lo) * int r ds (flat facets
+    are chords of the curved surface: relative error of order (h / R)^2 < 1e-4; 1e-3 allows for
+    that), and the influence numbers of the strip come out (the self normal term is positive)."""
+    from conformal.scene import load_scene
+
+    sc = load_scene(Path(__file__).parents[1] / "meshes" / "scenes" / "flange_worn.toml")
+    _, wheel_pts = fe.scene_profiles(sc)
+    wheel = BodyModel("wheel", Profile2D.from_points(wheel_pts, "worn"), axle_z=-444.0)
+    patch = StripPatch.uniform(3, 0.4, 3, 0.02, 21.2)
+    st = FESettings(mesh=MeshSpec(h_patch=4.0, body_size=1.0))
+    bm = mesh_body(wheel, patch, st.mesh)
+    ext = bm.extent
+    X = bm.points[bm.free_tris]
+    area = 0.5 * np.linalg.norm(np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]), axis=1).sum()
+    s = np.linspace(ext.s_lo, ext.s_hi, 4001)
+    r = wheel.radius_at(s)
+    exact = (ext.theta_hi - ext.theta_lo) * np.sum(0.5 * (r[1:] + r[:-1]) * np.diff(s))
+    assert area == pytest.approx(exact, rel=1e-3)
+    k = body_influence(wheel, patch, G, NU, st, mesh=bm).kernel
+    assert np.all(np.isfinite(k)) and k[patch.mx - 1, 1, 1, 2, 2] > 0
+
+
+def test_trace_interpolation_survives_degenerate_surface_triangles():
+    """gmsh leaves slivers on the free surface whose three nodes lie on one circle of revolution
+    (a patch edge s = const of a wheel): zero area in the (x, s) parametrisation.  matplotlib's
+    trifinder rejected such a surface ("Triangulation is invalid": flange flank at 70 degrees,
+    n = 48; the worn pair); the point location now skips them.  P1 interpolation of a linear
+    field must then be exact (to round-off) everywhere in the square, edges and nodes included."""
+    from types import SimpleNamespace
+
+    # F(0.5,2) above; A(0,1) B(0.5,1) C(1,1) on the patch edge; D(0,0) E(1,0) below.  Below the
+    # edge the triangles use B, above it (A, C, F) spans over B, and (A, C, B) is the collinear
+    # sliver between them (this configuration made matplotlib's trifinder raise).
+    nodes = np.array([[0.0, 1.0], [0.5, 1.0], [1.0, 1.0], [0.0, 0.0], [1.0, 0.0], [0.5, 2.0]])
+    tris = np.array([[3, 4, 2], [3, 2, 1], [3, 1, 0], [0, 2, 1], [0, 2, 5]])
+    surf = SimpleNamespace(tris=tris, tri_uv=nodes[tris])
+    space = fe._Space(None, None, len(nodes), np.zeros(0, np.int64), np.zeros(0, np.int64), len(nodes), 1)
+    rng = np.random.default_rng(3)
+    top = rng.random((30, 2))
+    top = top[top.sum(axis=1) < 1.0]                     # in the upper triangle (A, C, F)
+    top = nodes[0] + top[:, :1] * (nodes[2] - nodes[0]) + top[:, 1:] * (nodes[5] - nodes[0])
+    pts = np.vstack([rng.random((50, 2)), top, nodes, [[0.5, 0.5], [0.25, 1.0], [0.75, 1.0], [1.0, 0.3]]])
+    Q = fe._trace_interpolation(surf, space, pts)
+
+    def lin(p):
+        return 2.0 * p[:, 0] - 3.0 * p[:, 1] + 1.0
+
+    np.testing.assert_allclose(Q @ lin(nodes), lin(pts), rtol=0, atol=1e-12)
+    with pytest.raises(FESolveError, match="outside the meshed surface"):
+        fe._trace_interpolation(surf, space, np.array([[0.9, 1.5]]))

@@ -130,3 +130,33 @@ def test_local_dask_cluster(scene_file, tmp_path):
                      scheduler="local", progress=False)
     assert rep.done == 2 and not rep.failed
     assert len(Cache(tmp_path / "c").entries()) == 2
+
+
+def test_precompute_fills_the_conformal_strip_of_a_multi_patch_scene(tmp_path, monkeypatch):
+    """The worn pair at 9.9 mm has two geometric patches; the conformal theory solves them on
+    ONE strip (conformal.solvers.conformal.curved_problem_from_wheel_rail).  precompute must plan
+    that strip (rail + wheel: 2 bodies, not 2 per patch), and a conformal solve afterwards must
+    find both bodies in the cache (the check fails if plan() builds per-patch grids)."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    from conformal.scene import load_scene
+    from conformal.solve import solve_scene
+
+    scene = load_scene(Path(__file__).parents[1] / "meshes" / "scenes" / "flange_worn_three_patches.toml")
+    # at 9.93 mm (the scene's shift: three patches) the strip turns past the vertical gauge face
+    # and the rail is no FE body (not a graph over y); at 9.9 mm two patches, tread and flange root
+    opts = dict(scene.model.options, max_mx=6, max_ms=14, fe_body_size=0.3, fe_h_patch=4.0)
+    scene = replace(scene.with_model(influence="fe", options=opts),
+                    geometry=replace(scene.geometry, lateral_shift=9.9))
+    cache = Cache(tmp_path / "cache")
+    sweep = parse_sweep(f"shift={scene.geometry.lateral_shift}")
+    items, failed = plan(scene, sweep, cache=cache)
+    assert not failed and sorted(it.label.split()[-2] for it in items) == ["rail", "wheel"]
+    rep = precompute(scene, sweep, cache=cache, workers=1, progress=False)
+    assert rep.done == 2 and not rep.failed
+    monkeypatch.setenv("CONFORMAL_CACHE", str(cache.folder))
+    r = solve_scene(scene)
+    assert r.extra["n_geometric_patches"] == 2
+    fe_stats = r.extra["fe"]
+    assert set(fe_stats) == {"rail", "wheel"} and all(s.get("cache_hit") for s in fe_stats.values())

@@ -483,17 +483,21 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8) -> Result:
 def curved_creepages(pair: WheelRailPair, z: float, motion: WheelsetMotion, grid, patch: Patch) -> Creepages:
     """Creepages along the profile of a curved grid (one value per element column js, real frame):
     the spin phi(s) = (omega_r - omega_w) . n(s) / V follows the contact angle delta(s) across the
-    patch (seed Eq. 61 at every element centre, the wheel material point on the local normal)."""
-    from conformal.geometry.patches import wheel_on_lines
+    patch (seed Eq. 61 at every element centre).
 
+    The wheel material point of column s is the rule of :attr:`Patch.creep_point` (CONTACT's)
+    applied per column: the rail point R(s) moved by the patch's penetration along the local
+    normal n(s), i.e. the point that lies on the rail in the just-touching wheel; the conformal
+    solver's own just-touching gap is h(s) - approach along the same normals.  At the reference
+    column this is the planar path's point, so both give the same creepages there.  (The wheel
+    surface point on the local normal, used before, sits at the local overlap instead: an offset
+    of (penetration - overlap(s)) |omega| / V in the creepages, 1e-5 .. 1e-4.)"""
     wheel = pair.wheel(z)
     side_yz = np.c_[grid.y, grid.z] @ pair.rail.rotation.T + np.asarray(pair.rail.origin)
     n_side = grid.normal @ pair.rail.rotation.T
     R = np.c_[np.full(grid.ms, patch.x_ref), side_yz]
     nrm = np.c_[np.zeros(grid.ms), n_side]
-    s0 = patch.wheel_s + (grid.s - grid.s_ref)
-    _, _, t = wheel_on_lines(wheel, R, nrm, s0, np.full(grid.ms, patch.wheel_theta))
-    c = creepages(wheel.frame, motion.mirrored(pair.side), R + t[:, None] * nrm, nrm)
+    c = creepages(wheel.frame, motion.mirrored(pair.side), R + patch.penetration * nrm, nrm)
     m = pair.mirror
     return Creepages(xi=c.xi, eta=m * c.eta, phi=m * c.phi, velocity=c.velocity)
 

@@ -64,7 +64,7 @@ from conformal.influence.fe_halfspace3d import _gauss_rectangle_stress, rectangl
 from conformal.meshing.bodies import BodyModel, StripPatch
 from conformal.meshing.gmsh_body import BodyMesh, MeshSpec, mesh_body, surface_frame, surface_point
 
-FE_VERSION = "1"
+FE_VERSION = "2"   # 2: free surface no longer loses faces to the clamped ones on worn profiles
 SPLU_ORDERING = "COLAMD"
 METHODS = ("split", "direct")
 SOLVERS = ("auto", "pardiso", "splu", "amg")
@@ -252,23 +252,70 @@ def _free_surface(bm: BodyMesh, space: _Space) -> _Surface:
                     tris=tris, tri_uv=tri_uv)
 
 
+def _locate(tri_uv: np.ndarray, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Triangle containing each point (x, s) and its barycentric coordinates, in the (x, s)
+    parametrisation of the free surface.
+
+    A point lies in the triangle whose barycentric coordinates have the largest minimum (>= 0
+    up to round-off).  Candidates: the triangles whose centroids are nearest (k-d tree), and for
+    points not placed that way every triangle whose centroid lies within the largest triangle
+    diameter.  Degenerate (zero-area) triangles of the parametrisation are skipped: a point on
+    one also lies in a neighbour.  (matplotlib's trifinder refused the whole surface of a steep
+    flank, "Triangulation is invalid", for such triangles.)  Returns (f (M,), lam (M, 3)); f = -1
+    where no triangle contains the point.
+    """
+    from scipy.spatial import cKDTree
+
+    A = tri_uv[:, 0]
+    T = np.stack([tri_uv[:, 1] - A, tri_uv[:, 2] - A], axis=-1)            # (F, 2, 2)
+    det = T[:, 0, 0] * T[:, 1, 1] - T[:, 0, 1] * T[:, 1, 0]
+    scale = np.max(np.abs(T), axis=(1, 2))
+    ok = np.abs(det) > 1e-12 * scale ** 2
+    inv = np.zeros_like(T)
+    inv[ok, 0, 0], inv[ok, 1, 1] = T[ok, 1, 1] / det[ok], T[ok, 0, 0] / det[ok]
+    inv[ok, 0, 1], inv[ok, 1, 0] = -T[ok, 0, 1] / det[ok], -T[ok, 1, 0] / det[ok]
+    idx = np.flatnonzero(ok)
+    tree = cKDTree(tri_uv[idx].mean(axis=1))
+    tol = 1e-9
+
+    def bary(pts, cand):                                                     # cand: indices into idx
+        f = idx[cand]
+        l12 = np.einsum("...ab,...b->...a", inv[f], pts - A[f])
+        return np.concatenate([(1 - l12.sum(axis=-1))[..., None], l12], axis=-1)
+
+    M = len(uv)
+    f_out = np.full(M, -1)
+    lam_out = np.zeros((M, 3))
+    k = min(12, idx.size)
+    _, cand = tree.query(uv, k=k)
+    cand = cand.reshape(M, k)
+    lam = bary(uv[:, None, :], cand)                                         # (M, k, 3)
+    best = np.argmax(lam.min(axis=-1), axis=1)
+    lam_b = lam[np.arange(M), best]
+    hit = lam_b.min(axis=1) >= -tol
+    f_out[hit], lam_out[hit] = idx[cand[np.arange(M), best]][hit], lam_b[hit]
+    if not np.all(hit):
+        diam = np.max(np.linalg.norm(tri_uv[idx] - np.roll(tri_uv[idx], 1, axis=1), axis=2))
+        for m in np.flatnonzero(~hit):
+            c = np.asarray(tree.query_ball_point(uv[m], diam), dtype=int)
+            if c.size == 0:
+                continue
+            lm = bary(uv[m][None, :], c)
+            b = int(np.argmax(lm.min(axis=-1)))
+            if lm[b].min() >= -tol:
+                f_out[m], lam_out[m] = idx[c[b]], lm[b]
+    return f_out, lam_out
+
+
 def _trace_interpolation(surf: _Surface, space: _Space, uv: np.ndarray) -> sp.csr_matrix:
     """(M, n_scalar) matrix evaluating the FE trace at surface points given by (x, s)."""
-    from matplotlib.tri import Triangulation
-
-    nodes_uv = np.zeros((surf.tris.max() + 1, 2))
-    nodes_uv[surf.tris.ravel()] = surf.tri_uv.reshape(-1, 2)
-    tri = Triangulation(nodes_uv[:, 0], nodes_uv[:, 1], triangles=surf.tris)
-    finder = tri.get_trifinder()
-    f = finder(uv[:, 0], uv[:, 1])
+    f, lam = _locate(surf.tri_uv, uv)
     if np.any(f < 0):
         bad = uv[f < 0][0]
         raise FESolveError(f"observation point (x, s) = ({bad[0]:.4f}, {bad[1]:.4f}) lies outside the "
                            "meshed surface")
-    A = surf.tri_uv[f]                                   # (M, 3, 2)
-    T = np.stack([A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]], axis=-1)   # (M, 2, 2)
-    l12 = np.linalg.solve(T, (uv - A[:, 0])[..., None])[..., 0]
-    lam = np.column_stack([1 - l12.sum(axis=1), l12])
+    lam = np.clip(lam, 0.0, None)
+    lam /= lam.sum(axis=1, keepdims=True)
     phi = _trace_shape(lam, space.order)
     nodes = space.scalar_nodes(surf.tris[f])
     rows = np.repeat(np.arange(len(uv)), nodes.shape[1])
