@@ -10,21 +10,42 @@ Bad input ends with exit code 2 and one line on stderr naming the key and the pr
 """
 from __future__ import annotations
 
-import os
-
-# The solvers' inner loops are FFTs and small dense products: threaded BLAS only adds contention
-# (measured up to 1000x slower on a busy 2-core machine).  Set before numpy loads; a user's own
-# setting wins.
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-
 import argparse
 import json
+import os
 import sys
 import time
 from importlib import resources
 from pathlib import Path
 
 from conformal.errors import ConformalError, InputError
+
+#: file types ``--plot`` can write (matplotlib's raster and vector formats)
+PLOT_SUFFIXES = (".png", ".jpg", ".jpeg", ".pdf", ".svg", ".eps", ".ps", ".tif", ".tiff", ".webp")
+
+
+def check_output_path(path: str | None, option: str, suffixes: tuple[str, ...] | None = None) -> None:
+    """Refuse an output path before any work is done: a wrong file type, a folder, or a folder
+    that cannot be created or written (InputError naming the option)."""
+    if not path:
+        return
+    p = Path(path)
+    if suffixes is not None and p.suffix.lower() not in suffixes:
+        raise InputError(f"{option}: cannot write {p.suffix or 'a file without extension'!r} files "
+                         f"({p.name}); use one of {', '.join(suffixes)}")
+    if p.is_dir():
+        raise InputError(f"{option}: {p} is a folder, not a file")
+    if p.exists() and not os.access(p, os.W_OK):
+        raise InputError(f"{option}: {p} is not writable")
+    parent = p.parent
+    while not parent.exists():            # the first existing folder must be writable
+        if parent == parent.parent:
+            break
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError(f"{option}: cannot create a folder for {p}: {parent} is a file")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"{option}: cannot write into {parent}")
 
 
 def _write_json(summary: dict, path: str | None) -> None:
@@ -36,19 +57,39 @@ def _write_json(summary: dict, path: str | None) -> None:
 
 
 def _solve_and_report(scene, json_path: str | None, plot_path: str | None, vtu_path: str | None = None) -> int:
+    """Solve, write the JSON (always, once the solve succeeded), then the optional VTU and plot:
+    a failing plot is reported (exit 1) but does not lose the JSON."""
     from conformal.solve import solve_scene
 
+    check_output_path(json_path, "--json")
+    check_output_path(plot_path, "--plot", PLOT_SUFFIXES)
+    check_output_path(vtu_path, "--vtu", (".vtu",))
+    if vtu_path and scene.model.theory != "conformal":
+        raise InputError(f"--vtu: needs [model] theory = \"conformal\" (tractions on the curved surfaces); "
+                         f"this scene's theory is {scene.model.theory!r}")
     result = solve_scene(scene)
+    for w in result.warnings:
+        print(f"conformal: warning: {w}", file=sys.stderr)
+    _write_json(result.summary(), json_path)
+    code = 0
     if vtu_path:
         from conformal.plots import export_result_vtu
 
-        export_result_vtu(result, vtu_path)
+        try:
+            export_result_vtu(result, vtu_path)
+        except (OSError, ValueError, RuntimeError) as exc:
+            print(f"conformal: error: --vtu: {exc} (the JSON summary was written)", file=sys.stderr)
+            code = 1
     if plot_path:
         from conformal.plots import plot_result
 
-        plot_result(result, plot_path, title=f"{scene.name}: {result.theory}")
-    _write_json(result.summary(), json_path)
-    return 0
+        try:
+            plot_result(result, plot_path, title=f"{scene.name}: {result.theory}")
+        except Exception as exc:  # noqa: BLE001 - any plotting failure: the JSON is already out
+            print(f"conformal: error: --plot: {type(exc).__name__}: {exc} (the JSON summary was written)",
+                  file=sys.stderr)
+            code = 1
+    return code
 
 
 def cmd_solve(args) -> int:
@@ -72,6 +113,7 @@ def cmd_demo(args) -> int:
     from conformal.scene import load_scene
 
     out = Path(args.out)
+    check_output_path(str(out / "demo.json"), "--out")
     out.mkdir(parents=True, exist_ok=True)
     scene = load_scene(demo_scene_path())
     code = _solve_and_report(scene, str(out / "demo.json"), str(out / "demo.png"))
@@ -86,6 +128,7 @@ def cmd_sweep(args) -> int:
     scene = load_scene(args.scene)
     if scene.geometry.kind != "wheel_rail":
         raise InputError(f"[geometry] kind: a sweep needs a wheel_rail scene, got {scene.geometry.kind!r}")
+    check_output_path(str(Path(args.out) / "sweep.csv"), "--out")
     rows = sweep(scene.geometry, parse_range(args.shift), scene.base_dir)
     out = Path(args.out)
     write_csv(rows, out / "sweep.csv")
@@ -135,12 +178,19 @@ def build_parser() -> argparse.ArgumentParser:
     ca.add_argument("action", choices=("list", "clear"))
     ca.add_argument("--cache", metavar="DIR", help="cache folder (default: $CONFORMAL_CACHE or the user cache)")
     ca.set_defaults(func=cmd_cache)
+
+    from conformal.tables.cli import add_parsers as add_table_parsers  # conformal table build|info
+    add_table_parsers(sub)
+
+    from conformal.dynamics.cli import add_parsers as add_dynamics_parsers  # conformal simulate|stability
+    add_dynamics_parsers(sub)
     return p
 
 
 def cmd_precompute(args) -> int:
     from conformal.influence.cache import Cache
-    from conformal.jobs import parse_sweep, precompute
+    from conformal.cases.precompute import precompute
+    from conformal.jobs import parse_sweep
     from conformal.scene import load_scene
 
     if args.workers is not None and args.workers < 1:

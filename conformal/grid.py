@@ -72,7 +72,7 @@ class PlanarGrid:
 
 @dataclass(frozen=True, eq=False)
 class CurvedGrid:
-    """Potential contact area on the curved rail surface (conformal contact, DESIGN.md §4).
+    """Potential contact area on the curved rail surface (conformal contact, Li 2002).
 
     mx uniform elements along the rolling direction x (as in :class:`PlanarGrid`: edges
     ``xl + i dx``) times ms elements along s, the arc length of the rail profile.  Arrays on the

@@ -1,11 +1,11 @@
-"""Precomputation jobs: FE influence numbers for a sweep of wheel-rail positions (DESIGN.md §6).
+"""Jobs: sweeps, FE items and the parallel runner (local processes or Dask).
 
-``conformal precompute SCENE.toml --sweep shift=0:10:0.5`` places the wheelset at every lateral
-shift of the sweep, finds the curved grids the solver will use (conformal.geometry: one per patch;
-theory "conformal": one strip over all patches of the wheel), and computes the FE influence
-numbers of the rail and the wheel body of every grid into the cache
-(conformal.influence.cache).  Items already in the cache are skipped, so an interrupted job only
-redoes what is missing; an item that fails leaves nothing in the cache.
+The planning of a precomputation (which wheel-rail grids a sweep needs) is
+:mod:`conformal.cases.precompute`; this module runs the items: ``conformal precompute SCENE.toml
+--sweep shift=0:10:0.5`` computes the FE influence numbers of every grid into the cache
+(:mod:`conformal.influence.cache`).  Items already in the cache are skipped, so an interrupted job
+only redoes what is missing; an item that fails leaves nothing in the cache.  Ctrl-C stops the
+workers within seconds; what finished stays.
 
 Items run in parallel in local processes (default), in a local Dask cluster
 (``--scheduler local``) or on an existing Dask cluster (``--scheduler tcp://host:8786``; its
@@ -18,12 +18,11 @@ Sweep(key='shift', values=(0.0, 0.5, 1.0))
 from __future__ import annotations
 
 import math
-import os
 import sys
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
+from functools import partial
 from typing import Callable
-
 
 from conformal.errors import ConformalError, InputError
 
@@ -105,80 +104,28 @@ class JobReport:
         return ", ".join(parts) + f" ({self.wall_s:.1f} s)"
 
 
-def _scene_at(scene, key: str, value: float):
-    geo = scene.geometry
-    if geo.kind != "wheel_rail":
-        raise InputError("precompute: the scene's [geometry] kind must be \"wheel_rail\"")
-    return replace(scene, geometry=replace(geo, **{SWEEP_KEYS[key]: value}))
-
-
-def _solver_grids(scene, per_patch) -> list[tuple]:
-    """The curved grids the solver of ``[model] theory`` will use, as (grid, ...) tuples: for the
-    conformal theory ONE strip over every patch of the wheel
-    (conformal.solvers.conformal.curved_problem_from_wheel_rail; per-patch grids would fill the
-    cache with kernels it never asks for), else one grid per patch (``per_patch(scene)``)."""
-    if scene.model.theory == "conformal":
-        from conformal.solvers.conformal import curved_problem_from_wheel_rail
-
-        return [(curved_problem_from_wheel_rail(scene).grid,)]
-    return list(per_patch(scene))
-
-
-def plan(scene, sweep: Sweep, settings=None, cache=None,
-         on_position: Callable[[float, Exception], None] | None = None) -> tuple[list[Item], list]:
-    """The FE items of a sweep: (items, failed positions).  Grids: those the solver of
-    [model] theory will use (:func:`_solver_grids`)."""
-    from conformal.geometry.wheelrail import curved_problems_from_wheel_rail
-    from conformal.influence.cache import Cache
-    from conformal.influence.fe import (body_key, rail_body_from_grid, scene_profiles, settings_from_options,
-                                       wheel_body_from_grid)
-
-    settings = settings or settings_from_options(scene.model.options)
-    c = cache if isinstance(cache, Cache) else Cache(cache)
-    m = scene.material
-    items, failed, seen = [], [], set()
-    for v in sweep.values:
-        sc = _scene_at(scene, sweep.key, v)
-        rail_pts, wheel_pts = scene_profiles(sc)
-        try:
-            problems = _solver_grids(sc, curved_problems_from_wheel_rail)
-        except ConformalError as exc:
-            failed.append((v, str(exc)))
-            if on_position:
-                on_position(v, exc)
-            continue
-        for k, (grid, *_rest) in enumerate(problems):
-            rail, rpatch = rail_body_from_grid(grid, rail_pts, name=str(sc.geometry.rail_profile))
-            wheel, wpatch, _ = wheel_body_from_grid(grid, wheel_pts, name=str(sc.geometry.wheel_profile))
-            for kind, body, patch, G, nu in (("rail", rail, rpatch, m.G1, m.nu1), ("wheel", wheel, wpatch, m.G2, m.nu2)):
-                key = c.key(body_key(body, patch, G, nu, settings))
-                if key in seen:
-                    continue
-                seen.add(key)
-                label = f"{sweep.key}={v:g} patch {k} {kind} ({patch.n_columns}x{patch.ms})"
-                items.append(Item(label, body, patch, G, nu, settings, key, c.load(key, body_key(body, patch, G, nu, settings)) is not None))
-    return items, failed
-
-
 def compute_item(item: Item, cache_folder: str) -> dict:
-    """Worker: compute one body into the cache; returns its statistics (not the kernel)."""
+    """Worker: compute one body into the cache (BLAS single-threaded: the workers share the cores);
+    returns its statistics (not the kernel)."""
+    from conformal._threads import single_threaded_blas
     from conformal.influence.fe import cached_body_influence
 
     t0 = time.perf_counter()
-    r = cached_body_influence(item.body, item.patch, item.G, item.nu, item.settings, cache=cache_folder)
+    with single_threaded_blas():
+        r = cached_body_influence(item.body, item.patch, item.G, item.nu, item.settings, cache=cache_folder)
     return {"label": item.label, "wall_s": time.perf_counter() - t0, "dofs": r.stats.get("dofs"),
             "cache_hit": bool(r.stats.get("cache_hit", False))}
 
 
 class _Progress:
-    def __init__(self, total: int, enabled: bool):
+    def __init__(self, total: int, enabled: bool, desc: str = "FE influence", unit: str = "body"):
         self.bar = None
         self.total, self.n, self.enabled = total, 0, enabled
         if enabled:
             try:
                 from tqdm import tqdm
 
-                self.bar = tqdm(total=total, unit="body", desc="FE influence", file=sys.stderr)
+                self.bar = tqdm(total=total, unit=unit, desc=desc, file=sys.stderr)
             except ImportError:
                 self.bar = None
 
@@ -211,74 +158,106 @@ def _dask_client(scheduler: str, workers: int):
         raise ConformalError(f"--scheduler: cannot connect to {scheduler}: {exc}") from None
 
 
+def _stop_pool(ex) -> None:
+    """Ctrl-C: drop the queued items and end the worker processes now (an item in progress is lost;
+    finished items are already in the cache, written atomically)."""
+    procs = list(getattr(ex, "_processes", {}).values())
+    ex.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        if p.is_alive():
+            p.terminate()
+    for p in procs:
+        p.join(timeout=5)
+        if p.is_alive():
+            p.kill()
+
+
 def run(items: list[Item], *, cache_folder: str, workers: int = 1, scheduler: str | None = None,
         progress: bool = True) -> JobReport:
     """Compute every item that is not cached yet (in parallel); failures are collected."""
     todo = [it for it in items if not it.cached]
-    rep = JobReport(planned=len(items), skipped=len(items) - len(todo))
+    rep = run_tasks(partial(_compute_into, cache_folder), todo, [it.label for it in todo], workers=workers,
+                    scheduler=scheduler, progress=progress)
+    rep.planned, rep.skipped = len(items), len(items) - len(todo)
+    return rep
+
+
+def _compute_into(cache_folder: str, item: Item) -> dict:
+    return compute_item(item, cache_folder)
+
+
+def run_tasks(func: Callable, tasks: list, labels: list[str], *, workers: int = 1, scheduler: str | None = None,
+              progress: bool = True, on_result: Callable | None = None, desc: str = "FE influence",
+              unit: str = "body") -> JobReport:
+    """Run ``func(task)`` for every task: in this process (``workers <= 1``), in a pool of
+    ``workers`` spawned processes, or on Dask (``scheduler``: "local" for a LocalCluster of
+    ``workers`` processes, or a scheduler address).  ``on_result(task, value)`` is called in
+    this process as each task finishes (e.g. to write its output); a task that raises is counted
+    in ``failed`` with its error (ConformalError only in-process, where other exceptions, e.g.
+    KeyboardInterrupt, propagate) and the others go on.  ``func`` must be picklable (a module-level
+    function or a functools.partial of one) for the parallel paths.  Ctrl-C (KeyboardInterrupt)
+    ends the worker processes within seconds and propagates; finished tasks keep their output.
+    """
+    rep = JobReport(planned=len(tasks))
     t0 = time.perf_counter()
-    bar = _Progress(len(todo), progress)
+    bar = _Progress(len(tasks), progress, desc=desc, unit=unit)
     try:
-        if not todo:
+        if not tasks:
             return rep
         if scheduler:
             client, cluster = _dask_client(scheduler, workers)
             try:
                 from dask.distributed import as_completed
 
-                futs = {client.submit(compute_item, it, cache_folder, pure=False): it for it in todo}
-                _collect(futs, as_completed(futs), rep, bar)
+                futs = {client.submit(func, t, pure=False): (t, lab) for t, lab in zip(tasks, labels)}
+                try:
+                    _collect(futs, as_completed(futs), rep, bar, on_result)
+                except KeyboardInterrupt:
+                    client.cancel(list(futs), force=True)
+                    raise
             finally:
                 client.close()
                 if cluster is not None:
                     cluster.close()
         elif workers <= 1:
-            for it in todo:
+            for t, lab in zip(tasks, labels):
                 try:
-                    compute_item(it, cache_folder)
+                    value = func(t)
+                    if on_result is not None:
+                        on_result(t, value)
                     rep.done += 1
                 except ConformalError as exc:
-                    rep.failed.append((it.label, str(exc)))
-                bar.update(it.label)
+                    rep.failed.append((lab, str(exc)))
+                bar.update(lab)
         else:
             import multiprocessing as mp
             from concurrent.futures import ProcessPoolExecutor, as_completed as cf_completed
 
             # spawn: gmsh and MKL threads do not survive fork safely; one gmsh model per process
-            with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn")) as ex:
-                futs = {ex.submit(compute_item, it, cache_folder): it for it in todo}
-                _collect(futs, cf_completed(futs), rep, bar)
+            ex = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"))
+            try:
+                futs = {ex.submit(func, t): (t, lab) for t, lab in zip(tasks, labels)}
+                _collect(futs, cf_completed(futs), rep, bar, on_result)
+            except BaseException:       # Ctrl-C (or an error of the pool): end the workers now
+                _stop_pool(ex)
+                raise
+            ex.shutdown(wait=True)
     finally:
         bar.close()
         rep.wall_s = time.perf_counter() - t0
     return rep
 
 
-def _collect(futures: dict, completed, rep: "JobReport", bar) -> None:
-    """Wait for parallel items (Dask or process-pool futures) as they complete; count each as done
-    or failed with its error (one item's failure does not stop the others)."""
+def _collect(futures: dict, completed, rep: "JobReport", bar, on_result: Callable | None = None) -> None:
+    """Wait for parallel tasks (Dask or process-pool futures -> (task, label)) as they complete;
+    count each as done or failed with its error (one task's failure does not stop the others)."""
     for fut in completed:
-        it = futures[fut]
+        task, label = futures[fut]
         try:
-            fut.result()
+            value = fut.result()
+            if on_result is not None:
+                on_result(task, value)
             rep.done += 1
-        except Exception as exc:  # noqa: BLE001 - reported per item
-            rep.failed.append((it.label, f"{type(exc).__name__}: {exc}"))
-        bar.update(it.label)
-
-
-def precompute(scene, sweep: Sweep, *, cache=None, workers: int | None = None, scheduler: str | None = None,
-               progress: bool = True, dry_run: bool = False) -> JobReport:
-    """Plan and run a precomputation job (see the module docstring)."""
-    from conformal.influence.cache import Cache
-
-    c = cache if isinstance(cache, Cache) else Cache(cache)
-    items, failed = plan(scene, sweep, cache=c)
-    if workers is None:
-        workers = max(1, (os.cpu_count() or 2) // 2)
-    if dry_run:
-        rep = JobReport(planned=len(items), skipped=sum(it.cached for it in items), dry_run=True)
-    else:
-        rep = run(items, cache_folder=str(c.folder), workers=workers, scheduler=scheduler, progress=progress)
-    rep.positions_failed = failed
-    return rep
+        except Exception as exc:  # noqa: BLE001 - reported per task
+            rep.failed.append((label, f"{type(exc).__name__}: {exc}"))
+        bar.update(label)

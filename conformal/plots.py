@@ -1,107 +1,233 @@
-"""Plots of results: planar traction maps (matplotlib, off-screen).
+"""Plots of results: planar traction maps (matplotlib) and 3-D views (pyvista).
 
-``plot_result`` draws, for every patch with a traction field, three maps: the pressure p_n, the
-tangential traction |p_t| with its direction, and the element status (exterior / adhesion / slip).
-Results without a field (Hertz, linear, empirical) are drawn as their Hertz ellipse pressure.
+``plot_result`` writes a file: for every patch with a traction field three maps (the pressure
+p_n, the tangential traction |p_t| with its direction, the element status exterior / adhesion /
+slip); results without a field (Hertz, linear, empirical) are drawn as their Hertz ellipse
+pressure.  :func:`plot_pressure` draws one map into a given matplotlib Axes (``Result.plot``) and
+:func:`plot3d` adds a result to a given pyvista Plotter (``Result.plot3d``).
+
+Library code changes no global state: no matplotlib backend is selected (figures are
+``matplotlib.figure.Figure`` objects written directly), and pyvista plotters are created
+off-screen per call (never ``pyvista.OFF_SCREEN``).  Where no X display exists the render window
+is EGL, so VTK does not warn about a missing X server.
+
+Names: the contact-frame tangential forces are FX (rolling) and FS (lateral, in the contact plane;
+``FY`` in the JSON); the track-frame lateral force on the rail is FY_track.
+
+This module imports nothing from the rest of the package (results are read by their attributes),
+so that :class:`conformal.result.Result` can draw itself.
 """
 from __future__ import annotations
 
+import contextlib
+import os
 from pathlib import Path
 
 import numpy as np
 
-from conformal.result import ADHESION, SLIP, Result
+# the element status flags of conformal.result.TractionField (tests/test_plots3d.py checks they agree)
+EXTERIOR, ADHESION, SLIP = 0, 1, 2
 
 
 def _figure(rows: int, cols: int, size: float = 3.6):
-    import matplotlib
+    """A matplotlib Figure (not registered with pyplot: no backend switch, nothing global)."""
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(rows, cols, figsize=(cols * size + 0.8, rows * size), squeeze=False)
-    return plt, fig, axes
+    fig = Figure(figsize=(cols * size + 0.8, rows * size))
+    axes = np.atleast_2d(fig.subplots(rows, cols, squeeze=False))
+    return None, fig, axes
 
 
 def _edges(grid):
     return (grid.xl + np.arange(grid.mx + 1) * grid.dx, grid.yl + np.arange(grid.my + 1) * grid.dy)
 
 
-def _draw_field(fig, axes, result: Result, label: str) -> None:
+#: a map is drawn to scale up to this ratio of its sides; a thinner one is drawn with this ratio
+#: (the short side stretched, and the axis label says by how much)
+MAX_MAP_RATIO = 3.0
+
+
+def _aspect(ax, width: float, height: float) -> None:
+    """Equal axes unless the patch is thin, where the long side would squeeze the short one to a
+    line: then the panel keeps the sides MAX_MAP_RATIO : 1 and the label of the stretched axis
+    says so; at most 5 ticks per axis (no overlapping labels)."""
+    from matplotlib.ticker import MaxNLocator
+
+    ratio = max(width, height) / max(min(width, height), 1e-12)
+    if ratio <= MAX_MAP_RATIO:
+        ax.set_aspect("equal", adjustable="box")
+    else:
+        stretch = ratio / MAX_MAP_RATIO
+        wide = width >= height
+        ax.set_aspect(stretch if wide else 1.0 / stretch, adjustable="box")
+        axis = ax.yaxis if wide else ax.xaxis
+        axis.set_label_text(f"{axis.get_label_text()} (stretched {stretch:.1f}x)")
+    ax.xaxis.set_major_locator(MaxNLocator(5))
+    ax.yaxis.set_major_locator(MaxNLocator(5))
+
+
+def _colorbar(fig, mappable, ax, label: str) -> None:
+    """A colour bar as tall as the map itself (an inset beside it, so that it follows the map's
+    aspect), at most 4 labelled ticks."""
+    cb = fig.colorbar(mappable, cax=ax.inset_axes([1.04, 0.0, 0.05, 1.0]), label=label)
+    from matplotlib.ticker import MaxNLocator
+
+    cb.locator = MaxNLocator(4)
+    cb.update_ticks()
+
+
+def _draw_map(fig, ax, result, quantity: str = "pn", label: str = "") -> None:
+    """One map of a planar (or developed) traction field: ``quantity`` "pn", "pt" or "status"."""
     f = result.field
     xe, ye = _edges(f.grid)
-    ax = axes[0]
-    m = ax.pcolormesh(xe, ye, f.pn.T, cmap="viridis", shading="flat")
-    fig.colorbar(m, ax=ax, label="p_n [N/mm²]")
-    ax.set_title(f"{label} pressure, pmax {result.pmax:.4g}")
-    ax = axes[1]
-    pt = np.hypot(f.px, f.py)
-    m = ax.pcolormesh(xe, ye, pt.T, cmap="magma", shading="flat")
-    fig.colorbar(m, ax=ax, label="|p_t| [N/mm²]")
-    step = max(1, max(f.grid.mx, f.grid.my) // 20)
-    X, Y = f.grid.mesh()
-    sel = (slice(None, None, step), slice(None, None, step))
-    mask = pt[sel] > 0
-    if mask.any():
-        ax.quiver(X[sel][mask], Y[sel][mask], f.px[sel][mask], f.py[sel][mask], color="white", pivot="mid")
-    ax.set_title(f"traction, FX {result.FX:.4g} FY {result.FY:.4g}")
-    ax = axes[2]
-    code = np.zeros(f.status.shape)
-    code[f.status == ADHESION] = 1
-    code[f.status == SLIP] = 2
-    from matplotlib.colors import ListedColormap
+    if quantity == "pn":
+        v = f.pn
+        m = ax.pcolormesh(xe, ye, v.T, cmap="viridis", shading="flat", vmin=0.0, vmax=max(float(v.max()), 1e-12))
+        _colorbar(fig, m, ax, "p_n [N/mm²]")
+        ax.set_title(f"{label}pressure p_n, pmax {result.pmax:.4g} N/mm²".strip(), fontsize=9)
+    elif quantity == "pt":
+        pt = np.hypot(f.px, f.py)
+        m = ax.pcolormesh(xe, ye, pt.T, cmap="magma", shading="flat", vmin=0.0, vmax=max(float(pt.max()), 1e-12))
+        _colorbar(fig, m, ax, "|p_t| [N/mm²]")
+        step = max(1, max(f.grid.mx, f.grid.my) // 20)
+        X, Y = f.grid.mesh()
+        sel = (slice(None, None, step), slice(None, None, step))
+        mask = pt[sel] > 0
+        if mask.any():
+            ax.quiver(X[sel][mask], Y[sel][mask], f.px[sel][mask], f.py[sel][mask], color="white", pivot="mid")
+        ax.set_title(f"{label}traction, FX {result.FX:.4g} N, FS {result.FY:.4g} N".strip(), fontsize=9)
+    elif quantity == "status":
+        from matplotlib.colors import ListedColormap
 
-    ax.pcolormesh(xe, ye, code.T, cmap=ListedColormap(["#dddddd", "#2b83ba", "#d7191c"]), vmin=0, vmax=2,
-                  shading="flat")
-    ax.set_title(f"adhesion (blue) {f.n_adhesion}, slip (red) {f.n_slip}")
-    for a in axes:
-        a.set_aspect("equal")
-        a.set_xlabel("x (rolling) [mm]")
-        a.set_ylabel("y [mm]")
+        code = np.zeros(f.status.shape)
+        code[f.status == ADHESION] = 1
+        code[f.status == SLIP] = 2
+        ax.pcolormesh(xe, ye, code.T, cmap=ListedColormap(["#dddddd", "#2b83ba", "#d7191c"]), vmin=0, vmax=2,
+                      shading="flat")
+        ax.set_title(f"{label}adhesion (blue) {f.n_adhesion}, slip (red) {f.n_slip} elements".strip(), fontsize=9)
+    else:
+        raise ValueError(f"quantity: one of 'pn', 'pt', 'status', got {quantity!r}")
+    ax.set_xlabel("x (rolling) [mm]")
+    ax.set_ylabel("y [mm]")
+    _aspect(ax, xe[-1] - xe[0], ye[-1] - ye[0])
 
 
-def _draw_ellipse(fig, ax, result: Result, label: str) -> None:
+def _draw_field(fig, axes, result, label: str) -> None:
+    for ax, q in zip(axes, ("pn", "pt", "status")):
+        _draw_map(fig, ax, result, q, label=f"{label}: " if label else "")
+
+
+def _draw_ellipse(fig, ax, result, label: str) -> None:
     a, b = result.a, result.b
     x = np.linspace(-1.2 * a, 1.2 * a, 121)
     y = np.linspace(-1.2 * b, 1.2 * b, 121)
     X, Y = np.meshgrid(x, y, indexing="ij")
     p = result.pmax * np.sqrt(np.clip(1 - (X / a) ** 2 - (Y / b) ** 2, 0, None))
-    m = ax.pcolormesh(x, y, p.T, cmap="viridis", shading="auto")
-    fig.colorbar(m, ax=ax, label="p_n [N/mm²]")
-    ax.set_aspect("equal")
-    ax.set_title(f"{label} ({result.theory}): Hertz pressure, FX {result.FX:.4g} FY {result.FY:.4g}")
+    m = ax.pcolormesh(x, y, p.T, cmap="viridis", shading="auto", vmin=0.0)
+    _colorbar(fig, m, ax, "p_n [N/mm²]")
+    ax.set_title(f"{label} ({result.theory}): Hertz pressure, pmax {result.pmax:.4g} N/mm²\n"
+                 f"FX {result.FX:.4g} N, FS {result.FY:.4g} N", fontsize=9)
     ax.set_xlabel("x (rolling) [mm]")
     ax.set_ylabel("y [mm]")
+    _aspect(ax, 2.4 * a, 2.4 * b)
 
 
-def plot_result(result: Result, path: str | Path, title: str | None = None) -> Path:
-    """Write a PNG of the result's traction maps (one row per contact patch); a conformal result
-    (curved grid) gets :func:`plot_conformal_result` (3-D view and developed maps)."""
+def plot_pressure(result, ax=None, quantity: str = "pn", patch: int | None = None):
+    """Draw one map of a result into a matplotlib Axes and return the Axes.
+
+    Parameters
+    ----------
+    result : conformal.result.Result
+        Any model's result.  A result without a traction field (Hertz, linear, empirical) is drawn
+        as its Hertz pressure ellipse.
+    ax : matplotlib.axes.Axes, optional
+        Where to draw; a new figure (``matplotlib.pyplot.subplots``) when omitted.
+    quantity : {"pn", "pt", "status"}
+        Pressure, tangential traction (with arrows) or adhesion/slip.
+    patch : int, optional
+        Which contact patch of a multi-patch result (default: the most loaded one).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+
+    Examples
+    --------
+    >>> from matplotlib.figure import Figure
+    >>> import conformal
+    >>> r = conformal.solve({"geometry": {"kind": "quadratic", "A": 1e-3, "B": 1e-3},
+    ...                      "load": {"normal_force": 1e4}, "model": {"theory": "hertz"}})
+    >>> ax = plot_pressure(r, Figure().subplots())
+    >>> ax.get_xlabel()
+    'x (rolling) [mm]'
+    """
+    part = result
+    if result.field is None and result.patches:
+        parts = list(result.patches)
+        part = parts[patch] if patch is not None else max(parts, key=lambda r: r.FN)
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots()
+    fig = ax.figure
+    if part.field is not None:
+        _draw_map(fig, ax, part, quantity)
+    else:
+        _draw_ellipse(fig, ax, part, "contact")
+    return ax
+
+
+def plot_result(result, path: str | Path, title: str | None = None) -> Path:
+    """Write an image of the result's traction maps (one row per contact patch); a conformal result
+    (curved grid) gets :func:`plot_conformal_result` (3-D view and developed maps).  The file
+    type follows the suffix of ``path`` (png, pdf, svg, ...)."""
     if _curved_field(result) is not None:
         return plot_conformal_result(result, path, title)
     parts = list(result.patches) or [result]
-    plt, fig, axes = _figure(len(parts), 3)
+    _, fig, axes = _figure(len(parts), 3)
     for row, part in enumerate(parts):
-        label = str(part.extra.get("label", f"patch {row + 1}")) if len(parts) > 1 else "contact"
+        label = str(part.extra.get("label", f"patch {row + 1}")) if len(parts) > 1 else ""
         if part.field is not None:
             _draw_field(fig, axes[row], part, label)
         else:
-            _draw_ellipse(fig, axes[row][0], part, label)
+            _draw_ellipse(fig, axes[row][0], part, label or "contact")
             axes[row][1].axis("off")
             axes[row][2].axis("off")
     if title:
         fig.suptitle(title)
-    return _save(plt, fig, path, 110)
+    return _save(None, fig, path, 110)
 
 
 def _save(plt, fig, path: str | Path, dpi: int) -> Path:
-    """Lay out, write the PNG (its folder made) and close the figure."""
+    """Lay out and write the figure (its folder made)."""
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=dpi)
-    plt.close(fig)
     return path
+
+
+@contextlib.contextmanager
+def _headless_window():
+    """Without an X display, ask VTK for an EGL render window for the plotters created inside (VTK
+    would try X first and warn "bad X server connection"); the environment is restored after."""
+    key = "VTK_DEFAULT_OPENGL_WINDOW"
+    headless = os.name == "posix" and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    if not headless or key in os.environ:
+        yield
+        return
+    os.environ[key] = "vtkEGLRenderWindow"
+    try:
+        yield
+    finally:
+        os.environ.pop(key, None)
+
+
+def _offscreen_plotter(window: tuple[int, int]):
+    import pyvista as pv
+
+    with _headless_window():
+        return pv.Plotter(off_screen=True, window_size=list(window))
 
 
 # ----------------------------------------------------------------------------- 3-D (pyvista, meshio)
@@ -154,10 +280,7 @@ def plot_surfaces_3d(path: str | Path, contact: "object", *, bodies: list | None
     ``contact`` is a StructuredGrid from :func:`strip_mesh`; ``bodies`` more meshes to show;
     ``vectors`` (mx*ms, 3) traction vectors at cell centres in 3-D; ``boundary`` a PolyData line.
     """
-    import pyvista as pv
-
-    pv.OFF_SCREEN = True
-    plotter = pv.Plotter(off_screen=True, window_size=list(window))
+    plotter = _offscreen_plotter(window)
     for body in bodies or []:
         plotter.add_mesh(body, color="lightgrey", opacity=0.35, show_edges=False)
     plotter.add_mesh(contact, scalars=scalar, cmap="viridis", show_edges=True, edge_color="#555555",
@@ -180,7 +303,7 @@ def plot_surfaces_3d(path: str | Path, contact: "object", *, bodies: list | None
 
 
 # ----------------------------------------------------------------------------- conformal results (curved grids)
-def _curved_field(result: Result):
+def _curved_field(result):
     """The CurvedTractionField of a conformal result, or None."""
     f = result.field
     return f if f is not None and getattr(f, "curved", None) is not None else None
@@ -243,7 +366,7 @@ def _polylines(segs: np.ndarray):
     return pv.PolyData(pts, lines=lines.ravel())
 
 
-def conformal_meshes(result: Result) -> dict:
+def conformal_meshes(result) -> dict:
     """pyvista meshes of a conformal result, all in the rail-profile frame of the side: ``strip``
     (the curved grid with cell data pn, px, ps, pt, status, delta, h, un and the 3-D tangential
     traction vector ``traction``), ``rail``, ``wheel`` (surfaces around the contact) and the
@@ -271,50 +394,96 @@ def conformal_meshes(result: Result) -> dict:
                                                            _boundary_segments(Pl, status, 0, SLIP)]))}
 
 
-def render_conformal_3d(result: Result, *, scalar: str = "pn", window: tuple[int, int] = (1000, 800),
-                        title: str = "") -> np.ndarray:
-    """Off-screen pyvista image (RGB array) of a conformal result: rail (grey) and wheel
-    (translucent) around the contact, the contact strip coloured by ``scalar`` (pn, pt, ...),
-    tangential traction vectors (black arrows) and the slip/adhesion boundary (red) and the edge
-    of the contact area (white).  The wheel is cut at the trailing edge of the grid and seen from
-    ahead, so that the contact face it covers is visible."""
+def plot3d(result, plotter=None, *, scalar: str = "pn", bodies: bool = True):
+    """Add a result to a pyvista Plotter and return the plotter (nothing is shown or written).
+
+    A conformal result (curved grid) gives the rail (grey) and the wheel (translucent, cut at the
+    trailing edge of the grid) around the contact, the contact strip coloured by ``scalar``, the
+    tangential tractions (black arrows), the slip/adhesion boundary (red) and the edge of the
+    contact (white), in the rail-profile frame of the side (x rolling, y lateral, z down, mm).
+    A planar result is drawn as its flat traction field (x, y, z = 0).
+
+    Parameters
+    ----------
+    result : conformal.result.Result
+        A result with a traction field (theories exact, conformal, fastsim).
+    plotter : pyvista.Plotter, optional
+        The plotter to draw into (e.g. ``pyvista.Plotter()`` in a notebook, then ``.show()``); an
+        off-screen plotter when omitted.
+    scalar : {"pn", "pt", "px", "ps"}
+        The colouring of the contact strip.
+    bodies : bool
+        Draw the rail and wheel surfaces (conformal results).
+
+    Returns
+    -------
+    pyvista.Plotter
+    """
     import pyvista as pv
 
-    pv.OFF_SCREEN = True
+    if plotter is None:
+        plotter = _offscreen_plotter((1000, 800))
+    label = {"pn": "p_n [N/mm²]", "pt": "|p_t| [N/mm²]", "px": "p_x [N/mm²]", "ps": "p_s [N/mm²]"}.get(scalar, scalar)
+    bar = {"title": label, "color": "black", "n_labels": 3, "fmt": "%.4g", "vertical": True,
+           "position_x": 0.86, "position_y": 0.15, "width": 0.06, "height": 0.7,
+           "title_font_size": 18, "label_font_size": 16}
+    if _curved_field(result) is None:
+        f = result.field if result.field is not None else None
+        if f is None and result.patches:
+            f = max(result.patches, key=lambda r: r.FN).field
+        if f is None:
+            raise ValueError("plot3d: the result has no traction field (theory hertz, linear or empirical)")
+        xe, ye = _edges(f.grid)
+        cells = {"pn": f.pn, "px": f.px, "ps": f.py, "pt": np.hypot(f.px, f.py), "status": f.status.astype(float)}
+        mesh = strip_mesh(strip_points(xe, ye, np.zeros_like(ye)), cells)
+        plotter.add_mesh(mesh, scalars=scalar, cmap="viridis", show_edges=True, edge_color="#404040",
+                         clim=(0.0, max(float(np.max(cells[scalar])), 1e-12)) if scalar in ("pn", "pt") else None,
+                         scalar_bar_args=bar)
+        return plotter
     m = conformal_meshes(result)
     g = result.field.curved
     strip = m["strip"]
-    pl = pv.Plotter(off_screen=True, window_size=list(window))
-    pl.set_background("white")
-    pl.add_mesh(m["rail"], color="#b0b0b0", smooth_shading=True)
     L = max(g.mx * g.dx, float(g.s_edges[-1] - g.s_edges[0]), 10.0)
-    cut = strip_mesh(wheel_surface_points(g, x_range=(g.xl - 1.5 * L, g.xl)))
-    pl.add_mesh(cut, color="#d9b38c", opacity=0.55, smooth_shading=True)
-    label = {"pn": "p_n [N/mm²]", "pt": "|p_t| [N/mm²]"}.get(scalar, scalar)
+    if bodies:
+        plotter.add_mesh(m["rail"], color="#b0b0b0", smooth_shading=True)
+        cut = strip_mesh(wheel_surface_points(g, x_range=(g.xl - 1.5 * L, g.xl)))
+        plotter.add_mesh(cut, color="#d9b38c", opacity=0.55, smooth_shading=True)
     contact = strip.threshold(0.5, scalars="status")
-    pl.add_mesh(strip, color="#e8e8e8", show_edges=True, edge_color="#909090", line_width=0.5)
+    plotter.add_mesh(strip, color="#e8e8e8", show_edges=True, edge_color="#909090", line_width=0.5)
     if contact.n_cells:
-        pl.add_mesh(contact, scalars=scalar, cmap="viridis", show_edges=True, edge_color="#404040",
-                    line_width=0.5, scalar_bar_args={"title": label, "color": "black"})
+        vmax = max(float(np.max(contact.cell_data[scalar])), 1e-12)
+        plotter.add_mesh(contact, scalars=scalar, cmap="viridis", show_edges=True, edge_color="#404040",
+                         line_width=0.5, clim=(0.0, vmax) if scalar in ("pn", "pt") else None,
+                         scalar_bar_args=bar)
         T = np.asarray(contact.cell_data["traction"])
         tmax = float(np.abs(T).max())
         if tmax > 0:
             cen = contact.cell_centers()
             cen["traction"] = T
             size = 1.5 * max(g.dx, float(g.ds.mean()))
-            pl.add_mesh(cen.glyph(orient="traction", scale="traction", factor=size / tmax), color="black")
+            plotter.add_mesh(cen.glyph(orient="traction", scale="traction", factor=size / tmax), color="black")
     for key, colour in (("slip_boundary", "red"), ("contact_boundary", "white")):
         if m[key] is not None:
-            pl.add_mesh(m[key], color=colour, line_width=4)
+            plotter.add_mesh(m[key], color=colour, line_width=4)
     # camera: from the wheel side of the reference normal, turned towards the rolling direction
     c = np.asarray(strip.center)
     k = int(np.argmin(np.abs(g.s - g.s_ref)))
     n = np.r_[0.0, g.normal[k]]
     t = np.r_[0.0, g.normal[k, 1], -g.normal[k, 0]]
     view = -1.0 * n + 0.9 * np.array([1.0, 0.0, 0.0]) + 0.35 * t
-    pl.camera.focal_point = c
-    pl.camera.position = c + 2.2 * L * view / np.linalg.norm(view)
-    pl.camera.up = (0.0, 0.0, -1.0)        # z is down in the rail-profile frame
+    plotter.camera.focal_point = c
+    plotter.camera.position = c + 2.2 * L * view / np.linalg.norm(view)
+    plotter.camera.up = (0.0, 0.0, -1.0)        # z is down in the rail-profile frame
+    return plotter
+
+
+def render_conformal_3d(result, *, scalar: str = "pn", window: tuple[int, int] = (1000, 800),
+                        title: str = "") -> np.ndarray:
+    """Off-screen image (RGB array) of a conformal result as drawn by :func:`plot3d`, seen from
+    ahead so that the contact face the wheel covers is visible."""
+    pl = _offscreen_plotter(window)
+    pl.set_background("white")
+    plot3d(result, pl, scalar=scalar)
     if title:
         pl.add_text(title, font_size=10, color="black")
     img = pl.screenshot(return_img=True)
@@ -322,25 +491,26 @@ def render_conformal_3d(result: Result, *, scalar: str = "pn", window: tuple[int
     return img
 
 
-def plot_conformal_result(result: Result, path: str | Path, title: str | None = None) -> Path:
+def plot_conformal_result(result, path: str | Path, title: str | None = None) -> Path:
     """One PNG of a conformal result: the 3-D view of rail, wheel and tractions (pyvista), the
     developed maps (pressure, tangential traction, adhesion/slip) and the pressure and contact
     angle along the profile."""
     f = _curved_field(result)
+    from matplotlib.figure import Figure
+
     img = render_conformal_3d(result, window=(1100, 850))
-    plt, fig, _ = _figure(1, 1)
-    plt.close(fig)
-    fig = plt.figure(figsize=(17, 9.5))
+    fig = Figure(figsize=(17, 9.5))
     gs = fig.add_gridspec(3, 3, width_ratios=[2.2, 1, 1], height_ratios=[1, 1, 1])
     ax3 = fig.add_subplot(gs[:, 0])
     ax3.imshow(img)
     ax3.axis("off")
-    ax3.set_title(f"{title or result.extra.get('label', '')}: FN {result.FN:.5g} N, FX {result.FX:.4g} N, "
-                  f"FS {result.FY:.4g} N, pmax {result.pmax:.4g} N/mm²", fontsize=10)
+    ax3.set_title(f"{title or result.extra.get('label', '')}\nFN {result.FN:.5g} N, FX {result.FX:.4g} N, "
+                  f"FS {result.FY:.4g} N (contact plane)\nFY_track {result.extra.get('FY_track', float('nan')):.4g} N "
+                  f"(track lateral), pmax {result.pmax:.4g} N/mm²", fontsize=10)
     maps = [fig.add_subplot(gs[0, 1]), fig.add_subplot(gs[1, 1]), fig.add_subplot(gs[2, 1])]
     _draw_field(fig, maps, result, "developed")
     for a in maps:
-        a.set_ylabel("s - s_ref [mm]")
+        a.set_ylabel(a.get_ylabel().replace("y [mm]", "s - s_ref [mm]"))
     g = f.curved
     ax = fig.add_subplot(gs[0:2, 2])
     P = curved_strip_points(g)
@@ -367,10 +537,10 @@ def plot_conformal_result(result: Result, path: str | Path, title: str | None = 
     ax2.plot(sc, np.degrees(g.delta), color="C3", ls="--", label="contact angle")
     ax2.set_ylabel("delta [deg]", color="C3")
     ax.legend(fontsize=8, loc="upper left")
-    return _save(plt, fig, path, 100)
+    return _save(None, fig, path, 100)
 
 
-def export_conformal_vtu(result: Result, path: str | Path) -> list[Path]:
+def export_conformal_vtu(result, path: str | Path) -> list[Path]:
     """VTU files of a conformal result for ParaView (meshio): ``path`` holds the contact strip with
     the per-element data of :func:`conformal_meshes`; ``<stem>_rail.vtu`` and ``<stem>_wheel.vtu``
     the surfaces around it.  All in the rail-profile frame of the side (x rolling, y lateral,
@@ -388,7 +558,7 @@ def export_conformal_vtu(result: Result, path: str | Path) -> list[Path]:
     return out
 
 
-def export_result_vtu(result: Result, path: str | Path) -> list[Path]:
+def export_result_vtu(result, path: str | Path) -> list[Path]:
     """``conformal solve --vtu``: the VTU files of a conformal result (:func:`export_conformal_vtu`);
     other theories have no curved surface to export (InputError says so)."""
     from conformal.errors import InputError

@@ -3,21 +3,24 @@
 A :class:`ContactProblem` is one contact patch in its own contact frame (x rolling, y lateral,
 n into body 1): materials, friction, the undeformed distance (as curvatures A, B where it is
 quadratic, and/or sampled on a planar grid), the load and the kinematics.  Simple scenes give
-one problem; a wheel-rail scene gives one per contact patch (conformal.geometry).
+one problem; a wheel-rail scene gives one per contact patch (conformal.cases.wheelrail).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
 from conformal.errors import InputError
 from conformal.grid import PlanarGrid
 from conformal.materials import Material
-from conformal.scene import Friction, Kinematics, ModelSpec, Scene
+from conformal.specs import Friction, Kinematics, ModelSpec
 from conformal.theories.hertz import HertzContact, hertz_from_curvatures, hertz_from_semiaxes
+
+if TYPE_CHECKING:   # problems_from_scene reads a scene's sections; the problem itself knows no scene
+    from conformal.scene import Scene
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,12 +89,12 @@ def _grid_from_spec(scene: Scene, hertz: HertzContact | None) -> PlanarGrid:
 
 
 def problems_from_scene(scene: Scene) -> list[ContactProblem]:
-    """The contact problems of a scene (one, or one per wheel-rail contact patch)."""
+    """The contact problem of a planar scene (quadratic, Hertz or table geometry); a wheel-rail scene
+    gives one problem per contact patch through :mod:`conformal.cases.wheelrail`."""
     geo = scene.geometry
     if geo.kind == "wheel_rail":
-        from conformal.geometry.wheelrail import problems_from_wheel_rail
-
-        return problems_from_wheel_rail(scene)
+        raise InputError("[geometry] kind: a wheel_rail scene's problems come from its placement and load "
+                         "balance: conformal.cases.wheelrail.problems_from_wheel_rail (or conformal.solve)")
     load = scene.load
     common = dict(material=scene.material, friction=scene.friction, kinematics=scene.kinematics,
                   model=scene.model, normal_force=load.normal_force, approach=load.approach,

@@ -7,7 +7,7 @@ enters the contact at the leading edge x = +a, where the adhesion zone lies.
 
 Sources: Johnson (1985), Contact Mechanics, §7.2 (Cattaneo-Mindlin, sphere pulled tangentially
 with Q < mu P) and §8.2 (Carter 1926, 2-D rolling with traction); Kalker (1990) §5.2; the
-formulas and numbers quoted in reference/contact_cases.md (cases cattaneo and carter2d).
+formulas and numbers quoted in the CONTACT cases (tests/reference/contact_cases.json) (cases cattaneo and carter2d).
 
 Carter (2-D, cylinders with combined radius R, i.e. gap h = x²/(2R), contact modulus
 E* = G/(1-nu) of the combined constants, load FN per unit width):
@@ -90,7 +90,7 @@ def cattaneo_stick_ratio(q: float) -> float:
 def cattaneo_shift(q: float, *, mu: float, FN: float, a: float, G: float, nu: float) -> float:
     """Rigid shift (mm) of body 1 relative to body 2 for Q/(mu FN) = q (Johnson 1985, eq. 7.42 with
     the combined G, nu of two identical bodies): W = (1 - theta²) 3 mu FN (2 - nu) / (8 G a),
-    i.e. reference/contact_cases.md's (1 - theta²) 3 mu FN / (2 pi a G) (pi/2 - nu pi/4).
+    i.e. the CONTACT cases (tests/reference/contact_cases.json)'s (1 - theta²) 3 mu FN / (2 pi a G) (pi/2 - nu pi/4).
     The shift has the sign of -q (a force on body 1 opposite to its shift)."""
     theta = cattaneo_stick_ratio(q)
     W = (1.0 - theta * theta) * 3.0 * mu * FN * (2.0 - nu) / (8.0 * G * a)

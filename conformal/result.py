@@ -77,7 +77,9 @@ def _jsonable(v: Any) -> Any:
 class Result:
     """The answer of one model to one contact problem (or the sum over patches).
 
-    FN, FX, FY (N), MZ (N mm) on body 1; a, b (mm) the semi-axes of the contact (Hertz
+    FN, FX, FY (N), MZ (N mm) on body 1, in the contact frame: FY is the lateral force in the contact
+    plane (also written ``FS`` in the JSON; a wheel-rail result's track-frame lateral force on the
+    rail is ``extra["FY_track"]``); a, b (mm) the semi-axes of the contact (Hertz
     ellipse or the extent of the computed patch); pmax (N/mm²); approach (mm); xi, eta, phi the
     creepages used (solved ones where forces were prescribed).
     """
@@ -118,10 +120,78 @@ class Result:
             return sum(p.n_slip for p in self.patches)
         return None
 
+    @property
+    def warnings(self) -> list[str]:
+        """Warnings about this result and its patches (physically questionable input or output),
+        each once, in order: ``extra["warnings"]`` of the total, then of every patch."""
+        out: list[str] = []
+        for w in list(self.extra.get("warnings", ())) + [w for p in self.patches for w in p.warnings]:
+            if w not in out:
+                out.append(str(w))
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """The result as plain JSON-ready Python values (the JSON summary of ``conformal solve``:
+        totals, convergence, ``patches``, the model's extra fields and ``warnings``).
+
+        >>> import conformal
+        >>> r = conformal.solve({"geometry": {"kind": "quadratic", "A": 1e-3, "B": 1e-3},
+        ...                      "load": {"normal_force": 1e4}, "model": {"theory": "hertz"}})
+        >>> d = r.to_dict()
+        >>> d["theory"], round(d["FN"]), d["warnings"]
+        ('hertz', 10000, [])
+        """
+        return self.summary()
+
+    def plot(self, ax=None, quantity: str = "pn", patch: int | None = None):
+        """Draw the result into a matplotlib Axes and return the Axes.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Where to draw (a new pyplot figure when omitted).
+        quantity : {"pn", "pt", "status"}
+            Pressure, tangential traction with its direction, or the adhesion/slip areas.
+        patch : int, optional
+            Which patch of a multi-patch result (default: the most loaded one).
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+
+        Examples
+        --------
+        >>> import conformal
+        >>> from matplotlib.figure import Figure
+        >>> r = conformal.solve({"geometry": {"kind": "quadratic", "A": 1e-3, "B": 1e-3},
+        ...                      "load": {"normal_force": 1e4}, "kinematics": {"xi": 1e-3},
+        ...                      "grid": {"n": 12}, "model": {"theory": "exact"}})
+        >>> ax = r.plot(Figure().subplots(), quantity="pt")
+        >>> ax.get_title().startswith("traction, FX")
+        True
+        """
+        from conformal.plots import plot_pressure
+
+        return plot_pressure(self, ax, quantity=quantity, patch=patch)
+
+    def plot3d(self, plotter=None, scalar: str = "pn"):
+        """Add the result to a pyvista Plotter (a new off-screen one if None) and return it: for a
+        conformal result the rail, the wheel and the tractions in 3-D; see :func:`conformal.plots.plot3d`.
+
+        Examples
+        --------
+        >>> import conformal, pyvista
+        >>> r = conformal.solve("meshes/scenes/flange_s1002_uic60.toml")      # doctest: +SKIP
+        >>> r.plot3d(pyvista.Plotter()).show()                                 # doctest: +SKIP
+        """
+        from conformal.plots import plot3d
+
+        return plot3d(self, plotter, scalar=scalar)
+
     def summary(self) -> dict[str, Any]:
         """The JSON summary printed by ``conformal solve`` (public field names: add, never rename)."""
         out: dict[str, Any] = {
-            "theory": self.theory, "FN": self.FN, "FX": self.FX, "FY": self.FY, "MZ": self.MZ,
+            "theory": self.theory, "FN": self.FN, "FX": self.FX, "FY": self.FY, "FS": self.FY, "MZ": self.MZ,
             "a": self.a, "b": self.b, "pmax": self.pmax, "approach": self.approach,
             "xi": self.xi, "eta": self.eta, "phi": self.phi,
             "n_contact": self.n_contact, "n_slip": self.n_slip,
@@ -131,4 +201,5 @@ class Result:
         if self.patches:
             out["patches"] = [p.summary() for p in self.patches]
         out.update(self.extra)
+        out["warnings"] = self.warnings
         return _jsonable(out)

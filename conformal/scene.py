@@ -14,32 +14,52 @@ The keys below are a public interface (other tools write scene files): add, neve
 """
 from __future__ import annotations
 
+import difflib
 import math
+import os
 import tomllib
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any, Mapping
 
 from conformal.errors import InputError
 from conformal.materials import Material
+from conformal.specs import Friction, Kinematics, ModelSpec  # noqa: F401  (part of the scene API)
 
-THEORIES = ("hertz", "linear", "empirical", "johnson_vermeulen", "fastsim", "exact", "conformal")
+THEORIES = ("hertz", "linear", "empirical", "johnson_vermeulen", "fastsim", "exact", "conformal", "table", "fe_contact")
 GEOMETRY_KINDS = ("quadratic", "hertz", "table", "wheel_rail")
+
+#: model-specific ``[model]`` keys (besides theory, bound, influence, tol, maxit, layer_flexibility),
+#: with the module that reads them.  Any other key is rejected (a misspelt key would otherwise be
+#: ignored silently and the default model would run).
+MODEL_OPTIONS = {
+    "maxout": "outer (normal-tangential) iterations of the exact and conformal solvers",
+    "max_mx": "conformal: largest number of strip elements along x",
+    "max_ms": "conformal: largest number of strip elements along s",
+    "creepage": "conformal: \"surface\" | \"reference\" creepages on the strip",
+    "creep_coefficients": "empirical: \"kalker\" | \"elliptic\"",
+    "n": "fastsim: number of strips",
+    "flexibilities": "fastsim: the flexibilities L1, L2, L3",
+    "discretisation": "fastsim: \"midpoint\" | \"contact\"",
+    "require_c33": "linear: compute C33 also without spin",
+    "table": "table: the creep-force table file",
+    "fe_method": "FE: \"split\" | \"direct\"", "fe_order": "FE: element order 1 | 2",
+    "fe_h_patch": "FE: element size on the patch (mm)", "fe_h_load": "FE: element size of the loaded column",
+    "fe_growth": "FE: element growth rate", "fe_h_max": "FE: largest element (mm)",
+    "fe_conform": "FE: conforming mesh", "fe_body_size": "FE: body size over the patch",
+    "fe_solver": "FE: linear solver", "fe_collocation": "FE: collocation rule",
+    "fe_far_field": "FE: far-field boundary condition",
+    **{k: "fe_contact: see conformal.fe_contact.problems" for k in ("fec_n", "fec_h", "fec_order", "fec_growth", "fec_h_max", "fec_body_size", "fec_patch", "fec_far_field", "fec_solver")},
+}
+
+#: a wheelset yaw beyond this (rad, about 11 degrees) is outside the contact search's validity
+MAX_YAW = 0.2
+#: rail inclinations (cant, rad) beyond MAX_CANT are refused; beyond CANT_WARN (1:15) they warn
+MAX_CANT = 0.2
+CANT_WARN = 1.0 / 15.0
 
 
 # ----------------------------------------------------------------------------- sections
-@dataclass(frozen=True)
-class Friction:
-    """Coulomb friction.  ``mu_static`` bounds adhesion, ``mu_kinetic`` acts in slip."""
-
-    mu_static: float
-    mu_kinetic: float
-
-    @property
-    def mu(self) -> float:
-        return self.mu_kinetic
-
-
 @dataclass(frozen=True)
 class QuadraticGeometry:
     """Undeformed distance h = A x² + B y² (1/mm)."""
@@ -103,27 +123,6 @@ class Load:
 
 
 @dataclass(frozen=True)
-class Kinematics:
-    """Creepages (steady rolling) or shift distances (rolling = "shift", as CONTACT's T = 1:
-    xi, eta are rigid shifts in mm and phi a rotation in rad).  fx_rel, fy_rel = F/(mu FN)
-    prescribe the tangential forces instead of xi, eta."""
-
-    xi: float = 0.0
-    eta: float = 0.0
-    phi: float = 0.0
-    rolling: str = "steady"
-    fx_rel: float | None = None
-    fy_rel: float | None = None
-    velocity: float = 1000.0  # mm/s, rolling speed (for frictional power)
-    # wheel-rail only: wheelset velocities; with `speed` set the creepages follow per contact patch
-    speed: float | None = None          # mm/s, forward velocity of the wheelset
-    pitch_velocity: float | None = None  # rad/s about the axle (None: pure rolling at wheel_radius)
-    yaw_rate: float = 0.0               # rad/s
-    roll_rate: float = 0.0              # rad/s
-    lateral_velocity: float = 0.0       # mm/s
-
-
-@dataclass(frozen=True)
 class GridSpec:
     """Potential contact area.  Either explicit (mx, my, dx, dy and optional corner xl, yl) or
     automatic: ``n`` elements along each axis of ``scale`` times the Hertz patch."""
@@ -143,17 +142,6 @@ class GridSpec:
 
 
 @dataclass(frozen=True)
-class ModelSpec:
-    theory: str = "fastsim"
-    bound: str = "parabolic"          # fastsim traction bound: "parabolic" | "elliptic"
-    influence: str = "halfspace"      # "halfspace" | "fe"
-    tol: float = 1e-6
-    maxit: int = 1000
-    layer_flexibility: float = 0.0    # mm/(N/mm²), FASTSIM contamination layer (seed Eqs. 34-36)
-    options: Mapping[str, Any] = field(default_factory=dict)  # other model-specific keys
-
-
-@dataclass(frozen=True)
 class Scene:
     material: Material
     friction: Friction
@@ -166,7 +154,100 @@ class Scene:
     base_dir: Path = Path(".")
 
     def with_model(self, **changes) -> "Scene":
+        """The scene with other ``[model]`` values, e.g. ``scene.with_model(theory="exact")``."""
         return replace(self, model=replace(self.model, **changes))
+
+    def with_(self, key: str | None = None, value: Any = None, /, **changes) -> "Scene":
+        """The scene with one or more keys changed, without nested :func:`dataclasses.replace`.
+
+        Keys are dotted paths (``"model.theory"``, ``"geometry.lateral_shift"``) or, as keyword
+        arguments, the same with a double underscore (``model__theory="exact"``).  A ``[model]``
+        key that is not a field of :class:`ModelSpec` goes to ``model.options``.  The new scene is
+        validated again (:func:`validate`).
+
+        >>> s = scene_from_dict({"geometry": {"kind": "quadratic", "A": 0.001, "B": 0.001},
+        ...                      "load": {"normal_force": 1e4}})
+        >>> s.with_("model.theory", "exact").model.theory
+        'exact'
+        >>> s2 = s.with_(load__normal_force=2e4, model__maxout=5)
+        >>> s2.load.normal_force, s2.model.options["maxout"], s.load.normal_force
+        (20000.0, 5, 10000.0)
+        >>> s.with_("load.approach", 0.01).load        # one load replaces the other
+        Load(normal_force=None, approach=0.01, wheel_load=None)
+        """
+        if key is not None:
+            changes = {key: value, **changes}
+        out = self
+        for path, v in changes.items():
+            out = _with_path(out, path.replace("__", "."), v)
+        # the whole scene is checked again as if read from a file (ranges, combinations, memory)
+        return scene_from_dict(out.to_dict(), base_dir=out.base_dir, name=out.name)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The scene as the mapping of its TOML file (``scene_from_dict(scene.to_dict())`` gives it
+        back).
+
+        >>> s = scene_from_dict({"geometry": {"kind": "quadratic", "A": 0.001, "B": 0.002},
+        ...                      "load": {"normal_force": 1e4}})
+        >>> d = s.to_dict()
+        >>> d["geometry"], d["load"], scene_from_dict(d).geometry == s.geometry
+        ({'kind': 'quadratic', 'A': 0.001, 'B': 0.002}, {'normal_force': 10000.0}, True)
+        """
+        def plain(obj) -> dict:
+            return {f.name: getattr(obj, f.name) for f in fields(obj) if getattr(obj, f.name) is not None}
+
+        m = self.material
+        material: dict[str, Any] = {"G": m.G1, "nu": m.nu1}
+        if (m.G2, m.nu2) != (m.G1, m.nu1):
+            material["body2"] = {"G": m.G2, "nu": m.nu2}
+        f = self.friction
+        friction = {"mu": f.mu_kinetic} if f.mu_static == f.mu_kinetic else {"mu_static": f.mu_static,
+                                                                                "mu_kinetic": f.mu_kinetic}
+        geometry = plain(self.geometry)
+        geometry = {"kind": geometry.pop("kind"), **geometry}
+        if "file" in geometry:
+            geometry["file"] = str(Path(geometry["file"]).resolve())
+        model = plain(self.model)
+        model.update(model.pop("options", {}))
+        return {"name": self.name, "material": material, "friction": friction, "geometry": geometry,
+                "load": plain(self.load), "kinematics": plain(self.kinematics), "grid": plain(self.grid),
+                "model": model}
+
+
+def _with_path(scene: "Scene", path: str, value: Any) -> "Scene":
+    parts = path.split(".")
+    if len(parts) == 1:
+        if parts[0] not in ("name", "base_dir"):
+            raise InputError(f"{path}: not a scene key; use section.key, e.g. \"model.theory\"")
+        return replace(scene, **{parts[0]: value})
+    if len(parts) != 2:
+        raise InputError(f"{path}: expected section.key, e.g. \"model.theory\"")
+    sec, key = parts
+    if sec not in SECTIONS[1:]:
+        raise InputError(f"[{sec}]: unknown section{_did_you_mean(sec, SECTIONS[1:])}")
+    obj = getattr(scene, sec)
+    names = {f.name for f in fields(obj)}
+    if sec == "model" and key not in names:
+        if key not in MODEL_OPTIONS:
+            raise InputError(f"[model] {key}: unknown key{_did_you_mean(key, sorted(names | set(MODEL_OPTIONS)))}")
+        return replace(scene, model=replace(obj, options={**dict(obj.options), key: value}))
+    if key not in names:
+        raise InputError(f"[{sec}] {key}: unknown key{_did_you_mean(key, sorted(names))}")
+    if sec == "load":            # exactly one of normal_force, approach, wheel_load: the new one replaces
+        return replace(scene, load=_load({key: value}, scene.geometry))
+    if isinstance(value, int) and not isinstance(value, bool) and isinstance(getattr(obj, key), float):
+        value = float(value)
+    return replace(scene, **{sec: replace(obj, **{key: value})})
+
+
+def _did_you_mean(key: str, known) -> str:
+    """' (did you mean 'x'?)' for the closest known key (case-insensitive), else ''."""
+    known = [str(k) for k in known]
+    lower = {k.lower(): k for k in known}
+    if str(key).lower() in lower:
+        return f" (did you mean {lower[str(key).lower()]!r}?)"
+    close = difflib.get_close_matches(str(key).lower(), list(lower), n=1, cutoff=0.6)
+    return f" (did you mean {lower[close[0]]!r}?)" if close else ""
 
 
 # ----------------------------------------------------------------------------- reading
@@ -182,7 +263,8 @@ class _Section:
         if known is not None:
             unknown = sorted(set(self.data) - known)
             if unknown:
-                raise InputError(f"[{name}] {unknown[0]}: unknown key (known: {', '.join(sorted(known))})")
+                raise InputError(f"[{name}] {unknown[0]}: unknown key{_did_you_mean(unknown[0], known)} "
+                                 f"(known: {', '.join(sorted(known))})")
 
     def has(self, key: str) -> bool:
         return key in self.data
@@ -244,7 +326,11 @@ def _material(data: Any) -> Material:
             return sec.number("G", positive=True), nu
         return sec.number("E", positive=True) / (2.0 * (1.0 + nu)), nu
 
-    data = dict(data or {"G": 82000.0, "nu": 0.28})
+    if data is None:
+        data = {"G": 82000.0, "nu": 0.28}
+    if not isinstance(data, Mapping):
+        raise InputError(f"[material] must be a table (G or E, nu), got {type(data).__name__} {data!r}")
+    data = dict(data)
     body2 = data.pop("body2", None)
     G1, nu1 = constants(_Section("material", data, {"G", "E", "nu"}))
     G2, nu2 = (G1, nu1) if body2 is None else constants(_Section("material.body2", body2, {"G", "E", "nu"}))
@@ -270,7 +356,9 @@ def _friction(data: Any) -> Friction:
 
 
 def _geometry(data: Any, base_dir: Path) -> Geometry:
-    raw = dict(data or {})
+    if not isinstance(data, Mapping):
+        raise InputError(f"[geometry] must be a table, got {type(data).__name__} {data!r}")
+    raw = dict(data)
     kind = _Section("geometry", raw).choice("kind", GEOMETRY_KINDS)
     if kind == "quadratic":
         sec = _Section("geometry", raw, {"kind", "A", "B"})
@@ -296,13 +384,23 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
     side = sec.choice("side", ("left", "right"), d.side)
     placement = sec.choice("placement", ("wheelset", "single"), d.placement)
     roll = sec.number("roll")
+    yaw = sec.number("yaw", d.yaw)
+    if abs(yaw) > MAX_YAW:
+        raise sec.error("yaw", f"the wheelset yaw must lie within +-{MAX_YAW:g} rad "
+                               f"({math.degrees(MAX_YAW):.0f} degrees), got {yaw:g} rad")
+    cant = sec.number("rail_cant", d.rail_cant)
+    if abs(cant) > MAX_CANT:
+        raise sec.error("rail_cant", f"the rail inclination must lie within +-{MAX_CANT:g} rad "
+                                     f"(1:40 = 0.025, 1:20 = 0.05), got {cant:g} rad")
+    if roll is not None and abs(roll) > MAX_YAW:
+        raise sec.error("roll", f"the wheelset roll must lie within +-{MAX_YAW:g} rad, got {roll:g} rad")
     return WheelRailGeometry(
         wheel_profile=sec.string("wheel_profile", d.wheel_profile),
         rail_profile=sec.string("rail_profile", d.rail_profile),
         side=side, placement=placement,
         lateral_shift=sec.number("lateral_shift", d.lateral_shift),
-        yaw=sec.number("yaw", d.yaw), roll=roll,
-        rail_cant=sec.number("rail_cant", d.rail_cant),
+        yaw=yaw, roll=roll,
+        rail_cant=cant,
         gauge=sec.number("gauge", d.gauge, positive=True),
         gauge_height=sec.number("gauge_height", d.gauge_height, nonnegative=True),
         flange_back=sec.number("flange_back", d.flange_back, positive=True),
@@ -359,8 +457,11 @@ def _grid(data: Any) -> GridSpec:
 
 
 def _model(data: Any) -> ModelSpec:
+    if data is not None and not isinstance(data, Mapping):
+        raise InputError(f"[model] must be a table, got {type(data).__name__} {data!r}")
     raw = dict(data or {})
-    core = {"theory", "bound", "influence", "tol", "maxit", "layer_flexibility"}
+    core = {f.name for f in fields(ModelSpec)} - {"options"}
+    _Section("model", raw, core | set(MODEL_OPTIONS))      # unknown keys (with the closest known one)
     sec = _Section("model", {k: v for k, v in raw.items() if k in core})
     options = {k: v for k, v in raw.items() if k not in core}
     return ModelSpec(theory=sec.choice("theory", THEORIES, "fastsim"),
@@ -375,21 +476,149 @@ def _model(data: Any) -> ModelSpec:
 SECTIONS = ("name", "material", "friction", "geometry", "load", "kinematics", "grid", "model")
 
 
+#: bytes per grid element a theory needs (arrays it allocates; the exact theory: zero-padded FFTs of
+#: the 3 x 3 influence kernel and its working arrays).  The conformal theory adds dense blocks along s.
+_BYTES_PER_ELEMENT = {"hertz": 48, "linear": 48, "empirical": 48, "johnson_vermeulen": 48, "fastsim": 240,
+                      "exact": 900, "conformal": 900, "table": 48}
+
+
+def available_memory() -> float | None:
+    """Memory available to this process (bytes): /proc/meminfo MemAvailable, else the physical
+    memory, else None."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    try:
+        return float(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def grid_memory(scene: "Scene") -> tuple[int, int, float]:
+    """(mx, my, bytes): an estimate of the memory the scene's grid needs with its theory, before
+    anything is allocated.  Wheel-rail grids sized by ``element_size`` are not known here: (0, 0, 0)."""
+    g, theory = scene.grid, scene.model.theory
+    if g.explicit:
+        mx, my = int(g.mx), int(g.my)
+    elif scene.geometry.kind == "wheel_rail" and scene.geometry.element_size is not None:
+        return 0, 0, 0.0
+    else:
+        mx = my = int(g.n)
+    n = float(mx) * float(my)
+    per = _BYTES_PER_ELEMENT.get(theory, 900)
+    need = n * per
+    if theory == "conformal":        # (2mx-1) x ms x ms x 3 x 3 kernel and its FFT along x
+        need += 2.0 * mx * float(my) ** 2 * 9 * 16
+    return mx, my, need
+
+
+def validate(scene: "Scene") -> "Scene":
+    """Checks that need several sections (a grid too large for the memory of this machine, the
+    ranges of changed keys); raises :class:`InputError` naming the key.  Returns the scene."""
+    if scene.model.theory not in THEORIES:
+        raise InputError(f"[model] theory: must be one of {', '.join(THEORIES)}, got {scene.model.theory!r}"
+                         f"{_did_you_mean(scene.model.theory, THEORIES)}")
+    geo = scene.geometry
+    if isinstance(geo, WheelRailGeometry):
+        if abs(geo.yaw) > MAX_YAW:
+            raise InputError(f"[geometry] yaw: the wheelset yaw must lie within +-{MAX_YAW:g} rad, got {geo.yaw:g}")
+        if abs(geo.rail_cant) > MAX_CANT:
+            raise InputError(f"[geometry] rail_cant: must lie within +-{MAX_CANT:g} rad, got {geo.rail_cant:g}")
+    mx, my, need = grid_memory(scene)
+    avail = available_memory()
+    if avail is not None and need > 0.8 * avail:
+        key = "mx" if scene.grid.explicit else "n"
+        raise InputError(f"[grid] {key}: a {mx} x {my} grid needs about {need / 2**30:.3g} GiB with theory "
+                         f"{scene.model.theory!r}, more than the {avail / 2**30:.3g} GiB available; use a "
+                         "coarser grid")
+    return scene
+
+
+def scene_warnings(scene: "Scene") -> list[str]:
+    """Warnings about a valid but physically questionable scene (reported on stderr and in the JSON's
+    ``warnings``): a rail inclination steeper than 1:15.  (Warnings about results, e.g. the linear
+    theory beyond the friction bound, come from the models.)"""
+    out = []
+    geo = scene.geometry
+    if isinstance(geo, WheelRailGeometry) and abs(geo.rail_cant) > CANT_WARN:
+        out.append(f"[geometry] rail_cant = {geo.rail_cant:g} rad is steeper than 1:15 ({CANT_WARN:.4f} rad); "
+                   "rails are inclined 1:20 (0.05) or 1:40 (0.025): is this the cant in rad?")
+    return out
+
+
 def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: str = "scene") -> Scene:
-    """Build a validated :class:`Scene` from a parsed TOML mapping."""
+    """Build a validated :class:`Scene` from a parsed TOML mapping.
+
+    Every section is checked: unknown keys are refused with the closest known one, values are
+    range-checked, and a grid that would not fit in memory is refused before anything is allocated.
+
+    Parameters
+    ----------
+    data : mapping
+        The parsed TOML: sections ``material``, ``friction``, ``geometry``, ``load``,
+        ``kinematics``, ``grid``, ``model`` and an optional ``name``.
+    base_dir : path, optional
+        Folder that relative file names (profiles, tables) are taken from.
+    name : str, optional
+        Name of the scene when ``data`` has none.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    InputError
+        Naming the section and the key, e.g. ``[model] Theory: unknown key (did you mean 'theory'?)``.
+
+    Examples
+    --------
+    >>> scene_from_dict({"geometry": {"kind": "quadratic", "A": 0.001, "B": 0.001},
+    ...                  "load": {"normal_force": 1e4}, "model": {"thoery": "exact"}})
+    Traceback (most recent call last):
+    ...
+    conformal.errors.InputError: [model] thoery: unknown key (did you mean 'theory'?) (known: ...)
+    """
+    if not isinstance(data, Mapping):
+        raise InputError(f"a scene must be a table of sections, got {type(data).__name__}")
     unknown = sorted(set(data) - set(SECTIONS))
     if unknown:
-        raise InputError(f"[{unknown[0]}]: unknown section (known: {', '.join(SECTIONS[1:])})")
+        raise InputError(f"[{unknown[0]}]: unknown section{_did_you_mean(unknown[0], SECTIONS)} "
+                         f"(known: {', '.join(SECTIONS[1:])})")
+    for sec in SECTIONS[1:]:
+        if sec in data and not isinstance(data[sec], Mapping):
+            raise InputError(f"[{sec}] must be a table (a [{sec}] section), got {sec} = {data[sec]!r}")
+    if "name" in data and not isinstance(data["name"], str):
+        raise InputError(f"name: must be a string, got {data['name']!r}")
     if "geometry" not in data:
         raise InputError("[geometry] kind: missing (one of " + ", ".join(GEOMETRY_KINDS) + ")")
     if "load" not in data:
         raise InputError("[load] normal_force: missing (give normal_force, approach or wheel_load)")
     base_dir = Path(base_dir)
     geometry = _geometry(data.get("geometry"), base_dir)
-    return Scene(material=_material(data.get("material")), friction=_friction(data.get("friction")),
-                 geometry=geometry, load=_load(data.get("load"), geometry),
-                 kinematics=_kinematics(data.get("kinematics")), grid=_grid(data.get("grid")),
-                 model=_model(data.get("model")), name=str(data.get("name", name)), base_dir=base_dir)
+    scene = Scene(material=_material(data.get("material")), friction=_friction(data.get("friction")),
+                  geometry=geometry, load=_load(data.get("load"), geometry),
+                  kinematics=_kinematics(data.get("kinematics")), grid=_grid(data.get("grid")),
+                  model=_model(data.get("model")), name=str(data.get("name", name)), base_dir=base_dir)
+    return validate(scene)
+
+
+def as_scene(source: "Scene | str | Path | Mapping[str, Any]", **overrides: Any) -> Scene:
+    """A validated scene from a Scene, a TOML file path or a mapping, with ``section__key=value``
+    overrides applied (:meth:`Scene.with_`); the API's :func:`conformal.load_scene`."""
+    if isinstance(source, Scene):
+        scene = source
+    elif isinstance(source, (str, Path)):
+        scene = load_scene(source)
+    elif isinstance(source, Mapping):
+        scene = scene_from_dict(source)
+    else:
+        raise InputError(f"scene: expected a Scene, a file path or a dict, got {type(source).__name__}")
+    return scene.with_(**overrides) if overrides else scene
 
 
 def load_scene(path: str | Path) -> Scene:

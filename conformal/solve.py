@@ -2,54 +2,86 @@
 
 Every model module exposes ``solve(problem: ContactProblem) -> Result``.  A scene with several
 contact patches returns the sum of the patches' forces with the patches listed in ``patches``.
+
+This module is also the API's ``conformal.solve``: calling it, ``conformal.solve(scene, **overrides)``,
+is :func:`conformal.api.solve` (a scene, a TOML path or a dict; ``section__key=value`` overrides).
+
+>>> import conformal
+>>> r = conformal.solve({"geometry": {"kind": "quadratic", "A": 1e-3, "B": 1e-3},
+...                      "load": {"normal_force": 1e4}}, model__theory="hertz")
+>>> r.theory, round(r.FN)
+('hertz', 10000)
 """
 from __future__ import annotations
 
-import importlib
+import sys
 import time
+import types
 from dataclasses import replace
+from typing import Any
 
-from conformal.problem import ContactProblem, problems_from_scene
+from conformal.problem import ContactProblem, problems_from_scene  # noqa: F401
 from conformal.result import Result
-from conformal.scene import Scene
+from conformal._threads import single_threaded_blas
+from conformal.scene import Scene, as_scene, scene_warnings
 
-MODELS = {
-    "hertz": "conformal.theories.hertz",
-    "linear": "conformal.theories.linear",
-    "empirical": "conformal.theories.empirical",
-    "johnson_vermeulen": "conformal.theories.empirical",
-    "fastsim": "conformal.theories.fastsim",
-    "exact": "conformal.solvers.exact",
-    "conformal": "conformal.solvers.conformal",
-}
-
-
-def solve_problem(problem: ContactProblem) -> Result:
-    """Solve one contact problem with ``problem.model.theory``; wall_s is measured here."""
-    module = importlib.import_module(MODELS[problem.model.theory])
-    t0 = time.perf_counter()
-    result = module.solve(problem)
-    return replace(result, wall_s=time.perf_counter() - t0)
-
-
-def combine(results: list[Result], theory: str) -> Result:
-    """Totals over several patches: forces add; a, b, pmax, approach of the most loaded patch.
-    Forces are summed as given, i.e. all patches must report forces in one common frame."""
-    main = max(results, key=lambda r: r.FN)
-    return Result(theory=theory, FN=sum(r.FN for r in results), FX=sum(r.FX for r in results),
-                  FY=sum(r.FY for r in results), MZ=sum(r.MZ for r in results), a=main.a, b=main.b,
-                  pmax=max(r.pmax for r in results), approach=main.approach, xi=main.xi, eta=main.eta,
-                  phi=main.phi, converged=all(r.converged for r in results),
-                  wall_s=sum(r.wall_s for r in results), patches=tuple(results))
+# the models by name live in conformal.models (below the wheel-rail cases); kept here for callers
+from conformal.models import MODELS, combine, solve_problem  # noqa: E402,F401
 
 
 def solve_scene(scene: Scene) -> Result:
-    t0 = time.perf_counter()
-    if scene.geometry.kind == "wheel_rail":  # patches in their own frames, track-frame totals
-        from conformal.geometry.wheelrail import solve_wheel_rail
+    """Solve a validated scene with the model it names.
 
-        return replace(solve_wheel_rail(scene), wall_s=time.perf_counter() - t0)
-    problems = problems_from_scene(scene)
-    results = [solve_problem(p) for p in problems]
-    out = results[0] if len(results) == 1 else combine(results, scene.model.theory)
+    Planar scenes give one contact problem (:func:`conformal.problem.problems_from_scene`) solved
+    by the model of ``[model] theory`` (:mod:`conformal.models`); wheel-rail scenes go through the
+    wheel-rail cases (:func:`conformal.cases.solve_wheel_rail`).  BLAS is single-threaded for the
+    duration (:mod:`conformal._threads`); the scene's warnings join the result's ``warnings``.
+
+    Parameters
+    ----------
+    scene : Scene
+
+    Returns
+    -------
+    Result
+        With ``wall_s`` the wall time of the whole solve.
+
+    Examples
+    --------
+    >>> from conformal.scene import scene_from_dict
+    >>> s = scene_from_dict({"geometry": {"kind": "hertz", "a": 6.0, "b": 6.0},
+    ...                      "load": {"normal_force": 1e5}, "model": {"theory": "hertz"}})
+    >>> round(solve_scene(s).a, 6)
+    6.0
+    """
+    t0 = time.perf_counter()
+    with single_threaded_blas():
+        if scene.geometry.kind == "wheel_rail":  # patches in their own frames, track-frame totals
+            from conformal.cases import solve_wheel_rail
+
+            out = solve_wheel_rail(scene)
+        else:
+            problems = problems_from_scene(scene)
+            results = [solve_problem(p) for p in problems]
+            out = results[0] if len(results) == 1 else combine(results, scene.model.theory)
+    warnings = scene_warnings(scene) + out.warnings
+    if warnings:
+        out = replace(out, extra=dict(out.extra, warnings=list(dict.fromkeys(warnings))))
     return replace(out, wall_s=time.perf_counter() - t0)
+
+
+def solve(scene: Any, **overrides: Any) -> Result:
+    """``conformal.solve``: a validated scene (:func:`conformal.scene.as_scene`) solved by
+    :func:`solve_scene`; see :func:`conformal.api.solve`."""
+    return solve_scene(as_scene(scene, **overrides))
+
+
+class _CallableModule(types.ModuleType):
+    """``conformal.solve`` is this module (``from conformal.solve import solve_scene`` keeps working)
+    and the API function at once: calling the module calls :func:`solve`."""
+
+    def __call__(self, scene: Any, **overrides: Any) -> Result:
+        return solve(scene, **overrides)
+
+
+sys.modules[__name__].__class__ = _CallableModule

@@ -5,7 +5,7 @@
 Prints (1) FASTSIM throughput: single calls (slices and grid) and the vectorised batch, with
 the other vectorised fast theories for comparison; (2) the error of each fast theory (Hertz,
 linear, Kalker 1968 empirical, Johnson-Vermeulen, FASTSIM) against CONTACT's exact half-space
-results in shared/reference/contact_cases.json (cases `cattaneo`, `fastsim`, `tractcurv`
+results in tests/reference/contact_cases.json (cases `cattaneo`, `fastsim`, `tractcurv`
 series 1), and FASTSIM against CONTACT's FASTSIM (same variant); (3) FASTSIM's grid
 convergence.  The error table is written to OUT/fast_theories.csv.
 

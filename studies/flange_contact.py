@@ -1,4 +1,4 @@
-"""Flange contact: where the half-space simplification fails (issue 6).
+"""Flange contact: where the half-space simplification fails.
 
 S1002 wheelset on UIC 60 rails inclined 1:40, 10 kN per wheel, rolling at 2 m/s (pure rolling at
 the nominal radius; creepages from the wheelset motion), over the lateral shifts where the flange
@@ -14,7 +14,7 @@ root meets the gauge corner (meshes/scenes/flange_s1002_uic60.toml).  For every 
 Per model and shift: FN, the track-frame forces on the rail FX, FY, FZ, the spin moment MZ about the
 reference normal, pmax, the contact area and shape (half-lengths along x and across), the range of
 contact angles over the contact area (conformal), and the wall time.  A worn pair (the worn
-heavy-haul wheel on the worn high rail, ../shared/profiles) follows with the same models.
+heavy-haul wheel on the worn high rail, conformal/data/profiles) follows with the same models.
 
 Writes to --out (default studies/out/flange_contact): flange_contact.csv, flange_contact.md (the
 table), *_forces.png (the quantities against the shift), *_maps_y*.png (pressure on the developed
@@ -53,7 +53,7 @@ MODELS = (("fastsim", "halfspace", "Hertz+FASTSIM"),
           ("conformal-ref", "halfspace", "conformal HS, ref. creepages"),
           ("conformal", "halfspace", "conformal, half-space"),
           ("conformal", "fe", "conformal, FE"))
-FIELDS = ("pair", "shift", "model", "FN", "FX", "FY", "FZ", "MZ", "pmax", "area", "a", "b",
+FIELDS = ("pair", "shift", "model", "FN", "FX_track", "FY_track", "FZ_track", "MZ", "pmax", "area", "a", "b",
           "angle_deg", "angle_min_deg", "angle_max_deg", "n_patches", "converged", "wall_s", "note")
 
 
@@ -83,7 +83,7 @@ def measure(scene, theory: str, influence: str) -> dict:
     r = solve_scene(sc)
     wall = time.perf_counter() - t0
     ex = r.extra
-    row = {"FN": r.FN, "FX": ex.get("FX_track", r.FX), "FY": ex.get("FY_track", r.FY), "FZ": ex.get("FZ_track"),
+    row = {"FN": r.FN, "FX_track": ex.get("FX_track", r.FX), "FY_track": ex.get("FY_track", r.FY), "FZ_track": ex.get("FZ_track"),
            "pmax": r.pmax, "area": _area(r), "a": r.a, "b": r.b, "converged": r.converged, "wall_s": wall}
     if theory == "conformal":
         row.update(MZ=ex["MZ_3d"], angle_deg=math.degrees(ex["regions"][0]["contact_angle"]) if ex["regions"] else None,
@@ -118,7 +118,7 @@ def run_pair(scene, shifts, pair: str, models, out: Path, showcase=(), vtu: bool
             row.update(pair=pair, shift=y, model=label)
             rows.append(row)
             print(f"{pair} y={y:5.2f} {label:24s} " + "  ".join(
-                f"{k}={row[k]:.4g}" for k in ("FN", "FY", "MZ", "pmax", "area", "wall_s") if row.get(k) is not None)
+                f"{k}={row[k]:.4g}" for k in ("FN", "FY_track", "MZ", "pmax", "area", "wall_s") if row.get(k) is not None)
                 + (f"  [{row['note']}]" if row.get("note") else ""), flush=True)
         if y in showcase:
             draw_maps(results, out / f"{_slug(pair)}_maps_y{y:g}.png", f"{pair}, lateral shift {y:g} mm")
@@ -161,7 +161,7 @@ def draw_maps(results: dict, path: Path, title: str) -> None:
             ax.set_xlabel("x (rolling) [mm]")
             ax.set_ylabel("s - s_ref [mm]" if r.theory == "conformal" else "lateral [mm]")
             ax.set_title(f"{label}\npmax {r.pmax:.0f}" if row == 0 else f"FX {r.extra.get('FX_track', r.FX):.0f}, "
-                         f"FY {r.extra.get('FY_track', r.FY):.0f} N", fontsize=9)
+                         f"FY_track {r.extra.get('FY_track', r.FY):.0f} N", fontsize=9)
     fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
@@ -190,14 +190,14 @@ def draw_forces(rows: list[dict], pair: str, path: Path) -> None:
 
     ref_labels = [m[2] for m in MODELS if m[1] == "fe"] + ["conformal, half-space"]
     fig, axes = plt.subplots(2, 3, figsize=(16, 8.5))
-    for ax, (key, name) in zip(axes[0], (("FN", "FN [N]"), ("FY", "FY track [N]"), ("pmax", "pmax [N/mm²]"))):
+    for ax, (key, name) in zip(axes[0], (("FN", "FN [N]"), ("FY_track", "FY_track (track lateral) [N]"), ("pmax", "pmax [N/mm²]"))):
         for i, label in enumerate(labels):
             pts = [(pos[y], value(y, label, key)) for y in shifts if value(y, label, key) is not None]
             if pts:
                 ax.plot(*zip(*pts), marker="os^Dv"[i % 5], label=label)
         ax.set_ylabel(name)
         ax.set_yscale("log")
-    for ax, (key, name) in zip(axes[1], (("FY", "FY track"), ("MZ", "spin moment MZ"), ("area", "contact area"))):
+    for ax, (key, name) in zip(axes[1], (("FY_track", "FY_track"), ("MZ", "spin moment MZ"), ("area", "contact area"))):
         for i, label in enumerate(labels):
             pts = []
             for y in shifts:
@@ -247,7 +247,7 @@ def write_table(rows: list[dict], out: Path) -> None:
         w.writeheader()
         for r in rows:
             w.writerow({k: r.get(k) for k in FIELDS})
-    lines = ["| pair | shift | model | FN [N] | FX [N] | FY [N] | MZ [N mm] | pmax [N/mm²] | area [mm²] | a x b [mm] "
+    lines = ["| pair | shift | model | FN [N] | FX_track [N] | FY_track [N] | MZ [N mm] | pmax [N/mm²] | area [mm²] | a x b [mm] "
              "| angle [deg] | wall [s] |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if r.get("FN") is None:
@@ -255,7 +255,7 @@ def write_table(rows: list[dict], out: Path) -> None:
             continue
         ang = (f"{r['angle_min_deg']:.0f}..{r['angle_max_deg']:.0f}" if r.get("angle_min_deg") is not None
                else f"{r['angle_deg']:.0f}" if r.get("angle_deg") is not None else "")
-        lines.append(f"| {r['pair']} | {r['shift']:g} | {r['model']} | {r['FN']:.0f} | {r['FX']:.0f} | {r['FY']:.0f} | "
+        lines.append(f"| {r['pair']} | {r['shift']:g} | {r['model']} | {r['FN']:.0f} | {r['FX_track']:.0f} | {r['FY_track']:.0f} | "
                      f"{r['MZ']:.0f} | {r['pmax']:.0f} | {r['area']:.1f} | {r['a']:.2f} x {r['b']:.2f} | {ang} | "
                      f"{r['wall_s']:.2f}{'' if r['converged'] else ' (not converged)'} |")
     (out / "flange_contact.md").write_text("\n".join(lines) + "\n")

@@ -1,7 +1,7 @@
 """Manchester contact benchmark A-2.2: the full table (21 lateral shifts x 2 wheels) against CONTACT.
 
 S1002 on UIC60 1:40, 10 kN per wheel, yaw 2.4 mrad/mm, CONTACT's roll and pitch velocity
-(reference A5, shared/reference/contact_cases.json).  For every case this script
+(reference A5, tests/reference/contact_cases.json).  For every case this script
 
 1. checks the geometry alone: at CONTACT's solved wheelset height Z_WS, our contact reference
    point, contact angle and approach (no solver involved);
@@ -53,7 +53,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from conformal.geometry.patches import find_patches  # noqa: E402
-from conformal.geometry.wheelrail import place_scene, problems_from_wheel_rail, solve_wheel_rail  # noqa: E402
+from conformal.cases.wheelrail import place_scene, problems_from_wheel_rail, solve_wheel_rail  # noqa: E402
 from conformal.scene import load_scene  # noqa: E402
 
 #: force tolerance against CONTACT (module docstring): max(REL_TOL |F_CONTACT|, MU_FN_TOL mu FN)

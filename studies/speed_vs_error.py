@@ -1,4 +1,4 @@
-"""Speed against error: every model on the same wheel-rail scenes (issue 6).
+"""Speed against error: every model on the same wheel-rail scenes.
 
 Scenes: S1002 on UIC 60 (1:40), 10 kN, 2 m/s, at three lateral shifts: the tread (0 mm), the flange
 root against the gauge corner (6.2 mm, contact angles -25 to -42 degrees) and the flange flank
@@ -39,7 +39,7 @@ from conformal.solve import solve_scene  # noqa: E402
 SCENE = ROOT / "meshes" / "scenes" / "flange_s1002_uic60.toml"
 SCENES = (("tread, y = 0", 0.0), ("flange root, y = 6.2", 6.2), ("flange flank, y = 6.3", 6.3))
 FAST = (("hertz", None), ("linear", None), ("empirical", None), ("fastsim", None))
-FIELDS = ("scene", "model", "n", "FX", "FY", "FZ", "pmax", "force_error", "pmax_error", "wall_s", "wall_cold_s", "note")
+FIELDS = ("scene", "model", "n", "FX_track", "FY_track", "FZ_track", "pmax", "force_error", "pmax_error", "wall_s", "wall_cold_s", "note")
 
 
 def configs(quick: bool):
@@ -63,7 +63,7 @@ def run(scene, theory, influence, n) -> dict:
     r = solve_scene(sc)
     wall = time.perf_counter() - t0
     ex = r.extra
-    row = {"FX": ex.get("FX_track", r.FX), "FY": ex.get("FY_track", r.FY), "FZ": ex.get("FZ_track", r.FN),
+    row = {"FX_track": ex.get("FX_track", r.FX), "FY_track": ex.get("FY_track", r.FY), "FZ_track": ex.get("FZ_track", r.FN),
            "pmax": r.pmax, "wall_s": wall, "wall_cold_s": wall, "converged": r.converged}
     if influence == "fe":
         fe = ex.get("fe", {})
@@ -96,7 +96,7 @@ def main(argv=None):
             print(f"{scene_label}: reference {ref_label} failed ({exc}); using the half-space one", flush=True)
             ref_label = ref_cfg[0].replace("FE", "HS")
             ref = run(sc, "conformal", "halfspace", ref_cfg[3])
-        F_ref = np.array([ref["FX"], ref["FY"], ref["FZ"]])
+        F_ref = np.array([ref["FX_track"], ref["FY_track"], ref["FZ_track"]])
         print(f"{scene_label}: reference {ref_label}: F = {np.round(F_ref, 1)}, pmax {ref['pmax']:.1f}, "
               f"{ref['wall_s']:.1f} s", flush=True)
         for label, theory, influence, n in runs:
@@ -105,7 +105,7 @@ def main(argv=None):
             except ConformalError as exc:
                 row = {"note": f"{type(exc).__name__}: {exc}"[:160]}
             else:
-                F = np.array([row["FX"], row["FY"], row["FZ"]])
+                F = np.array([row["FX_track"], row["FY_track"], row["FZ_track"]])
                 row["force_error"] = float(np.linalg.norm(F - F_ref) / np.linalg.norm(F_ref))
                 row["pmax_error"] = abs(row["pmax"] - ref["pmax"]) / ref["pmax"]
             row.update(scene=scene_label, model=label, n=n)

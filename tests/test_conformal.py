@@ -15,6 +15,7 @@ from conformal.materials import Material
 from conformal.result import SLIP
 from conformal.scene import load_scene, scene_from_dict
 from conformal.solve import solve_scene
+from conformal.cases import conformal as CC
 from conformal.solvers import conformal as C
 from conformal.solvers.normal import solve_normal
 from conformal.theories.hertz import hertz_from_curvatures, hertz_from_semiaxes
@@ -36,7 +37,7 @@ def flange():
     coarse grid (20 x 20 on the patch)."""
     sc = load_scene(SCENES / "flange_s1002_uic60.toml")
     sc = replace(sc, grid=replace(sc.grid, n=20))
-    problem = C.curved_problem_from_wheel_rail(sc)
+    problem = CC.curved_problem_from_wheel_rail(sc)
     return sc, problem, C.solve_curved(problem)
 
 
@@ -86,7 +87,7 @@ def test_column_creepages_are_a_rigid_motion():
     projected on each column's tangents (independent 3-D vector algebra), gives the column
     creepages; the spin follows the local normal, phi n_ref . n(s)."""
     sc = load_scene(SCENES / "flange_s1002_uic60.toml")
-    g = C.curved_problem_from_wheel_rail(replace(sc, grid=replace(sc.grid, n=10))).grid
+    g = CC.curved_problem_from_wheel_rail(replace(sc, grid=replace(sc.grid, n=10))).grid
     xi, eta, phi = 2e-3, -1e-3, 3e-3
     xs, es, ps = C.column_creepages(g, xi, eta, phi)
     (y0, z0), n0 = C.reference_point(g)
@@ -216,7 +217,7 @@ def test_full_slip_and_large_spin():
     assert r.converged and np.all(f.status[c] == SLIP)
     # Coulomb in every element, to the tangential solver's tolerance (1e-6 of the largest traction)
     np.testing.assert_allclose(np.hypot(f.px, f.py)[c], 0.3 * f.pn[c], rtol=0, atol=2e-6 * 0.3 * r.pmax)
-    assert np.ptp(C.curved_problem_from_wheel_rail(sc).phi_s) > 0.2 * abs(r.phi)
+    assert np.ptp(CC.curved_problem_from_wheel_rail(sc).phi_s) > 0.2 * abs(r.phi)
 
 
 def test_nadal_limit_stops_with_a_clear_message():
@@ -227,7 +228,7 @@ def test_nadal_limit_stops_with_a_clear_message():
     longitudinal part of the slip)."""
     sc = load_scene(SCENES / "flange_s1002_uic60_70deg.toml")
     sc = replace(sc, grid=replace(sc.grid, n=12), friction=replace(sc.friction, mu_static=0.5, mu_kinetic=0.5))
-    p = C.curved_problem_from_wheel_rail(sc)
+    p = CC.curved_problem_from_wheel_rail(sc)
     with pytest.raises(ConvergenceError, match="climbs the flange"):
         C.solve_curved(replace(p, eta_s=np.full(p.grid.ms, -0.05)))
     r = C.solve_curved(replace(p, eta_s=np.full(p.grid.ms, 0.05)))
@@ -284,7 +285,7 @@ def test_curved_creepages_use_the_planar_creep_point(name):
     from types import SimpleNamespace
 
     from conformal.geometry.kinematics import WheelsetMotion
-    from conformal.geometry.wheelrail import _kinematics_for, balance_height, curved_creepages, place_scene
+    from conformal.cases.wheelrail import _kinematics_for, balance_height, curved_creepages, place_scene
 
     sc = load_scene(SCENES / name)
     pl = place_scene(sc)

@@ -12,6 +12,7 @@ from conformal.problem import problems_from_scene
 from conformal.scene import scene_from_dict
 from conformal.theories import coefficients as coef
 from conformal.theories import empirical as emp
+from conftest import reference_cases
 
 REF = Path(__file__).resolve().parent / "reference" / "contact_cases.json"
 G, NU, MU, FN = 82000.0, 0.28, 0.33, 106700.0
@@ -124,7 +125,7 @@ def test_against_contact_exact_creep_curve():
     FX/(mu FN): Kalker 1968 with Kalker's coefficients (Eq. 20) 0.003, with the elliptic
     coefficients 0.016; Johnson-Vermeulen with Kalker's coefficients 0.038, as published
     (elliptic) 0.068.  Bounds just above these measurements guard the implementation."""
-    steps = [s for s in json.loads(REF.read_text())["cases"]["tractcurv"]["steps"] if s.get("series") == 1]
+    steps = [s for s in reference_cases()["tractcurv"]["steps"] if s.get("series") == 1]
     xi = np.array([s["inputs"]["loading"]["CKSI_xi"] for s in steps])
     ref = np.array([s["outputs"]["FX_over_muFN"] for s in steps])
     bounds = {("kalker", "kalker"): 0.004, ("kalker", "elliptic"): 0.018,

@@ -1,6 +1,5 @@
 """FASTSIM (Kalker 1982) against the simplified theory's closed forms, linear theory and
-CONTACT's FASTSIM results (reference/contact_cases.md, cases `fastsim` and `tractcurv`)."""
-import json
+CONTACT's FASTSIM results (tests/reference/contact_cases.json, cases `fastsim` and `tractcurv`)."""
 import math
 from pathlib import Path
 
@@ -14,9 +13,10 @@ from conformal.result import ADHESION, EXTERIOR, SLIP
 from conformal.scene import scene_from_dict
 from conformal.theories import coefficients as coef
 from conformal.theories import fastsim as fs
+from conftest import reference_cases
 
 REF = Path(__file__).resolve().parent / "reference" / "contact_cases.json"
-CASES = json.loads(REF.read_text())["cases"]
+CASES = reference_cases()
 G, NU = 82000.0, 0.28
 # fastsim case: a = 8, b = 4 mm, FN = 82 kN, mu = 0.3, eta = -6.25e-4, phi = +6.25e-4 rad/mm
 FS = dict(a=8.0, b=4.0, FN=82000.0, mu=0.3, xi=0.0, eta=-0.000625, phi=0.000625)

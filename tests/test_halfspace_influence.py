@@ -1,4 +1,4 @@
-"""Half-space influence numbers against the verified reference values (reference/halfspace_influence.md §8)."""
+"""Half-space influence numbers against the verified reference values (closed forms of Love 1929 and Kalker 1990, tabulated values)."""
 import math
 
 import numpy as np

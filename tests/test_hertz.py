@@ -1,6 +1,5 @@
 """Hertz theory (conformal.theories.hertz) against closed forms, an independent numerical
 integration of the Hertz displacement and CONTACT's printed Hertz data."""
-import json
 import math
 from pathlib import Path
 
@@ -11,6 +10,7 @@ from scipy.integrate import quad
 from conformal.errors import InputError
 from conformal.materials import Material
 from conformal.theories.hertz import hertz_from_curvatures, hertz_from_semiaxes
+from conftest import reference_cases
 
 REF = Path(__file__).resolve().parent / "reference" / "contact_cases.json"
 STEEL = Material.identical(82000.0, 0.28)
@@ -69,7 +69,7 @@ def test_ellipse_against_numerical_integration(A, B):
 
 def test_contact_printed_hertz_data():
     """CONTACT's Hertz data (4 significant digits): tolerance half a unit of the last digit."""
-    cases = json.loads(REF.read_text())["cases"]
+    cases = reference_cases()
     # fastsim case: a = 8, b = 4 mm, FN = 82 kN -> A = 0.8464e-3, B = 2.406e-3, approach 0.09267
     out = cases["fastsim"]["steps"][1]["outputs"]
     hz = hertz_from_semiaxes(8.0, 4.0, STEEL, normal_force=82000.0)

@@ -11,7 +11,8 @@ import pytest
 from conformal.cli import main
 from conformal.errors import InputError
 from conformal.influence.cache import Cache
-from conformal.jobs import parse_sweep, plan, precompute, run
+from conformal.cases.precompute import plan, precompute
+from conformal.jobs import parse_sweep, run
 
 SCENE = textwrap.dedent("""\
     name = "sweep"
@@ -123,7 +124,7 @@ def test_precompute_bad_input(scene_file, tmp_path, capsys):
 
 @pytest.mark.slow
 def test_local_dask_cluster(scene_file, tmp_path):
-    pytest.importorskip("dask.distributed")
+    import dask.distributed  # noqa: F401 - in the test extra: the Dask path runs in CI, never skipped
     from conformal.scene import load_scene
 
     rep = precompute(load_scene(scene_file), parse_sweep("shift=0"), cache=tmp_path / "c", workers=1,
@@ -134,7 +135,7 @@ def test_local_dask_cluster(scene_file, tmp_path):
 
 def test_precompute_fills_the_conformal_strip_of_a_multi_patch_scene(tmp_path, monkeypatch):
     """The worn pair at 9.9 mm has two geometric patches; the conformal theory solves them on
-    ONE strip (conformal.solvers.conformal.curved_problem_from_wheel_rail).  precompute must plan
+    ONE strip (conformal.cases.conformal.curved_problem_from_wheel_rail).  precompute must plan
     that strip (rail + wheel: 2 bodies, not 2 per patch), and a conformal solve afterwards must
     find both bodies in the cache (the check fails if plan() builds per-patch grids)."""
     from dataclasses import replace

@@ -12,6 +12,7 @@ from conformal.problem import problems_from_scene
 from conformal.scene import scene_from_dict
 from conformal.theories import coefficients as coef
 from conformal.theories import linear
+from conftest import reference_cases
 
 REF = Path(__file__).resolve().parent / "reference" / "contact_cases.json"
 
@@ -58,7 +59,7 @@ def test_small_creepage_against_contact_exact():
     half-space solution FX = -247 N on its 48 x 44 grid.  Linear theory gives -243.7 N
     (-1.3 %); the tolerance of 2 % covers the discretisation error of CONTACT's grid (its
     FASTSIM on the same grid is 3 % off the continuum, see test_fastsim)."""
-    out = json.loads(REF.read_text())["cases"]["tractcurv"]["steps"][0]["outputs"]
+    out = reference_cases()["tractcurv"]["steps"][0]["outputs"]
     r = linear.solve(problem(xi=1e-5))
     assert r.FX == pytest.approx(out["FX_N"], rel=0.02)
     assert r.FY == 0.0 and r.MZ == 0.0 and r.FN == pytest.approx(106700.0)

@@ -9,8 +9,9 @@ from pathlib import Path
 import pytest
 
 from conformal.geometry.patches import find_patches
-from conformal.geometry.wheelrail import place_scene, problems_from_wheel_rail, solve_wheel_rail
+from conformal.cases.wheelrail import place_scene, problems_from_wheel_rail, solve_wheel_rail
 from conformal.scene import load_scene
+from conftest import reference_cases
 
 ROOT = Path(__file__).resolve().parents[1]
 REF = ROOT / "tests" / "reference" / "contact_cases.json"
@@ -21,7 +22,7 @@ SCENE = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"
 def ref():
     if not REF.is_file():
         pytest.skip("shared reference data not available")
-    return json.loads(REF.read_text())["cases"]["mbench_a22"]
+    return reference_cases()["mbench_a22"]
 
 
 def scene_for(side, case, theory="exact", element_size=0.4):

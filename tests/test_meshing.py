@@ -15,7 +15,7 @@ from conformal.meshing.bodies import BodyModel, Profile2D, StripPatch, body_exte
 from conformal.meshing.gmsh_body import MeshingError, MeshSpec, mesh_body, surface_frame, surface_point
 
 _trapz = getattr(np, "trapezoid", None) or np.trapz   # numpy < 2 has only trapz
-PROFILES = Path(conformal.__file__).parent / "data" / "profiles"   # packaged copies of ../shared/profiles
+PROFILES = Path(conformal.__file__).parent / "data" / "profiles"   # the packaged profiles
 
 
 def _tet_volume(m) -> np.ndarray:
@@ -25,6 +25,34 @@ def _tet_volume(m) -> np.ndarray:
 
 def _tri_area(p, t) -> float:
     return 0.5 * np.linalg.norm(np.cross(p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]), axis=1).sum()
+
+
+def _section(body: BodyModel, ext) -> np.ndarray:
+    """Closed cross-section polygon (y, z): the profile from s_lo to s_hi (4001 points), then the
+    artificial boundary (end cuts and the arc, 2048 segments) back to the start."""
+    yz = body.profile.point(np.linspace(ext.s_lo, ext.s_hi, 4001))
+    return np.vstack([yz, ext.closure(2048)])
+
+
+def _area_centroid(poly: np.ndarray) -> tuple[float, np.ndarray]:
+    """Area and centroid of a simple polygon (shoelace formula)."""
+    y, z = poly[:, 0], poly[:, 1]
+    y2, z2 = np.roll(y, -1), np.roll(z, -1)
+    c = y * z2 - y2 * z
+    A = 0.5 * c.sum()
+    return abs(A), np.array([((y + y2) * c).sum(), ((z + z2) * c).sum()]) / (6 * A)
+
+
+def _fine(prof: Profile2D, step: float = 0.05) -> Profile2D:
+    """The same polyline sampled every ``step`` mm (corners kept), as measured profiles are."""
+    s = np.unique(np.concatenate([np.arange(0.0, prof.length, step), prof.s]))
+    yz = prof.point(s)
+    return Profile2D(yz[:, 0], yz[:, 1], prof.name)
+
+
+def _arc_h(m) -> float:
+    """Element size on the artificial arc: the size field's largest element there."""
+    return max(m.spec.h_max * m.extent.depth, m.spec.h_patch * m.stats["h_element"])
 
 
 def _rail() -> BodyModel:
@@ -38,15 +66,20 @@ def test_block_geometry_and_conformity():
     m = mesh_body(body, patch, MeshSpec(conform="all", body_size=1.0))
     ext = m.extent
     L, W = ext.x_hi - ext.x_lo, ext.s_hi - ext.s_lo
+    R = ext.radius
+    assert W == pytest.approx(2 * R) and ext.arc_mid[1] == pytest.approx(R)   # half-disc below the surface
     assert np.all(_tet_volume(m) > 0)
-    assert _tet_volume(m).sum() == pytest.approx(L * W * ext.depth, rel=1e-12)     # a box: exact
+    # a half-cylinder: the faceted arc (chords of angle h / R) loses about (h / R)^2 / 6 of the area
+    h = _arc_h(m)
+    assert _tet_volume(m).sum() == pytest.approx(L * 0.5 * math.pi * R ** 2, rel=0.25 * (h / R) ** 2)
+    assert _tet_volume(m).sum() < L * 0.5 * math.pi * R ** 2
     assert _tri_area(m.points, m.free_tris) == pytest.approx(L * W, rel=1e-12)
     assert np.allclose(m.points[np.unique(m.free_tris), 2], 0.0)
-    # clamped faces: the four sides and the bottom, nothing of the top surface inside
+    # artificial boundary: the two x-end faces and the cylinder, nothing of the top surface inside
     cn = m.clamped_nodes
     p = m.points[cn]
-    on_cut = (np.isclose(p[:, 0], ext.x_lo) | np.isclose(p[:, 0], ext.x_hi) | np.isclose(p[:, 2], ext.depth)
-              | np.isclose(p[:, 1], -30 + ext.s_lo) | np.isclose(p[:, 1], -30 + ext.s_hi))
+    r = np.hypot(p[:, 1] - (-30 + 30.0), p[:, 2])
+    on_cut = np.isclose(p[:, 0], ext.x_lo) | np.isclose(p[:, 0], ext.x_hi) | np.isclose(r, R, rtol=1e-6)
     assert on_cut.all()
     # conformity: every free triangle lies in one contact element of the observed patch or outside
     uv = m.uv[m.free_tris]                                   # (F, 3, 2)
@@ -69,13 +102,12 @@ def test_rail_body_volume_and_surface():
     patch = StripPatch.uniform(3, 1.0, 3, 1.0, s0)
     m = mesh_body(rail, patch, MeshSpec(body_size=1.0))
     ext = m.extent
-    ss = np.linspace(ext.s_lo, ext.s_hi, 4001)
-    yz = rail.profile.point(ss)
-    # cross-section area between the profile and the bottom line (trapezoid rule on 4001 points)
-    area = _trapz(ext.z_bottom - yz[:, 1], yz[:, 0])
+    area, _ = _area_centroid(_section(rail, ext))
     L = ext.x_hi - ext.x_lo
-    # faceted curve: chord sag h^2/(8R) over the coarse parts; measured 1e-5 relative
-    assert _tet_volume(m).sum() == pytest.approx(area * L, rel=2e-4)
+    # faceted arc: chords of angle h / R lose about (h / R)^2 / 6 of the area
+    h = _arc_h(m)
+    assert _tet_volume(m).sum() == pytest.approx(area * L, rel=0.25 * (h / ext.radius) ** 2)
+    assert _tet_volume(m).sum() < area * L
     assert _tri_area(m.points, m.free_tris) == pytest.approx((ext.s_hi - ext.s_lo) * L, rel=2e-4)
     # frame: n points into the rail (down at the crown), right-handed (x, s, n)
     F = surface_frame(rail, ext, 0.0, s0)
@@ -89,13 +121,11 @@ def test_wheel_sector_volume_and_meshio(tmp_path):
     patch = StripPatch.uniform(3, 1.0, 3, 1.0, s0)
     m = mesh_body(wheel, patch, MeshSpec(body_size=1.0))
     ext = m.extent
-    ss = np.linspace(ext.s_lo, ext.s_hi, 4001)
-    yzs = wheel.profile.point(ss)
-    r_out = yzs[:, 1] - wheel.axle_z
-    r_in = ext.z_bottom - wheel.axle_z
+    area, cen = _area_centroid(_section(wheel, ext))
     theta = ext.theta_hi - ext.theta_lo
-    vol = 0.5 * theta * _trapz(r_out ** 2 - r_in ** 2, yzs[:, 0])      # ring sector
-    assert _tet_volume(m).sum() == pytest.approx(vol, rel=2e-4)
+    vol = theta * area * (cen[1] - wheel.axle_z)                      # Pappus: ring sector
+    h = _arc_h(m)
+    assert _tet_volume(m).sum() == pytest.approx(vol, rel=0.25 * (h / ext.radius) ** 2)
     # the surface point at (x, s) lies on the mesh's free surface nodes' surface; n points out of the wheel
     P = surface_point(wheel, ext, 0.0, s0)
     assert P[2] == pytest.approx(float(wheel.profile.point(s0)[1]))
@@ -114,11 +144,47 @@ def test_body_extent_and_bad_input():
     rail = _rail()
     with pytest.raises(InputError, match="too short for the requested patch"):
         body_extent(rail, StripPatch.uniform(3, 1.0, 10, 1.0, 2.0), 1.0)
-    # a profile that turns back (not a graph over y) within the body
-    y = np.array([0.0, 1.0, 2.0, 1.5, 3.0, 4.0])
-    z = np.array([0.0, 0.0, 0.0, 1.0, 1.0, 1.0])
-    with pytest.raises(InputError, match="graph over y"):
-        body_extent(BodyModel("rail", Profile2D(y, z)), StripPatch.uniform(1, 0.2, 1, 0.2, 0.5), 20.0)
+    # a profile that turns back (not a graph over y) within the body is meshed like any other:
+    # the patch sits on the segment from (20, 0) back to (15, 10)
+    y = np.array([0.0, 10.0, 20.0, 15.0, 30.0, 40.0])
+    z = np.array([0.0, 0.0, 0.0, 10.0, 10.0, 10.0])
+    folded = BodyModel("rail", Profile2D(y, z))
+    patch = StripPatch.uniform(2, 1.0, 2, 1.0, 25.0)
+    m = mesh_body(folded, patch, MeshSpec(body_size=1.0))
+    ext = m.extent
+    assert not (ext.cut_lo or ext.cut_hi)
+    assert _tri_area(m.points, m.free_tris) == pytest.approx((ext.x_hi - ext.x_lo) * (ext.s_hi - ext.s_lo), rel=1e-9)
+    # a profile ending inside the disc: a straight cut along the inward normal closes the section
+    short = body_extent(BodyModel("block", flat_profile(-3, 20)), StripPatch.uniform(2, 1.0, 2, 1.0, 3.0), 2.0)
+    assert short.s_lo == 0.0 and short.cut_lo and not short.cut_hi
+    assert short.q_lo[0] == pytest.approx(-3.0) and short.q_lo[1] == pytest.approx(4.0)   # |q - c| = R = 5
+    # a profile end just inside the disc: the disc shrinks to it instead of a sliver cut
+    near = body_extent(BodyModel("block", flat_profile(-4.5, 20)), StripPatch.uniform(2, 1.0, 2, 1.0, 4.5), 2.0)
+    assert near.radius == pytest.approx(4.5) and not near.cut_lo
+    # a profile hooking back under the running surface: a cut from its end along the inward normal
+    # would cross the running surface, and one that does not would run nearly along it; the disc
+    # shrinks to the hook's end (0.9 mm from the patch centre) and leaves the hook out
+    hook = BodyModel("rail", _fine(Profile2D(np.array([0.0, -1.0, -1.0, 5.0, 20.0]), np.array([0.9, 0.9, 0.0, 0.0, 0.0]))))
+    m = mesh_body(hook, StripPatch.uniform(1, 0.5, 2, 0.5, 2.9), MeshSpec(body_size=1.0, h_patch=1.0))
+    ext = m.extent
+    assert ext.radius == pytest.approx(0.9) and not (ext.cut_lo or ext.cut_hi)
+    L = ext.x_hi - ext.x_lo
+    assert _tri_area(m.points, m.free_tris) == pytest.approx(L * (ext.s_hi - ext.s_lo), rel=1e-9)
+    area, _ = _area_centroid(_section(hook, ext))
+    assert _tet_volume(m).sum() == pytest.approx(area * L, rel=0.25 * (_arc_h(m) / ext.radius) ** 2)
+    # a gauge face turning past vertical (an undercut running back under the head): part of the
+    # body's surface, meshed along its arc length
+    under = _fine(Profile2D(np.array([-3.0, -5.0, 20.0]), np.array([6.0, 0.0, 0.0])))   # (-3, 6) up to (-5, 0)
+    gauge = BodyModel("rail", under)
+    sc = float(gauge.profile.project(np.array([-4.0, 0.0])))
+    m = mesh_body(gauge, StripPatch.uniform(2, 0.5, 4, 0.5, sc), MeshSpec(body_size=2.0, h_patch=1.0))
+    ext = m.extent
+    assert ext.s_lo < float(gauge.profile.project(np.array([-5.0, 0.0]))) - 3.0     # 3 mm of undercut inside
+    assert ext.q_lo[0] > -5.0                                            # ... which turns back under the head
+    L = ext.x_hi - ext.x_lo
+    assert _tri_area(m.points, m.free_tris) == pytest.approx(L * (ext.s_hi - ext.s_lo), rel=1e-9)
+    area, _ = _area_centroid(_section(gauge, ext))
+    assert _tet_volume(m).sum() == pytest.approx(area * L, rel=0.25 * (_arc_h(m) / ext.radius) ** 2)
     with pytest.raises(InputError, match="axle"):
         BodyModel("wheel", flat_profile(-1, 1), axle_z=5.0)
     with pytest.raises(InputError, match="kind"):

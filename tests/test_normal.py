@@ -42,7 +42,7 @@ def test_lattice_kernels_equal_the_closed_forms():
 
 def test_cattaneo_normal_case_matches_contact_and_hertz():
     """CONTACT's cattaneo case 1 (19 x 19, SCALE 19/15): FN 9.195, pmax 4.393, 177 contact
-    elements, approach 0.01998, elastic energy 7.35e-5 J (reference/contact_cases.md A1)."""
+    elements, approach 0.01998, elastic energy 7.35e-5 J (the CONTACT cases (tests/reference/contact_cases.json) A1)."""
     hz = hertz_from_semiaxes(1.0, 1.0, PE, normal_force=9.1954)
     g = PlanarGrid.around_ellipse(1.0, 1.0, mx=19, my=19, scale=19 / 15)
     X, Y = g.mesh()

@@ -13,6 +13,7 @@ from conformal.geometry.spline import fit_curve
 from conformal.geometry.surfaces import WheelFrame
 from conformal.geometry.wheelrail import wheelset_roll
 from conformal.scene import WheelRailGeometry
+from conftest import reference_cases
 
 REF = Path(__file__).resolve().parent / "reference" / "contact_cases.json"
 WHEEL = fit_curve(load_profile("S1002_MBENCH", "wheel").points, 1.0)
@@ -22,7 +23,7 @@ RAIL = fit_curve(load_profile("UIC60_MBENCH_1IN40", "rail").points, 1.0)
 def mbench():
     if not REF.is_file():
         pytest.skip("shared reference data not available")
-    return json.loads(REF.read_text())["cases"]["mbench_a22"]
+    return reference_cases()["mbench_a22"]
 
 
 def pair_for(side, y, yaw, roll):

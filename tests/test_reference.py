@@ -1,7 +1,6 @@
 """The analytic oracles (conformal.reference) against the numbers quoted in
-reference/contact_cases.md/.json (computed there from Johnson's and Kalker's formulas) and
+tests/reference/contact_cases.json (computed there from Johnson's and Kalker's formulas) and
 against their own integrals (the traction must integrate to the force)."""
-import json
 import math
 from pathlib import Path
 
@@ -10,8 +9,9 @@ import pytest
 from scipy import integrate
 
 from conformal import reference as ref
+from conftest import reference_cases
 
-CASES = json.loads((Path(__file__).parent / "reference" / "contact_cases.json").read_text())["cases"]
+CASES = reference_cases()
 
 
 def test_carter_against_the_reference_numbers():

@@ -12,10 +12,11 @@ from conformal.cli import main
 from conformal.errors import InputError, NoContactError
 from conformal.geometry.kinematics import WheelsetMotion, creepages
 from conformal.geometry.patches import find_patches, planar_distance
-from conformal.geometry.wheelrail import (curved_problems_from_wheel_rail, place_scene,
+from conformal.cases.wheelrail import (curved_problems_from_wheel_rail, place_scene,
                                           problems_from_wheel_rail, solve_wheel_rail, state_at)
 from conformal.scene import load_scene
 from conformal.solve import solve_scene
+from conftest import reference_cases
 
 ROOT = Path(__file__).resolve().parents[1]
 MBENCH = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"
@@ -126,7 +127,7 @@ def test_creepages_match_contact():
     the wheel surface point on the normal line was 1.4e-6 and 1.5e-5 off there)."""
     if not REF.is_file():
         pytest.skip("shared reference data not available")
-    ref = json.loads(REF.read_text())["cases"]["mbench_a22"]
+    ref = reference_cases()["mbench_a22"]
     for side in ("right", "left"):
         for k in (0, 1, 4, 10, 11, 16, 20):
             case = ref[side][k]

@@ -111,13 +111,11 @@ def write_csv(rows: list[dict], path: str | Path) -> None:
 
 
 def plot(rows: list[dict], path: str | Path, title: str = "") -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure      # no pyplot: no backend switch, nothing global
 
     y = np.array([r["shift"] for r in rows])
-    fig, ax = plt.subplots(1, 3, figsize=(14, 4.2))
+    fig = Figure(figsize=(14, 4.2))
+    ax = fig.subplots(1, 3)
     if "delta_r" in rows[0]:
         ax[0].plot(y, [r["delta_r"] for r in rows], "o-", ms=3)
         ax[0].set_ylabel("rolling-radius difference r_R - r_L [mm]")
@@ -146,4 +144,3 @@ def plot(rows: list[dict], path: str | Path, title: str = "") -> None:
     fig.tight_layout()
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
-    plt.close(fig)

@@ -1,48 +1,26 @@
-"""Wheel-rail scenes: from ``[geometry] kind = "wheel_rail"`` to contact problems and one result.
-
-Stages (seed: geometry, kinematic and dynamic stage):
+"""Wheel-rail geometry of a scene: profile curves, the pair of a side placed on the track, and the
+heights at which the wheels touch (no contact mechanics here; the wheel-rail cases that balance
+loads and solve contact problems are :mod:`conformal.cases.wheelrail`).
 
 1. profiles -> smoothing splines (``smoothing``), rail placed on the track (gauge, cant),
    wheelset placed (lateral shift, yaw, roll; the roll found so that both wheels touch when it
    is not given), see :mod:`conformal.geometry.placement`;
-2. the height at which the wheel of ``side`` first touches its rail (contact search, seed
-   Eqs. 54-56), then the height under load: ``[load] wheel_load`` (vertical, N) is balanced by the
-   vertical components of all patch forces (normal and tangential, as CONTACT's FZ(TR));
-   ``[load] approach`` lowers the wheelset by that many mm below the height where its first wheel
-   touches (a wheel that then still has a gap is lifted off: NoContactError);
-3. per patch a planar grid on the tangent plane with the undeformed distance of the true
-   profiles, Hertz curvatures, and creepages from the wheelset velocities (seed Eq. 61) when
-   ``[kinematics] speed`` is given (else the scene's xi, eta, phi for every patch).
-
-Forces are those on the rail (body 1, the normal points into the rail), CONTACT's module 1
-convention.  A left wheel is computed as a mirrored right wheel and reported in its own frame:
-y_rail > 0 towards the track centre, contact angle > 0 on the tread (as CONTACT prints).
+2. the height at which the wheel of ``side`` first touches its rail (contact search, the seed
+   paper's Eqs. 54-56).
 """
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
-import numpy as np
 from scipy.optimize import brentq
 
 from conformal.errors import ConvergenceError, InputError, NoContactError
-from conformal.geometry.kinematics import Creepages, WheelsetMotion, creepages
-from conformal.geometry.patches import Patch, curved_grid_for_patch, find_patches, planar_grid_for_patch
 from conformal.geometry.placement import WheelRailPair, make_pair
 from conformal.geometry.profiles import builtin_flange_back, load_profile
 from conformal.geometry.search import RailTop, touch_height
 from conformal.geometry.spline import ProfileCurve, fit_curve
-from conformal.grid import PlanarGrid
-from conformal.problem import ContactProblem
-from conformal.result import Result
-from conformal.scene import Scene, WheelRailGeometry
-from conformal.theories.hertz import hertz_from_curvatures
-
-GRID_THEORIES = ("exact", "conformal")   # theories whose normal problem is solved on the grid
-BALANCE_TOL = 1e-4                       # relative tolerance of the vertical force balance
+from conformal.scene import WheelRailGeometry
 
 
 # ----------------------------------------------------------------------------- set-up
@@ -78,18 +56,25 @@ def build_pair(geo: WheelRailGeometry, base_dir: str | Path = ".", *, side: str 
                      wheel_radius=geo.wheel_radius)
 
 
-def _touch(pair: WheelRailPair, top: RailTop | None = None) -> float:
+def _position_key(pair: WheelRailPair) -> str:
+    """The scene key to blame when no contact is found: the yaw when it is the larger cause."""
+    yaw = abs(pair.pose.yaw)
+    return "yaw" if yaw > 0.02 else "lateral_shift"
+
+
+def first_touch(pair: WheelRailPair, top: RailTop | None = None) -> float:
+    key = _position_key(pair)
     try:
         z, sr = touch_height(pair, top)
     except NoContactError as exc:
-        raise InputError(f"[geometry] lateral_shift: the {pair.side} wheel does not lie over its rail "
+        raise InputError(f"[geometry] {key}: the {pair.side} wheel does not lie over its rail "
                          f"at this position ({exc})") from None
     except (InputError, ConvergenceError) as exc:
-        raise InputError(f"[geometry] lateral_shift: no contact point for the {pair.side} wheel at this "
+        raise InputError(f"[geometry] {key}: no contact point for the {pair.side} wheel at this "
                          f"position ({exc})") from None
     c = sr.contacts[0]
     if c.at_end:
-        raise InputError(f"[geometry] lateral_shift: the {pair.side} wheel would touch the rail at the end "
+        raise InputError(f"[geometry] {key}: the {pair.side} wheel would touch the rail at the end "
                          f"of a profile (rail y = {float(pair.rail.to_own(c.rail_point[1:])[0]):.2f} mm, "
                          f"wheel y = {c.y_wheel:.2f} mm): the profiles do not cover this position")
     return z
@@ -100,8 +85,8 @@ def wheelset_roll(geo: WheelRailGeometry, base_dir: str | Path = ".", lateral_sh
     """Roll angle (rad, track frame) and height z at which both wheels of the wheelset touch their
     rails (rigid profiles, the given lateral shift and yaw)."""
     def f(roll):
-        zr = _touch(build_pair(geo, base_dir, side="right", roll=roll, lateral_shift=lateral_shift))
-        zl = _touch(build_pair(geo, base_dir, side="left", roll=roll, lateral_shift=lateral_shift))
+        zr = first_touch(build_pair(geo, base_dir, side="right", roll=roll, lateral_shift=lateral_shift))
+        zl = first_touch(build_pair(geo, base_dir, side="left", roll=roll, lateral_shift=lateral_shift))
         return zr - zl, zr
 
     arm = max(geo.flange_back / 2.0 + 70.0, 1.0)
@@ -118,410 +103,3 @@ def wheelset_roll(geo: WheelRailGeometry, base_dir: str | Path = ".", lateral_sh
         raise ConvergenceError("[geometry] roll: no roll angle makes both wheels touch their rails")
     roll = brentq(lambda r: f(r)[0], lo, hi, xtol=1e-12, rtol=1e-12)
     return float(roll), float(f(roll)[1])
-
-
-# ----------------------------------------------------------------------------- per height
-@dataclass(frozen=True, eq=False)
-class PatchGeometry:
-    """One patch at a wheelset height with its planar grid (side frame)."""
-
-    patch: Patch
-    grid: PlanarGrid
-    h: np.ndarray
-    approach: float
-    A: float
-    B: float
-    hertz_angle: float
-
-    @property
-    def hertzian(self) -> bool:
-        return self.A > 0 and self.B > 0
-
-
-@dataclass(frozen=True, eq=False)
-class PairState:
-    pair: WheelRailPair
-    z: float
-    roll: float                   # track frame
-    patches: list[PatchGeometry]
-    warnings: tuple[str, ...] = ()
-
-
-def _grid_options(scene: Scene) -> dict:
-    geo, g = scene.geometry, scene.grid
-    if g.explicit:
-        return dict(explicit=(g.mx, g.my, g.dx, g.dy, g.xl, g.yl))
-    return dict(element_size=geo.element_size, n=g.n, scale=g.scale)
-
-
-def state_at(pair: WheelRailPair, top: RailTop, z: float, roll: float, scene: Scene, *,
-             grids: bool = True) -> PairState:
-    """Patches of the wheel at height z; without ``grids`` only the patches and their overlap
-    (for Hertz-based balances, where the grid is not needed)."""
-    wheel = pair.wheel(z)
-    out = []
-    try:
-        patches = find_patches(wheel, pair.rail, top, d_comb=scene.geometry.patch_combine)
-    except InputError as exc:
-        raise InputError(f"[geometry] lateral_shift: {exc}") from None
-    for p in patches:
-        if grids:
-            grid, h, approach = planar_grid_for_patch(wheel, pair.rail, p, **_grid_options(scene))
-        else:
-            grid, h, approach = None, None, p.penetration
-        if approach <= 0:
-            continue
-        A, B, ang = p.deepest.principal()
-        out.append(PatchGeometry(p, grid, h, approach, A, B, ang))
-    if not out:
-        raise NoContactError("wheel lifted off: no grid element overlaps the rail")
-    return PairState(pair, z, roll, out)
-
-
-def _normal_force(pg: PatchGeometry, scene: Scene, warnings: list | None = None) -> float:
-    """Normal force of a patch at its approach: the grid's half-space normal problem for grid
-    theories, Hertz otherwise (the normal problem does not depend on friction for K = 0)."""
-    if scene.model.theory in GRID_THEORIES:
-        from conformal.solvers.normal import solve_normal
-
-        sol = solve_normal(None, pg.grid, pg.h, approach=pg.approach, material=scene.material,
-                           tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit)
-        if not sol.converged and warnings is not None:
-            warnings.append(f"vertical balance: the normal problem of the patch at contact angle "
-                            f"{pg.patch.delta:.3f} rad did not converge ({sol.iterations} iterations, "
-                            f"residual {sol.residual:.2g})")
-        return float(sol.FN)
-    if not pg.hertzian:
-        raise InputError(f"[model] theory: patch at contact angle {pg.patch.delta:.3f} rad is not Hertzian "
-                         f"(relative curvatures A = {pg.A:.3g}, B = {pg.B:.3g} 1/mm); use theory = \"exact\"")
-    return hertz_from_curvatures(pg.A, pg.B, scene.material, approach=pg.approach).FN
-
-
-# ----------------------------------------------------------------------------- placement of a scene
-@dataclass(frozen=True, eq=False)
-class Placement:
-    pair: WheelRailPair
-    top: RailTop
-    roll: float          # track frame
-    z_touch: float       # this wheel touches
-    z_first: float       # the first wheel of the wheelset touches
-
-
-def place_scene(scene: Scene) -> Placement:
-    geo = scene.geometry
-    if not isinstance(geo, WheelRailGeometry):
-        raise InputError("[geometry] kind: not a wheel_rail scene")
-    base = scene.base_dir
-    roll = geo.roll
-    z_other = None
-    if roll is None and geo.placement == "wheelset":
-        roll, z_both = wheelset_roll(geo, base)
-        z_other = z_both
-    roll = 0.0 if roll is None else roll
-    pair = build_pair(geo, base, roll=roll)
-    top = RailTop.of(pair.rail)
-    z_touch = _touch(pair, top)
-    z_first = z_touch
-    # the other wheel matters only where it sets the height: an approach below the first touch
-    if geo.placement == "wheelset" and scene.load.approach is not None:
-        if z_other is None:
-            other = build_pair(geo, base, side="left" if pair.side == "right" else "right", roll=roll)
-            z_other = _touch(other)
-        z_first = min(z_touch, z_other)
-    return Placement(pair, top, roll, z_touch, z_first)
-
-
-def balance_height(pl: Placement, scene: Scene, ratios=None) -> tuple[float, PairState, list[float]]:
-    """Height z at which sum_i FN_i (cos d_i + r_i sin d_i) = wheel_load, with r_i = FS_i/FN_i
-    (side frame) the tangential-to-normal ratios of the patches (0: normal forces only)."""
-    W = scene.load.wheel_load
-    cache: dict[float, tuple[PairState, list[float]]] = {}
-    warnings: list[str] = []
-    on_grid = scene.model.theory in GRID_THEORIES
-
-    def fz(z):
-        if z not in cache:
-            try:
-                st = state_at(pl.pair, pl.top, z, pl.roll, scene, grids=on_grid) if z > pl.z_touch else None
-            except NoContactError:      # just above the touching height no element overlaps yet
-                st = None
-            fns = [_normal_force(pg, scene, warnings) for pg in st.patches] if st else []
-            cache[z] = (st, fns)
-        st, fns = cache[z]
-        if st is None:
-            return -W
-        total = 0.0
-        for k, (pg, fn) in enumerate(zip(st.patches, fns)):
-            r = _ratio(ratios, pg)
-            d = pg.patch.delta
-            total += fn * (math.cos(d) + r * math.sin(d))
-        return total - W
-
-    # first guess: Hertz-like growth FZ ~ dz^1.5 from a small trial lowering (doubled until the
-    # overlap covers a grid element)
-    trial = 0.01
-    for _ in range(12):
-        f1 = fz(pl.z_touch + trial) + W
-        if f1 > 0:
-            break
-        trial *= 2.0
-    else:
-        raise ConvergenceError("[load] wheel_load: the vertical force does not grow when the wheel is lowered")
-    dz = trial * (W / f1) ** (2.0 / 3.0)
-    hi = pl.z_touch + 1.2 * dz
-    for _ in range(30):
-        if fz(hi) > 0:
-            break
-        hi = pl.z_touch + 2.0 * (hi - pl.z_touch)
-    else:
-        raise ConvergenceError("wheel_load: could not bracket the wheelset height")
-    lo = max((z for z in cache if z > pl.z_touch and fz(z) < 0), default=pl.z_touch)
-    z = brentq(fz, lo, hi, xtol=1e-9, rtol=1e-12, maxiter=100)
-    del warnings[:]
-    cache.pop(z, None)
-    fz(z)
-    st, fns = cache[z]
-    if not on_grid:
-        st = state_at(pl.pair, pl.top, z, pl.roll, scene)
-        if len(st.patches) != len(fns):
-            raise ConvergenceError("vertical balance: the patches on the grid differ from those of the overlap")
-    return z, replace(st, warnings=tuple(warnings)), fns
-
-
-def _ratio(ratios, pg: PatchGeometry) -> float:
-    """Tangential-to-normal ratio of the nearest patch of a previous solve (by rail position)."""
-    if not ratios:
-        return 0.0
-    s = pg.patch.s_ref
-    best = min(ratios, key=lambda item: abs(item[0] - s))
-    return best[1] if abs(best[0] - s) < 5.0 else 0.0
-
-
-# ----------------------------------------------------------------------------- problems
-def _mirror_grid(grid: PlanarGrid, h: np.ndarray, side: str) -> tuple[PlanarGrid, np.ndarray]:
-    if side == "right":
-        return grid, h
-    g = PlanarGrid(grid.mx, grid.my, grid.dx, grid.dy, grid.xl, -(grid.yl + grid.my * grid.dy))
-    return g, h[:, ::-1].copy()
-
-
-def _kinematics_for(scene: Scene, pair: WheelRailPair, z: float, patch: Patch):
-    """The patch's Kinematics (real frame) and the creepages (or None when given directly)."""
-    k = scene.kinematics
-    if k.speed is None:
-        return k, None
-    geo = scene.geometry
-    pitch = k.pitch_velocity if k.pitch_velocity is not None else -k.speed / geo.wheel_radius
-    motion = WheelsetMotion(k.speed, pitch, k.yaw_rate, k.roll_rate, k.lateral_velocity).mirrored(pair.side)
-    # the wheel material point: the reference point in the just-touching wheel (CONTACT's convention)
-    c = creepages(pair.frame(z), motion, patch.creep_point, patch.normal)
-    m = pair.mirror
-    kin = replace(k, xi=float(c.xi), eta=float(m * c.eta), phi=float(m * c.phi), velocity=float(c.velocity))
-    return kin, c
-
-
-def patch_info(pair: WheelRailPair, st: PairState, pg: PatchGeometry, index: int) -> dict:
-    """Positions and geometry of a patch in CONTACT's printed conventions (see module docstring)."""
-    p, m = pg.patch, pair.mirror
-    own = pair.rail.to_own(p.point[1:])
-    wheel = pair.wheel(st.z)
-    y_w, z_w = (float(v) for v in wheel.curve.point(p.wheel_s))
-    return {
-        "patch": index,
-        "side": pair.side,
-        "contact_angle": m * p.delta,
-        "y_rail": float(m * own[0]),
-        "z_rail": float(own[1]),
-        "x_track": float(p.x_ref),
-        "y_track": float(m * p.point[1]),
-        "z_track": float(p.point[2]),
-        "y_wheel": m * y_w,
-        "z_wheel": z_w,
-        "rolling_radius": float(wheel.rolling_radius(p.wheel_s)),
-        "penetration": pg.approach,
-        "n_lobes": p.n_lobes,
-        "curvature_A": pg.A,
-        "curvature_B": pg.B,
-        "hertz_angle": m * pg.hertz_angle,
-        "z_ws": st.z,
-        "roll": st.roll,
-    }
-
-
-def _problem(scene: Scene, pair: WheelRailPair, st: PairState, pg: PatchGeometry, index: int, *,
-             normal_force: float | None = None, approach: float | None = None) -> ContactProblem:
-    grid, h = _mirror_grid(pg.grid, pg.h, pair.side)
-    kin, c = _kinematics_for(scene, pair, st.z, pg.patch)
-    hz = None
-    if pg.hertzian:
-        hz = hertz_from_curvatures(pg.A, pg.B, scene.material, normal_force=normal_force,
-                                   approach=None if normal_force is not None else approach)
-    info = patch_info(pair, st, pg, index)
-    if c is not None:
-        info.update(rolling_velocity=float(c.velocity))
-    if hz is not None:
-        info.update(hertz_a=hz.a, hertz_b=hz.b, hertz_pmax=hz.pmax)
-    if st.warnings:
-        info.update(balance_warnings=list(st.warnings))
-    return ContactProblem(material=scene.material, friction=scene.friction, kinematics=kin, model=scene.model,
-                          normal_force=normal_force, approach=None if normal_force is not None else approach,
-                          hertz=hz, grid=grid, h=h, label=f"{scene.name}:{pair.side}:{index}", info=info)
-
-
-def problems_at(scene: Scene, pl: Placement, st: PairState, fns: list[float] | None) -> list[ContactProblem]:
-    out = []
-    for i, pg in enumerate(st.patches):
-        if fns is not None:
-            out.append(_problem(scene, pl.pair, st, pg, i, normal_force=fns[i]))
-        else:
-            out.append(_problem(scene, pl.pair, st, pg, i, approach=pg.approach))
-    return out
-
-
-def problems_from_wheel_rail(scene: Scene) -> list[ContactProblem]:
-    """One planar ContactProblem per contact patch of the scene's wheel.
-
-    With ``[load] wheel_load`` the normal forces balance the vertical load with normal forces only
-    (Hertz, or the half-space normal problem for grid theories); :func:`solve_wheel_rail` adds the
-    vertical components of the tangential forces.  With ``[load] approach`` each patch gets its own
-    approach (the overlap at that wheelset height)."""
-    pl = place_scene(scene)
-    if scene.load.wheel_load is not None:
-        z, st, fns = balance_height(pl, scene)
-        return problems_at(scene, pl, st, fns)
-    if scene.load.approach is None:
-        raise InputError("[load] wheel_load: a wheel_rail scene needs wheel_load (N) or approach (mm)")
-    st = state_at(pl.pair, pl.top, pl.z_first + scene.load.approach, pl.roll, scene)
-    return problems_at(scene, pl, st, None)
-
-
-# ----------------------------------------------------------------------------- solving
-def track_forces(result: Result, delta: float) -> np.ndarray:
-    """(FX, FY, FZ) on the rail in the track frame of a patch result (real frame, delta = its
-    contact angle): F = FN n + FX t1 + FY t2, n = (0, -sin d, cos d), t2 = (0, cos d, sin d)."""
-    c, s = math.cos(delta), math.sin(delta)
-    return np.array([result.FX, -result.FN * s + result.FY * c, result.FN * c + result.FY * s])
-
-
-def _with_patch_extra(r: Result, problem: ContactProblem) -> Result:
-    F = track_forces(r, problem.info["contact_angle"])
-    extra = dict(r.extra)
-    extra.update(problem.info)
-    extra.update(FX_track=float(F[0]), FY_track=float(F[1]), FZ_track=float(F[2]),
-                 xi_patch=problem.kinematics.xi, eta_patch=problem.kinematics.eta,
-                 phi_patch=problem.kinematics.phi)
-    return replace(r, extra=extra)
-
-
-def combine_patches(results: list[Result], problems: list[ContactProblem], theory: str, extra: dict) -> Result:
-    """One Result for a wheel: FN, FX, FY, MZ the sums of the patch values (contact frames), the
-    track-frame forces on the rail FX_track, FY_track, FZ_track in ``extra``; ``patches`` lists every
-    patch with its contact_angle and y_rail."""
-    patches = [_with_patch_extra(r, p) for r, p in zip(results, problems)]
-    main = max(patches, key=lambda r: r.FN)
-    F = sum(track_forces(r, p.info["contact_angle"]) for r, p in zip(results, problems))
-    ext = dict(extra)
-    ext.update(FX_track=float(F[0]), FY_track=float(F[1]), FZ_track=float(F[2]), n_patches=len(patches),
-               contact_angle=main.extra["contact_angle"], y_rail=main.extra["y_rail"])
-    return Result(theory=theory, FN=sum(r.FN for r in patches), FX=sum(r.FX for r in patches),
-                  FY=sum(r.FY for r in patches), MZ=sum(r.MZ for r in patches), a=main.a, b=main.b,
-                  pmax=max(r.pmax for r in patches), approach=main.approach, xi=main.xi, eta=main.eta,
-                  phi=main.phi, converged=all(r.converged for r in patches),
-                  wall_s=sum(r.wall_s for r in patches), iterations=None, residual=None,
-                  patches=tuple(patches), extra=ext)
-
-
-def _geometry_extra(scene: Scene, pl: Placement) -> dict:
-    w, r = profile_curves(scene.geometry, scene.base_dir)
-    return {"roll": pl.roll, "side": pl.pair.side, "smoothing_error_wheel": w.smoothing_error,
-            "smoothing_error_rail": r.smoothing_error}
-
-
-def solve_wheel_rail(scene: Scene, *, max_outer: int = 8) -> Result:
-    """Solve a wheel-rail scene with its model: patches, vertical balance including the tangential
-    forces (iterated), and the combined result with track-frame totals."""
-    from conformal.solve import solve_problem
-
-    if scene.model.theory == "conformal":   # one curved grid per wheel (conformal.solvers.conformal)
-        from conformal.solvers.conformal import solve_wheel_rail_conformal
-
-        return solve_wheel_rail_conformal(scene)
-    pl = place_scene(scene)
-    theory = scene.model.theory
-    geo_extra = _geometry_extra(scene, pl)
-    if scene.load.wheel_load is None:
-        if scene.load.approach is None:
-            raise InputError("[load] wheel_load: a wheel_rail scene needs wheel_load (N) or approach (mm)")
-        st = state_at(pl.pair, pl.top, pl.z_first + scene.load.approach, pl.roll, scene)
-        problems = problems_at(scene, pl, st, None)
-        results = [solve_problem(p) for p in problems]
-        return combine_patches(results, problems, theory, {"z_ws": st.z, **geo_extra})
-    W = scene.load.wheel_load
-    ratios = None
-    history = []
-    for outer in range(1, max_outer + 1):
-        z, st, fns = balance_height(pl, scene, ratios)
-        problems = problems_at(scene, pl, st, fns)
-        results = [solve_problem(p) for p in problems]
-        FZ = sum(track_forces(r, p.info["contact_angle"])[2] for r, p in zip(results, problems))
-        history.append({"z_ws": z, "FZ_track": float(FZ)})
-        if abs(FZ - W) <= BALANCE_TOL * W:
-            break
-        # side-frame ratio FS/FN (mirroring flips both FS and the angle: the product is invariant)
-        ratios = [(pg.patch.s_ref, pl.pair.mirror * r.FY / r.FN if r.FN > 0 else 0.0)
-                  for pg, r in zip(st.patches, results)]
-    else:
-        raise ConvergenceError(f"[load] wheel_load: the vertical balance did not converge in {max_outer} "
-                               f"iterations (FZ = {FZ:.1f} N for {W:g} N)")
-    extra = {"z_ws": z, **geo_extra, "wheel_load": W, "balance_iterations": len(history)}
-    if st.warnings:
-        extra["warnings"] = list(st.warnings)
-    out = combine_patches(results, problems, theory, extra)
-    return replace(out, converged=out.converged and not st.warnings)
-
-
-def curved_creepages(pair: WheelRailPair, z: float, motion: WheelsetMotion, grid, patch: Patch) -> Creepages:
-    """Creepages along the profile of a curved grid (one value per element column js, real frame):
-    the spin phi(s) = (omega_r - omega_w) . n(s) / V follows the contact angle delta(s) across the
-    patch (seed Eq. 61 at every element centre).
-
-    The wheel material point of column s is the rule of :attr:`Patch.creep_point` (CONTACT's)
-    applied per column: the rail point R(s) moved by the patch's penetration along the local
-    normal n(s), i.e. the point that lies on the rail in the just-touching wheel; the conformal
-    solver's own just-touching gap is h(s) - approach along the same normals.  At the reference
-    column this is the planar path's point, so both give the same creepages there.  (The wheel
-    surface point on the local normal, used before, sits at the local overlap instead: an offset
-    of (penetration - overlap(s)) |omega| / V in the creepages, 1e-5 .. 1e-4.)"""
-    wheel = pair.wheel(z)
-    side_yz = np.c_[grid.y, grid.z] @ pair.rail.rotation.T + np.asarray(pair.rail.origin)
-    n_side = grid.normal @ pair.rail.rotation.T
-    R = np.c_[np.full(grid.ms, patch.x_ref), side_yz]
-    nrm = np.c_[np.zeros(grid.ms), n_side]
-    c = creepages(wheel.frame, motion.mirrored(pair.side), R + patch.penetration * nrm, nrm)
-    m = pair.mirror
-    return Creepages(xi=c.xi, eta=m * c.eta, phi=m * c.phi, velocity=c.velocity)
-
-
-def curved_problems_from_wheel_rail(scene: Scene):
-    """Curved-grid versions of the patches: a list of (CurvedGrid, h, approach, info) per patch at the
-    height found by :func:`problems_from_wheel_rail`'s normal balance (for the conformal theory).
-    With ``[kinematics] speed`` the info holds the creepages per element column (xi_s, eta_s, phi_s)."""
-    pl = place_scene(scene)
-    if scene.load.wheel_load is not None:
-        z, st, _ = balance_height(pl, scene)
-    else:
-        st = state_at(pl.pair, pl.top, pl.z_first + scene.load.approach, pl.roll, scene)
-    wheel = pl.pair.wheel(st.z)
-    out = []
-    geo, g, k = scene.geometry, scene.grid, scene.kinematics
-    for i, pg in enumerate(st.patches):
-        grid, h, approach = curved_grid_for_patch(wheel, pl.pair.rail, pg.patch, element_size=geo.element_size,
-                                                  n=g.n, scale=g.scale, side=pl.pair.side)
-        info = patch_info(pl.pair, st, pg, i)
-        if k.speed is not None:
-            pitch = k.pitch_velocity if k.pitch_velocity is not None else -k.speed / geo.wheel_radius
-            motion = WheelsetMotion(k.speed, pitch, k.yaw_rate, k.roll_rate, k.lateral_velocity)
-            c = curved_creepages(pl.pair, st.z, motion, grid, pg.patch)
-            info.update(xi_s=c.xi, eta_s=c.eta, phi_s=c.phi, rolling_velocity_s=c.velocity)
-        out.append((grid, h, approach, info))
-    return out

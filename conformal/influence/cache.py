@@ -1,4 +1,4 @@
-"""Cache of FE influence numbers: NPZ files keyed by a hash of every input (DESIGN.md §6).
+"""Cache of FE influence numbers: NPZ files keyed by a hash of every input (written atomically, verified on load).
 
 The key is the SHA-256 of a canonical JSON text of everything that changes the numbers (profile
 arrays, placement, grid, mesh parameters, material, element order, method, and the influence

@@ -3,7 +3,7 @@ numerical influence coefficients.
 
 CONTACT (Vollebregt) can read influence numbers computed elsewhere (user guide, appendix
 "Specification of the file of numerical influence coefficients").  Its layout is the x-invariant
-kernel of a curved strip, (2mx-1, ms, ms, 3, 3) (DESIGN.md §4), which is the layout of
+kernel of a curved strip, (2mx-1, ms, ms, 3, 3) (invariant along x), which is the layout of
 :class:`~conformal.influence.curved.CurvedInfluence`.  The guide was not available here, so the
 exact CONTACT column order, header keywords and units line could NOT be verified: this module
 writes a documented, self-describing text format with that layout, reads it back exactly

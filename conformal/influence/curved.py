@@ -1,7 +1,7 @@
 """Influence numbers on a curved potential contact grid, invariant along the rolling direction.
 
 The rail is an extrusion and the wheel (nearly) a body of revolution, so along the rolling
-direction x the influence numbers depend only on the offset ix - jx (DESIGN.md §4).  They are
+direction x the influence numbers depend only on the offset ix - jx (a rail is an extrusion, a wheel a body of revolution).  They are
 stored as a kernel ``K[kx, I, J, i, j]`` of shape (2 mx - 1, ms, ms, 3, 3):
 
     u_i(ix, I) = sum_jx sum_J sum_j K[ix - jx, I, J, i, j] p_j(jx, J)

@@ -32,19 +32,45 @@ Two methods (``method``):
 ``"split"`` (default)
     The displacement is split as u = u_hs + u_c (in the spirit of Li's decomposition): u_hs is
     the analytic 3-D field of a half-space loaded on the tangent rectangle of the loaded element
-    (conformal.influence.fe_halfspace3d), u_c an FE correction whose clamped faces carry -u_hs
-    and whose free surface carries the residual traction p - sigma(u_hs) n: zero on a flat
-    surface, a curvature term of relative size d/R on a curved one.  The singular near field is
-    exact and the mesh only carries the smooth correction, so P1 on a coarse mesh suffices (flat
-    limit: the error is the truncation of the body, 0.2 % after the offset at body size 1).  On a
-    curved surface the mesh must conform to the loaded column (``conform = "column"``): the
+    (conformal.influence.fe_halfspace3d), u_c an FE correction that vanishes on the artificial
+    boundaries (see "Far field") and whose free surface carries the residual traction
+    p - sigma(u_hs) n: zero on a flat surface, a curvature term of relative size d/R on a curved
+    one.  The singular near field is exact and the mesh only carries the smooth correction, so P1
+    on a coarse mesh suffices (flat limit: exact).  On a curved surface the mesh must conform to the loaded column (``conform = "column"``): the
     half-space traction of the flat rectangle turns from p to 0 in a layer as thin as the depth
     of the surface below the tangent plane (d^2/8R), and quadrature points must not fall into it.
     Points above the tangent plane (a concave surface) are evaluated at depth 0+.
 
+Far field (``far_field``): the bodies are quasi-quarter spaces, large compared with the contact,
+but the FE model is finite (a disc of ``fe_body_size`` patch sizes around the patch in the
+cross-section, the same margin along x; conformal.meshing.bodies).  What the artificial
+boundaries carry decides whether the truncated body behaves like the large one:
+
+``"halfspace"`` (default)
+    The displacement on the artificial boundaries is the half-space field of the load, i.e. the
+    body continues beyond them as the half-space tangent to the loaded element.  In the split
+    method the correction u_c is then zero there: a flat block gives the half-space numbers
+    exactly (its correction has neither load nor boundary value), and on a curved body u_c
+    carries only the effect of the real surface inside the disc, which converges as the disc
+    grows.  Measured at a prescribed approach (studies/fe_body_size.py): a crowned wheel on a flat
+    rail gives Hertz's FN within 0.1 % at every body size from 0.5 to 4.
+``"clamped"``
+    Zero displacement (the earlier default).  Every number then carries a negative truncation
+    offset of about 1/size of the self term; summed over the hundreds of elements in contact it
+    made the bodies 20-45 % too stiff at a prescribed approach (crowned wheel: FN +44 % at size
+    0.5, +25 % at 1, +7.5 % at 4).  Kept for comparison.
+
+Why not a graded or infinite-element body: a clamped body large enough for 1 % in FN at a
+prescribed approach would need a margin of about 30 patch sizes (the offset decays like 1/size);
+infinite elements need their own decay law.  The half-space field is exact for the flat limit, is
+already evaluated in closed form for the split method (conformal.influence.fe_halfspace3d), and
+costs nothing extra.  Its limit: beyond the disc the body is taken as the tangent half-space of
+the loaded element, so curvature farther than ``fe_body_size`` patch sizes away is not seen; the
+body-size study shows how little that changes the contact.
+
 Defaults (MeshSpec): split, P1, h = 2 d on the observed patch, d/2 at the loaded column, growth
-0.35, body margin 1 x the patch size, pypardiso; chosen from the study's Pareto front (flat 0.2 %,
-R13 gauge corner 0.6 % against P2, 51 x 39 wheel + rail in about 20 s here).
+0.35, body margin 1 x the patch size, scipy splu or pypardiso; chosen from the study's Pareto
+front (studies/fe_influence_speed_error.py).
 
 Influence numbers are cached by conformal.influence.cache; bump ``FE_VERSION`` whenever a change
 here changes the numbers.
@@ -64,11 +90,12 @@ from conformal.influence.fe_halfspace3d import _gauss_rectangle_stress, rectangl
 from conformal.meshing.bodies import BodyModel, StripPatch
 from conformal.meshing.gmsh_body import BodyMesh, MeshSpec, mesh_body, surface_frame, surface_point
 
-FE_VERSION = "2"   # 2: free surface no longer loses faces to the clamped ones on worn profiles
+FE_VERSION = "3"   # 3: half-space far field on the artificial boundaries (was: clamped)
 SPLU_ORDERING = "COLAMD"
 METHODS = ("split", "direct")
 SOLVERS = ("auto", "pardiso", "splu", "amg")
 COLLOCATIONS = ("centre", "average")
+FAR_FIELDS = ("halfspace", "clamped")
 
 
 class FESolveError(ConformalError):
@@ -83,6 +110,7 @@ class FESettings:
     mesh: MeshSpec = MeshSpec()
     solver: str = "auto"
     collocation: str = "centre"
+    far_field: str = "halfspace"
     n_average: int = 6          # Gauss points per direction for "average" collocation
     max_dofs: int = 1_500_000
     amg_tol: float = 1e-10
@@ -95,6 +123,9 @@ class FESettings:
         if self.collocation not in COLLOCATIONS:
             raise InputError(f"[model] fe_collocation: must be one of {', '.join(COLLOCATIONS)}, "
                              f"got {self.collocation!r}")
+        if self.far_field not in FAR_FIELDS:
+            raise InputError(f"[model] fe_far_field: must be one of {', '.join(FAR_FIELDS)}, "
+                             f"got {self.far_field!r}")
         if self.method == "direct" and self.mesh.conform == "none":
             raise InputError("[model] fe_conform: the direct method needs a mesh that conforms to the "
                              "loaded elements (\"column\" or \"all\")")
@@ -102,6 +133,7 @@ class FESettings:
     def key(self) -> dict:
         """Settings that change the numbers (the solver choice does not, beyond round-off)."""
         return {"method": self.method, "mesh": self.mesh.key(), "collocation": self.collocation,
+                "far_field": self.far_field,
                 "n_average": self.n_average if self.collocation == "average" else None,
                 "amg_tol": self.amg_tol if self.solver == "amg" else None}
 
@@ -601,28 +633,31 @@ def body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
     ms, nl = patch.ms, 3 * patch.ms
     dx = patch.dx
 
-    # right-hand sides (n_scalar x loads per component) and Dirichlet values
+    # right-hand sides (n_scalar x loads per component) and Dirichlet values on the artificial
+    # boundaries: the total field there is the half-space field u_hs ("halfspace") or zero
+    # ("clamped"); the split method solves for u - u_hs, the direct method for u itself
     Fc = np.zeros((3, space.n_scalar, nl))
     UD = np.zeros((D.size, nl))
-    if settings.method == "direct":
+    flat = _flat(body)
+    hs_on_boundary = (settings.method == "direct") == (settings.far_field == "halfspace")
+    if hs_on_boundary:
+        Xd = space.basis.doflocs.T[D]                 # (nD, 3) positions of the boundary dofs
+        comp = np.zeros(D.size, dtype=int)
+        for c in range(3):
+            comp[np.isin(D, space.dofmap[c])] = c
+        sign = 1.0 if settings.method == "direct" else -1.0
         for J in range(ms):
+            UD[:, 3 * J:3 * J + 3] = sign * _hs_displacement(loads, Xd, dx, G, nu, J)[np.arange(D.size), comp]
+    for J in range(ms):
+        if settings.method == "direct":
             T = np.zeros((surf.uv.shape[0], 3, 3))
             T[loads.in_column(surf.uv, dx, J, patch.edges)] = loads.frames[J].T   # unit traction p_j
             for c in range(3):
                 Fc[c, :, 3 * J:3 * J + 3] = surf.P6 @ T[:, c, :]
-    else:
-        flat = _flat(body)
-        Xd = space.basis.doflocs.T[D]                 # (nD, 3) positions of the clamped dofs
-        comp = np.zeros(D.size, dtype=int)
-        for c in range(3):
-            comp[np.isin(D, space.dofmap[c])] = c
-        for J in range(ms):
-            UD[:, 3 * J:3 * J + 3] = -_hs_displacement(loads, Xd, dx, G, nu, J)[np.arange(D.size), comp]
-            if flat:
-                continue                              # sigma(u_hs) n = p on a flat surface: no residual
+        elif not flat:                                # sigma(u_hs) n = p on a flat surface: no residual
             Fc[:, :, 3 * J:3 * J + 3] = _residual_load(loads, surf, space, patch, G, nu, J)
-            if progress:
-                progress(J + 1, ms)
+        if progress:
+            progress(J + 1, ms)
     F = np.zeros((ndofs, nl))
     for c in range(3):
         F[space.dofmap[c]] = Fc[c]
@@ -647,9 +682,12 @@ def body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
             comp_all[space.dofmap[c]] = c
         near_null = _rigid_modes(space.basis.doflocs.T[free], comp_all[free])
     try:
-        fac = _Factor(Kff, solver, settings.amg_tol, near_null)
-        t_fac = time.perf_counter()
-        Uf = fac.solve(rhs)
+        if not rhs.any():   # split method, flat body, half-space far field: the correction is zero
+            Uf, iterations, t_fac = np.zeros_like(rhs), 0, time.perf_counter()
+        else:
+            fac = _Factor(Kff, solver, settings.amg_tol, near_null)
+            t_fac = time.perf_counter()
+            Uf, iterations = fac.solve(rhs), fac.iterations
     except MemoryError:
         raise FESolveError(f"out of memory in the {solver} solve ({ndofs} unknowns); coarsen the mesh "
                            "([model] fe_h_patch, fe_growth) or use fe_solver = \"amg\"") from None
@@ -688,7 +726,7 @@ def body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
     stats.update({"method": settings.method, "order": order, "solver": solver,
                   "mesh_s": t_mesh - t0, "assemble_s": t_asm - t_mesh, "rhs_s": t_rhs - t_asm,
                   "factor_s": t_fac - t_rhs, "solve_s": t_solve - t_fac, "observe_s": t_obs - t_solve,
-                  "total_s": t_obs - t0, "peak_rss_gib": _peak_rss_gib(), "amg_iterations": fac.iterations})
+                  "total_s": t_obs - t0, "peak_rss_gib": _peak_rss_gib(), "amg_iterations": iterations})
     return BodyInfluence(kernel, body.kind, patch, G, nu, settings, stats)
 
 
@@ -830,41 +868,17 @@ def wheel_rail_kernel(grid, material, settings: FESettings = FESettings(), *, ca
     return kernel, {"rail": kr.stats, "wheel": kw.stats}
 
 
-def scene_profiles(scene) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """Whole rail and wheel profiles (points, 0.1 mm apart) of a wheel-rail scene, so that the FE
-    bodies get room beyond the grid's local curves; (None, None) if they cannot be had."""
-    try:
-        from conformal.geometry.wheelrail import profile_curves
-
-        wc, rc = profile_curves(scene.geometry, scene.base_dir)
-        return rc.sample(0.1)[1], wc.sample(0.1)[1]
-    except (ImportError, AttributeError, TypeError):
-        return None, None
-
-
-def influence_for_grid(scene, grid, *, cache=None):
-    """The FE influence operator (CurvedInfluence) of a wheel-rail scene's curved grid, with the
-    scene's [model] fe_* settings, through the cache (``conformal precompute`` fills the same
-    entries).  Returns (operator, info)."""
-    from conformal.influence.curved import CurvedInfluence
-
-    rail_pts, wheel_pts = scene_profiles(scene)
-    geo = scene.geometry
-    kernel, info = wheel_rail_kernel(grid, scene.material, settings_from_options(scene.model.options),
-                                     cache=cache, rail_points=rail_pts, wheel_points=wheel_pts,
-                                     names=(str(geo.rail_profile), str(geo.wheel_profile)))
-    return CurvedInfluence.from_kernel(kernel), info
-
-
 # ----------------------------------------------------------------------------- settings
 _OPTION_KEYS = {"fe_method": "method", "fe_order": "order", "fe_h_patch": "h_patch", "fe_h_load": "h_load",
                 "fe_growth": "growth", "fe_h_max": "h_max", "fe_conform": "conform",
-                "fe_body_size": "body_size", "fe_solver": "solver", "fe_collocation": "collocation"}
+                "fe_body_size": "body_size", "fe_solver": "solver", "fe_collocation": "collocation",
+                "fe_far_field": "far_field"}
 
 
 def settings_from_options(options) -> FESettings:
     """FESettings from a scene's [model] keys fe_method, fe_order, fe_h_patch, fe_h_load, fe_growth,
-    fe_h_max, fe_conform, fe_body_size, fe_solver, fe_collocation (defaults for missing keys)."""
+    fe_h_max, fe_conform, fe_body_size, fe_solver, fe_collocation, fe_far_field (defaults for
+    missing keys)."""
     opts = {k: v for k, v in dict(options or {}).items() if str(k).startswith("fe_")}
     unknown = sorted(set(opts) - set(_OPTION_KEYS))
     if unknown:
@@ -872,7 +886,7 @@ def settings_from_options(options) -> FESettings:
     mesh_kw, top_kw = {}, {}
     for k, v in opts.items():
         name = _OPTION_KEYS[k]
-        if name in ("method", "solver", "collocation", "conform"):
+        if name in ("method", "solver", "collocation", "conform", "far_field"):
             if not isinstance(v, str):
                 raise InputError(f"[model] {k}: must be a string, got {v!r}")
         elif name == "order":
@@ -880,5 +894,5 @@ def settings_from_options(options) -> FESettings:
                 raise InputError(f"[model] {k}: must be 1 or 2, got {v!r}")
         elif isinstance(v, bool) or not isinstance(v, (int, float)):
             raise InputError(f"[model] {k}: must be a number, got {v!r}")
-        (top_kw if name in ("method", "solver", "collocation") else mesh_kw)[name] = v
+        (top_kw if name in ("method", "solver", "collocation", "far_field") else mesh_kw)[name] = v
     return FESettings(mesh=replace(MeshSpec(), **mesh_kw), **top_kw)

@@ -4,7 +4,7 @@
 from the centre of a dx x dy rectangle loaded by a unit uniform traction p_j on body 1.
 Components are ordered (x, y, z) = (0, 1, 2), z = n pointing into body 1.  Displacements are
 collocated at element centres (CONTACT's convention), which makes the grid matrix symmetric
-(reciprocity A_ij(x, y) = A_ji(-x, -y)).  Closed forms: ../shared/reference/halfspace_influence.md.
+(reciprocity A_ij(x, y) = A_ji(-x, -y)).  Closed forms: Love (1929) for the pressure, Kalker (1990, ch. 1) for the shear loads.
 
 On a uniform grid the numbers depend only on the index offset (block Toeplitz), so products are
 zero-padded FFT convolutions (DC-FFT, Liu, Wang & Liu 2000): O(N log N), no N x N matrix.

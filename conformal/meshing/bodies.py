@@ -3,25 +3,30 @@
 A body is a cross-section swept along the rolling direction x: extruded (rail, flat block) or
 revolved about the axle (wheel ring sector).  Everything is written in the common contact frame
 of the patch: x rolling, y lateral, z DOWN (into the rail, body 1).  The rail's and the block's
-material lies below their surface curve (larger z), the wheel's above it (smaller z).
+material lies on the +n side of their surface curve, the wheel's on the other side; the curve is
+parametrised by its arc length s, so it may be any simple curve (grooves, a gauge face turning
+past vertical, a flange flank at any angle).
 
 The contact grid the body must carry is a :class:`StripPatch`: ``mx`` elements of length ``dx``
 along x and ``ms`` elements along the arc length s of this body's profile, between the edges
-``s_edges``.  By the invariance along x (DESIGN.md §4) only ONE column of elements is loaded, the
-one centred on x = 0; the displacements are observed on the 2 mx - 1 columns around it, which
-gives every offset ix - jx of the (2mx-1, ms, ms, 3, 3) kernel.
+``s_edges``.  By the invariance along x only ONE column of elements is loaded, the one centred
+on x = 0; the displacements are observed on the 2 mx - 1 columns around it, which gives every
+offset ix - jx of the (2mx-1, ms, ms, 3, 3) kernel.
 
 The body size follows from the patch (:func:`body_extent`): a margin of ``size`` times the patch
-size beyond the observed region in x, beyond the patch along the profile (clipped to the
-profile's ends) and below the deepest surface point.  The far faces are clamped; a clamped body is
-stiffer than a half-space by an almost constant offset that shrinks like 1/size (DESIGN.md §5).
+size beyond the observed region in x, and in the cross-section a disc around the patch whose
+radius reaches ``size`` patch sizes beyond it.  On these artificial boundaries
+:mod:`conformal.influence.fe` imposes the half-space field, so that the body behaves like a large
+one (see there).
 
 >>> import numpy as np
 >>> prof = flat_profile(-20.0, 20.0)
 >>> patch = StripPatch.uniform(mx=5, dx=0.5, ms=4, ds=0.5, s_centre=20.0)
 >>> ext = body_extent(BodyModel("block", prof), patch, size=2.0)
->>> ext.x_lo, ext.s_lo, ext.s_hi, ext.depth
-(-7.25, 14.0, 26.0, 5.0)
+>>> ext.x_lo, ext.s_lo, ext.s_hi, ext.depth, ext.radius
+(-7.25, 14.0, 26.0, 5.0, 6.0)
+>>> np.round(ext.arc_mid, 12) + 0.0       # the arc runs through the material, below the surface
+array([0., 6.])
 """
 from __future__ import annotations
 
@@ -39,8 +44,8 @@ BODY_KINDS = ("block", "rail", "wheel")
 class Profile2D:
     """A cross-section surface curve as a polyline of points (y, z) ordered by arc length s.
 
-    ``s`` starts at 0 on the first point.  ``y`` must increase along the curve within any body
-    extent (a graph over y), so that vertical cuts close the cross-section.
+    ``s`` starts at 0 on the first point.  Any simple curve will do (it need not be a graph over
+    y); the body's material lies on one side of it (:func:`inward_normal`).
     """
 
     y: np.ndarray
@@ -96,15 +101,24 @@ class Profile2D:
             out.append(self.point(ss))
         return out
 
-    def project(self, yz: np.ndarray) -> np.ndarray:
-        """Arc length of the closest point of the polyline to each point (..., 2)."""
+    def project(self, yz: np.ndarray, s_lo: float | None = None, s_hi: float | None = None) -> np.ndarray:
+        """Arc length of the closest point of the polyline to each point (..., 2); with ``s_lo``,
+        ``s_hi`` the closest point of that part of it (a body's part of the profile, whose tail
+        may curl back close to it).  Assumes points a few segment lengths apart at most (the
+        closest point lies on a segment next to the nearest vertex), as sampled profiles are."""
         from scipy.spatial import cKDTree
 
         q = np.asarray(yz, dtype=float).reshape(-1, 2)
-        P = np.stack([self.y, self.z], axis=1)
+        if s_lo is None and s_hi is None:
+            P, S = np.stack([self.y, self.z], axis=1), self.s
+        else:
+            lo = self.s[0] if s_lo is None else s_lo
+            hi = self.s[-1] if s_hi is None else s_hi
+            S = np.concatenate([[lo], self.s[(self.s > lo) & (self.s < hi)], [hi]])
+            P = self.point(S)
         tree = cKDTree(P)
         _, k = tree.query(q)
-        best_s = self.s[k].copy()
+        best_s = S[k].copy()
         best_d = np.full(len(q), np.inf)
         for seg in (k - 1, k):
             valid = (seg >= 0) & (seg < len(P) - 1)
@@ -115,7 +129,7 @@ class Profile2D:
             d = np.linalg.norm(a + t[:, None] * ab - q, axis=1)
             better = valid & (d < best_d)
             best_d = np.where(better, d, best_d)
-            best_s = np.where(better, self.s[i] + t * (self.s[i + 1] - self.s[i]), best_s)
+            best_s = np.where(better, S[i] + t * (S[i + 1] - S[i]), best_s)
         return best_s.reshape(np.shape(yz)[:-1])
 
 
@@ -230,16 +244,31 @@ class StripPatch:
 
 @dataclass(frozen=True)
 class BodyExtent:
-    """Where the body ends: x (rolling length at the reference radius), s along the profile, and
-    the depth of the bottom face below the deepest (rail) or above the highest (wheel) surface
-    point of the cross-section."""
+    """Where the body ends.
+
+    Along x: ``x_lo .. x_hi`` (rolling length at the reference radius ``x_ref_radius`` for a
+    wheel).  In the cross-section: a disc of radius ``radius`` about ``centre`` (the profile point
+    at the middle of the patch), ``depth`` (the margin) beyond the farthest patch point.  The body's
+    part of the profile runs from ``s_lo`` to ``s_hi`` (where it leaves the disc, or where the
+    profile ends: then a straight cut, ``cut_lo``/``cut_hi``, along the inward normal or the
+    nearest direction that does not cross the profile, reaches the circle at ``q_lo``/``q_hi``).  The artificial boundary closes the section from ``q_hi`` through
+    ``arc_mid`` to ``q_lo`` along the circle, on the material side.  The disc works for any profile
+    shape (grooves, gauge faces past vertical, any contact angle): it never needs the profile to be
+    a graph over y, and it meets the profile at a steep angle.
+    """
 
     x_lo: float
     x_hi: float
     s_lo: float
     s_hi: float
     depth: float
-    z_bottom: float
+    centre: tuple[float, float]
+    radius: float
+    q_lo: tuple[float, float]
+    q_hi: tuple[float, float]
+    arc_mid: tuple[float, float]
+    cut_lo: bool = False
+    cut_hi: bool = False
     x_ref_radius: float | None = None  # wheel: radius at which x is arc length
 
     @property
@@ -250,12 +279,98 @@ class BodyExtent:
     def theta_hi(self) -> float:
         return self.x_hi / self.x_ref_radius
 
+    def closure(self, n_arc: int = 64) -> np.ndarray:
+        """Points (y, z) of the artificial boundary of the cross-section, from q_hi to q_lo."""
+        c = np.asarray(self.centre)
+        a0, am, a1 = (math.atan2(q[1] - c[1], q[0] - c[0]) for q in (self.q_hi, self.arc_mid, self.q_lo))
+        d1 = (am - a0) % (2 * math.pi)
+        d2 = (a1 - am) % (2 * math.pi)
+        if (a1 - a0) % (2 * math.pi) < d1:          # the arc turns clockwise
+            d1, d2 = d1 - 2 * math.pi, d2 - 2 * math.pi
+        t = a0 + np.linspace(0.0, d1 + d2, n_arc + 1)
+        return c + self.radius * np.column_stack([np.cos(t), np.sin(t)])
 
-def body_extent(body: BodyModel, patch: StripPatch, size: float = 2.0) -> BodyExtent:
-    """Body limits for a patch: a margin of ``size`` x patch size around it (clipped to the profile).
 
-    Raises InputError when the patch does not fit on the profile, when the profile is not a
-    graph over y within the body, or when a wheel sector would exceed the wheel.
+def inward_normal(body: BodyModel, s) -> np.ndarray:
+    """Unit normal (y, z) of the cross-section pointing into the body's material at arc length s."""
+    t = body.profile.tangent(s)
+    n = np.stack([-t[..., 1], t[..., 0]], axis=-1)   # common normal: into body 1 (rail, block)
+    return n if body.below else -n
+
+
+def _leave_disc(prof: Profile2D, c: np.ndarray, R: float, s_start: float, step: int) -> tuple[float, bool]:
+    """Arc length where the profile, followed from s_start in direction ``step`` (+1 or -1), first
+    leaves the disc |p - c| <= R; (profile end, True) if it ends inside."""
+    P = np.stack([prof.y, prof.z], axis=1)
+    dist = np.linalg.norm(P - c, axis=1)
+    idx = np.arange(len(P))
+    cand = idx[(prof.s > s_start) & (dist > R)] if step > 0 else idx[(prof.s < s_start) & (dist > R)][::-1]
+    if cand.size == 0:
+        return (prof.length if step > 0 else 0.0), True
+    k = int(cand[0])
+    j = k - step                                   # the vertex before it (inside, or s_start's segment)
+    a = prof.point(s_start) if (prof.s[j] < s_start) == (step > 0) else P[j]
+    sa = s_start if (prof.s[j] < s_start) == (step > 0) else prof.s[j]
+    b = P[k]
+    d = b - a
+    f = a - c
+    qa, qb, qc = d @ d, 2 * f @ d, f @ f - R * R
+    t = (-qb + math.sqrt(max(qb * qb - 4 * qa * qc, 0.0))) / (2 * qa)
+    return float(sa + np.clip(t, 0.0, 1.0) * (prof.s[k] - sa)), False
+
+
+def _to_circle(p: np.ndarray, n: np.ndarray, c: np.ndarray, R: float) -> np.ndarray:
+    """The point p + t n (t > 0) on the circle |q - c| = R (p inside)."""
+    f = p - c
+    b = f @ n
+    t = -b + math.sqrt(max(b * b - (f @ f - R * R), 0.0))
+    return p + t * n
+
+
+def _end_cut(p: np.ndarray, n_in: np.ndarray, c: np.ndarray, R: float, curve: np.ndarray,
+             gap: float) -> np.ndarray | None:
+    """End of a straight cut from a profile end p (inside the disc) to the circle: along the inward
+    normal n_in where that does not cross the profile, else along the direction closest to it that
+    does not (a worn gauge face curling back under the head), at most 60 degrees away (a cut
+    nearly along the profile would leave a sliver), ending at least ``gap`` from the profile;
+    None if there is none."""
+    ang0 = math.atan2(n_in[1], n_in[0])
+    for da in sorted(np.radians(np.arange(-60.0, 61.0, 5.0)), key=abs):
+        d = np.array([math.cos(ang0 + da), math.sin(ang0 + da)])
+        q = _to_circle(p, d, c, R)
+        if (np.min(np.linalg.norm(curve - q, axis=1)) >= gap
+                and not _segments_intersect(np.array([p + 1e-6 * (q - p), q]), curve)):
+            return q
+    return None
+
+
+def _inside(poly: np.ndarray, q: np.ndarray) -> bool:
+    """Point in polygon (even-odd rule)."""
+    y, z = poly[:, 0], poly[:, 1]
+    y2, z2 = np.roll(y, -1), np.roll(z, -1)
+    cross = (z > q[1]) != (z2 > q[1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        yi = y + (q[1] - z) * (y2 - y) / (z2 - z)
+    return bool(np.count_nonzero(cross & (yi > q[0])) % 2)
+
+
+def _segments_intersect(P: np.ndarray, Q: np.ndarray) -> bool:
+    """Whether any segment of polyline P properly crosses any segment of polyline Q."""
+    a, b = P[:-1, None, :], P[1:, None, :]
+    c, d = Q[None, :-1, :], Q[None, 1:, :]
+
+    def orient(p, q, r):
+        return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (q[..., 1] - p[..., 1]) * (r[..., 0] - p[..., 0])
+
+    o1, o2, o3, o4 = orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b)
+    return bool(np.any((o1 * o2 < -1e-18) & (o3 * o4 < -1e-18)))
+
+
+def body_extent(body: BodyModel, patch: StripPatch, size: float = 1.0) -> BodyExtent:
+    """Body limits for a patch: a margin of ``size`` x patch size around it (see BodyExtent).
+
+    Raises InputError when the patch does not fit on the profile, when the profile ends too close
+    to the patch, or when a wheel sector would exceed the wheel.
     """
     if not (size > 0 and math.isfinite(size)):
         raise InputError(f"[model] fe_body_size: must be > 0, got {size}")
@@ -266,29 +381,67 @@ def body_extent(body: BodyModel, patch: StripPatch, size: float = 2.0) -> BodyEx
                          f"s = {e[0]:.3f} .. {e[-1]:.3f} mm along the profile, the profile "
                          f"0 .. {prof.length:.3f} mm")
     margin = size * patch.size
-    s_lo = max(prof.s[0], e[0] - margin)
-    s_hi = min(prof.s[-1], e[-1] + margin)
-    depth = margin
+    s_mid = 0.5 * (e[0] + e[-1])
+    c = prof.point(s_mid)
+    inner = (prof.s > e[0]) & (prof.s < e[-1])
+    r_patch = float(np.max(np.linalg.norm(prof.point(np.concatenate([[e[0]], prof.s[inner], [e[-1]]])) - c, axis=1)))
+    R = r_patch + margin
     half = patch.n_columns * 0.5 * patch.dx + margin
+    r_ref = None
     if not body.below:
-        r_ref = float(body.radius_at(0.5 * (e[0] + e[-1])))
-        if depth >= 0.8 * r_ref or 2 * half / r_ref > 1.5 * math.pi:
-            raise InputError(f"wheel body: the grid is larger than the wheel: the FE body would be "
-                             f"{depth:.1f} mm deep and {2 * half:.1f} mm long at radius {r_ref:.1f} mm; "
+        r_ref = float(body.radius_at(s_mid))
+        if R >= 0.8 * r_ref or 2 * half / r_ref > 1.5 * math.pi:
+            raise InputError(f"wheel body: the grid is larger than the wheel: the FE body would reach "
+                             f"{R:.1f} mm into the wheel and be {2 * half:.1f} mm long at radius {r_ref:.1f} mm; "
                              "reduce mx, dx or [model] fe_body_size")
-    inside = (prof.s > s_lo + 1e-9) & (prof.s < s_hi - 1e-9)
-    yy = np.concatenate([[prof.point(s_lo)[0]], prof.y[inside], [prof.point(s_hi)[0]]])
-    if np.any(np.diff(yy) <= 0):
-        raise InputError(f"profile {prof.name}: y must increase along the profile within the body "
-                         f"(s = {s_lo:.2f} .. {s_hi:.2f} mm); the FE body needs a surface that is a "
-                         "graph over y")
-    zz = np.concatenate([[prof.point(s_lo)[1]], prof.z[inside], [prof.point(s_hi)[1]]])
-    if body.below:
-        z_bottom = float(zz.max()) + depth
-        return BodyExtent(-half, half, float(s_lo), float(s_hi), depth, z_bottom)
-    # wheel: the bottom (inner) face lies towards the axle
-    z_bottom = float(zz.min()) - depth
-    if z_bottom <= body.axle_z:
-        raise InputError(f"wheel body: the FE body ({depth:.1f} mm deep) would reach the axle; "
-                         "the grid is larger than the wheel (reduce the grid or [model] fe_body_size)")
-    return BodyExtent(-half, half, float(s_lo), float(s_hi), depth, z_bottom, r_ref)
+    # A profile end inside the disc is closed by a straight cut to the circle (along the inward
+    # normal, or the nearest direction that does not cross the profile).  Where that cut would be
+    # a sliver (the end lies just inside) or cannot be made, the disc shrinks to pass through
+    # that end instead.
+    for _ in range(6):
+        s_lo, cut_lo = _leave_disc(prof, c, R, e[0], -1)
+        s_hi, cut_hi = _leave_disc(prof, c, R, e[-1], +1)
+        ss = np.concatenate([[s_lo], prof.s[(prof.s > s_lo) & (prof.s < s_hi)], [s_hi]])
+        curve = prof.point(ss)
+        shrink, q_end = [], {}
+        for s_end, cut in ((s_lo, cut_lo), (s_hi, cut_hi)):
+            if not cut:
+                continue
+            p = prof.point(s_end)
+            d = float(np.linalg.norm(p - c))
+            q_end[s_end] = _end_cut(p, inward_normal(body, s_end), c, R, curve, 0.3 * margin)
+            if d > R - 0.3 * margin or q_end[s_end] is None:
+                shrink.append(d)
+        if len(q_end) == 2 and not shrink and _segments_intersect(
+                np.array([prof.point(s_lo), q_end[s_lo]]), np.array([prof.point(s_hi), q_end[s_hi]])):
+            shrink.append(max(float(np.linalg.norm(prof.point(s) - c)) for s in q_end))
+        if not shrink:
+            break
+        R = min(shrink) * (1 - 1e-9)
+    else:
+        raise InputError(f"profile {prof.name}: cannot close the {body.kind} body's cross-section around the "
+                         "patch (the profile ends close to it); extend the profile or reduce [model] fe_body_size")
+    if R < r_patch + 0.2 * margin:
+        raise InputError(f"profile {prof.name}: too short for an FE body around the patch: it ends "
+                         f"{R - r_patch:.2f} mm beyond the patch; extend the profile or reduce [model] fe_body_size")
+    p_lo, p_hi = prof.point(s_lo), prof.point(s_hi)
+    q_lo = q_end[s_lo] if cut_lo else p_lo
+    q_hi = q_end[s_hi] if cut_hi else p_hi
+    # the arc from q_hi to q_lo on the material side: the one whose closed section contains a
+    # point just inside the material at the patch centre
+    probe = c + 1e-4 * R * inward_normal(body, s_mid)
+    a0 = math.atan2(q_hi[1] - c[1], q_hi[0] - c[0])
+    a1 = math.atan2(q_lo[1] - c[1], q_lo[0] - c[0])
+    ccw = (a1 - a0) % (2 * math.pi)
+    for sweep in (ccw, ccw - 2 * math.pi):
+        t = a0 + np.linspace(0.0, sweep, 129)
+        arc = c + R * np.column_stack([np.cos(t), np.sin(t)])
+        closing = np.vstack([[p_hi]] * cut_hi + [arc] + [[p_lo]] * cut_lo)
+        if _inside(np.vstack([curve, closing]), probe):
+            break
+    else:
+        raise InputError(f"profile {prof.name}: cannot close the FE body's cross-section around the patch")
+    mid = arc[64]
+    return BodyExtent(-half, half, float(s_lo), float(s_hi), float(R - r_patch), (float(c[0]), float(c[1])),
+                      float(R), (float(q_lo[0]), float(q_lo[1])), (float(q_hi[0]), float(q_hi[1])),
+                      (float(mid[0]), float(mid[1])), bool(cut_lo), bool(cut_hi), r_ref)

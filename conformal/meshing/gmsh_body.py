@@ -1,9 +1,10 @@
 """Tetrahedral meshes of quasi-quarter-space bodies with gmsh (OpenCASCADE kernel).
 
-The cross-section (surface curve between s_lo and s_hi, closed by two vertical cuts and a bottom
-line) is extruded along x (rail, block) or revolved about the axle (wheel).  The surface curve is
-split at every grid edge s_l, so the swept surface falls apart into one strip per grid row; grid
-edges across x are imprinted as curves (``conform``):
+The cross-section (surface curve between s_lo and s_hi, closed on the material side by an arc of
+the disc around the patch, see :class:`~conformal.meshing.bodies.BodyExtent`) is extruded along x
+(rail, block) or revolved about the axle (wheel), piece by piece between the column edges the mesh
+must follow (``conform``).  The surface curve is split at every grid edge s_l, so the swept
+surface falls apart into one strip per grid row and one piece per swept section:
 
 * ``"all"``: every column edge of the observed region: each contact element is a face of its own
   and the surface mesh conforms to the grid (needed for exact element loads and averages);
@@ -183,40 +184,51 @@ def _build(gmsh, body: BodyModel, patch: StripPatch, ext: BodyExtent, spec: Mesh
         return occ.addPoint(x0, float(y), float(z))
 
     corner = [pt(*pieces[0][0])]
-    curves, grid_curves = [], []
-    first_grid = 1 if ext.s_lo < e[0] - 1e-9 else 0
-    for k, piece in enumerate(pieces):
+    curves = []
+    for piece in pieces:
         inner = [pt(*q) for q in piece[1:-1]]
         end = pt(*piece[-1])
         tags = [corner[-1]] + inner + [end]
-        c = occ.addLine(tags[0], tags[1]) if len(tags) == 2 else occ.addSpline(tags)
-        curves.append(c)
-        if first_grid <= k < first_grid + patch.ms:
-            grid_curves.append(c)
+        # a spline through smooth parts; split at kinks (turns over 10 degrees), where a spline
+        # through the corner would overshoot the polyline
+        seg = np.diff(piece, axis=0)
+        seg /= np.linalg.norm(seg, axis=1, keepdims=True)
+        kinks = 1 + np.flatnonzero(np.einsum("ij,ij->i", seg[:-1], seg[1:]) < math.cos(math.radians(10.0)))
+        for a, b in zip(np.concatenate([[0], kinks]), np.concatenate([kinks, [len(tags) - 1]])):
+            part = tags[a:b + 1]
+            curves.append(occ.addLine(part[0], part[1]) if len(part) == 2 else occ.addSpline(part))
         corner.append(end)
-    y_hi, y_lo = pieces[-1][-1][0], pieces[0][0][0]
-    p_bhi = pt(y_hi, ext.z_bottom)
-    p_blo = pt(y_lo, ext.z_bottom)
-    curves += [occ.addLine(corner[-1], p_bhi), occ.addLine(p_bhi, p_blo), occ.addLine(p_blo, corner[0])]
+    # artificial boundary: end cut (profile end inside the disc), two arcs (< pi each), end cut
+    cen = pt(*ext.centre)
+    q_hi = pt(*ext.q_hi) if ext.cut_hi else corner[-1]
+    if ext.cut_hi:
+        curves.append(occ.addLine(corner[-1], q_hi))
+    q_lo = pt(*ext.q_lo) if ext.cut_lo else corner[0]
+    mid = pt(*ext.arc_mid)
+    curves += [occ.addCircleArc(q_hi, cen, mid), occ.addCircleArc(mid, cen, q_lo)]
+    if ext.cut_lo:
+        curves.append(occ.addLine(q_lo, corner[0]))
     loop = occ.addCurveLoop(curves)
     face = occ.addPlaneSurface([loop])
 
-    # imprint curves: copies of the grid part of the surface curve at the cut positions
-    imprint = []
-    for xc in _cut_positions(patch, spec.conform):
-        cp = occ.copy([(1, c) for c in grid_curves])
+    # sweep the section piece by piece between the cut positions (x_lo, the cuts, x_hi), so that
+    # the column edges are edges of the pieces, then glue the pieces (fragment of volumes sharing
+    # whole faces).  Imprinting copies of the profile curves on one swept volume instead made
+    # OpenCASCADE fail ("Fragments failed") on a measured worn wheel with a 202 x 83 strip.
+    xs = np.concatenate([[ext.x_lo], _cut_positions(patch, spec.conform), [ext.x_hi]])
+    xs = np.unique(xs[(xs >= ext.x_lo) & (xs <= ext.x_hi)])
+    vols = []
+    for k, (xa, xb) in enumerate(zip(xs[:-1], xs[1:])):
+        f = [(2, face)] if k == len(xs) - 2 else occ.copy([(2, face)])
         if body.revolved:
-            occ.rotate(cp, 0, 0, body.axle_z, 0, 1, 0, xc / ext.x_ref_radius)
+            occ.rotate(f, 0, 0, body.axle_z, 0, 1, 0, xa / ext.x_ref_radius)
+            out = occ.revolve(f, 0, 0, body.axle_z, 0, 1, 0, (xb - xa) / ext.x_ref_radius)
         else:
-            occ.translate(cp, xc - x0, 0, 0)
-        imprint += cp
-    if body.revolved:
-        occ.rotate([(2, face)], 0, 0, body.axle_z, 0, 1, 0, ext.theta_lo)
-        out = occ.revolve([(2, face)], 0, 0, body.axle_z, 0, 1, 0, ext.theta_hi - ext.theta_lo)
-    else:
-        out = occ.extrude([(2, face)], ext.x_hi - ext.x_lo, 0, 0)
-    vols = [t for t in out if t[0] == 3]
-    occ.fragment(vols, imprint)
+            occ.translate(f, xa - x0, 0, 0)
+            out = occ.extrude(f, xb - xa, 0, 0)
+        vols += [t for t in out if t[0] == 3]
+    if len(vols) > 1:
+        occ.fragment(vols[:1], vols[1:])
     occ.synchronize()
 
 
@@ -245,7 +257,7 @@ def _size_field(gmsh, body, patch, ext, spec, h_e):
     for _, c in gmsh.model.getEntities(1):
         m = _curve_midpoint(gmsh, c)
         x, yz = cross_section_coordinates(body, ext, m)
-        s = body.profile.project(yz)
+        s = body.profile.project(yz, ext.s_lo, ext.s_hi)
         on_surface = np.linalg.norm(body.profile.point(s) - yz) < tol
         if not on_surface or s < e[0] - tol or s > e[-1] + tol or abs(x) > x_obs + tol:
             continue
@@ -276,12 +288,20 @@ def _size_field(gmsh, body, patch, ext, spec, h_e):
     return len(obs_curves), len(col_curves)
 
 
+def _has_tetrahedra(gmsh) -> bool:
+    types, _, conn = gmsh.model.mesh.getElements(3)
+    return any(len(c) for c in conn)
+
+
 def _extract(gmsh, body: BodyModel, ext: BodyExtent, h_element: float):
     tags, coords, _ = gmsh.model.mesh.getNodes()
     order = np.argsort(tags)
     tags = tags[order]
     pts = coords.reshape(-1, 3)[order]
     types, _, conn = gmsh.model.mesh.getElements(3)
+    if not any(len(c) for c in conn):
+        raise MeshingError(f"gmsh produced no tetrahedra for the {body.kind} body (its surface mesh "
+                           "could not be filled; a finer fe_h_patch or a smaller fe_body_size may help)")
     tets = []
     for t, c in zip(types, conn):
         if t != 4:
@@ -302,10 +322,13 @@ def _extract(gmsh, body: BodyModel, ext: BodyExtent, h_element: float):
     free, clamped = [], []
     for _, s in gmsh.model.getBoundary(gmsh.model.getEntities(3), oriented=False):
         types, _, conn = gmsh.model.mesh.getElements(2, s)
-        tri = np.searchsorted(tags, np.concatenate([c for t, c in zip(types, conn) if t == 2]).reshape(-1, 3))
+        conn = [c for t, c in zip(types, conn) if t == 2]
+        if not conn:                       # a degenerate face without triangles (a sliver of OCC's)
+            continue
+        tri = np.searchsorted(tags, np.concatenate(conn).reshape(-1, 3))
         nodes = np.unique(tri)
         _, yz = cross_section_coordinates(body, ext, pts[nodes])
-        sp = np.clip(body.profile.project(yz), ext.s_lo, ext.s_hi)   # the body's part of the profile only
+        sp = body.profile.project(yz, ext.s_lo, ext.s_hi)             # the body's part of the profile only
         dist = np.linalg.norm(body.profile.point(sp) - yz, axis=-1)
         (free if dist.max() < tol else clamped).append(tri)
     if not free:
@@ -320,6 +343,22 @@ def _extract(gmsh, body: BodyModel, ext: BodyExtent, h_element: float):
     return pts, tets, free, clamped
 
 
+def _drop_flat(points: np.ndarray, tets: np.ndarray, body: BodyModel) -> np.ndarray:
+    """Tetrahedra without the flat ones (four nodes in one plane: HXT left 487 of them on the
+    internal faces between the swept pieces of a worn wheel, whose singular element matrices
+    made the stiffness matrix singular).  They carry no material; every node must keep a
+    tetrahedron of volume."""
+    a, b, c, d = (points[tets[:, k]] for k in range(4))
+    vol = np.abs(np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a))
+    keep = vol > 1e-9 * np.median(vol)
+    if keep.all():
+        return tets
+    if np.unique(tets[keep]).size != len(points):
+        raise MeshingError(f"gmsh left flat tetrahedra in the {body.kind} body that cannot be removed "
+                           "(a node would lose its volume); try other [model] fe_h_patch or fe_body_size")
+    return tets[keep]
+
+
 def _orient(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
     """Tetrahedra with positive volume (node order swapped where needed)."""
     a, b, c, d = (points[tets[:, k]] for k in range(4))
@@ -330,14 +369,12 @@ def _orient(points: np.ndarray, tets: np.ndarray) -> np.ndarray:
     return tets
 
 
-def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
-              extent: BodyExtent | None = None, *, threads: int = 2) -> BodyMesh:
-    """Build and mesh one body for a patch (gmsh, OpenCASCADE).  Raises MeshingError on failure."""
-    import gmsh
+class _NoTetrahedra(Exception):
+    """gmsh's 3-D mesher left the volume empty (try another algorithm)."""
 
-    ext = extent or body_extent(body, patch, spec.body_size)
-    h_e = min(patch.dx, float(patch.s_widths.min()))
-    t0 = time.perf_counter()
+
+def _generate(gmsh, body, patch, ext, spec, h_e, threads, algorithm3d):
+    """One gmsh session: geometry, size field, mesh (Mesh.Algorithm3D = algorithm3d), extraction."""
     if gmsh.isInitialized():
         gmsh.finalize()
     # interruptible=False: no SIGINT handler, so that meshing also works in worker threads (Dask)
@@ -358,33 +395,63 @@ def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
             # gamma < 0.2 then removes the slivers (min gamma 0.07 instead of 1e-24).
             for name, value in (("Mesh.MeshSizeFromPoints", 0), ("Mesh.MeshSizeFromCurvature", 0),
                                 ("Mesh.MeshSizeExtendFromBoundary", 0), ("Mesh.Algorithm", 6),
-                                ("Mesh.Algorithm3D", 10), ("Mesh.Optimize", 0),
+                                ("Mesh.Algorithm3D", algorithm3d), ("Mesh.Optimize", 0),
                                 ("Mesh.LcIntegrationPrecision", 1e-3), ("Mesh.ElementOrder", 1)):
                 gmsh.option.setNumber(name, value)
             t1 = time.perf_counter()
             step = "meshing"
             gmsh.model.mesh.generate(3)
+            if not _has_tetrahedra(gmsh):
+                raise _NoTetrahedra()
             if spec.optimize:
                 gmsh.option.setNumber("Mesh.OptimizeThreshold", 0.2)
                 gmsh.model.mesh.optimize("")
             t2 = time.perf_counter()
             step = "reading the mesh"
             pts, tets, free, clamped = _extract(gmsh, body, ext, h_e)
-        except MeshingError:
+        except (MeshingError, _NoTetrahedra):
             raise
         except Exception as exc:  # gmsh raises plain Exceptions with its last error message
+            if step == "meshing" and algorithm3d != 1:
+                raise _NoTetrahedra() from None
             raise MeshingError(f"gmsh failed while {step} ({body.kind} body, {patch.ms} x "
                                f"{patch.n_columns} patch): {exc}") from None
     finally:
         gmsh.finalize()
+    return pts, tets, free, clamped, t1, t2
+
+
+def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
+              extent: BodyExtent | None = None, *, threads: int = 1) -> BodyMesh:
+    """Build and mesh one body for a patch (gmsh, OpenCASCADE).  Raises MeshingError on failure.
+
+    ``threads = 1`` (default) makes the mesh reproducible: gmsh's HXT mesher with 2 threads gave a
+    different mesh on every run (node counts differing by one or two, influence numbers by up to
+    5e-4 of the kernel maximum) and now and then aborted the process; single-threaded it gives
+    the same mesh every time and was no slower here (2.4-3.1 s against 3.3-5.5 s on a 16 x 16
+    wheel patch on a busy 2-core machine).
+    """
+    import gmsh
+
+    ext = extent or body_extent(body, patch, spec.body_size)
+    h_e = min(patch.dx, float(patch.s_widths.min()))
+    t0 = time.perf_counter()
+    # HXT (fast) first; where it cannot recover the surface mesh ("failed to recover constrained
+    # triangles", S1002 at a 5 mm shift) it leaves gmsh unusable ("I'm busy"), so the whole model
+    # is built again for gmsh's Delaunay mesher (slower, more tolerant)
+    try:
+        pts, tets, free, clamped, t1, t2 = _generate(gmsh, body, patch, ext, spec, h_e, threads, 10)
+    except _NoTetrahedra:
+        pts, tets, free, clamped, t1, t2 = _generate(gmsh, body, patch, ext, spec, h_e, threads, 1)
     if len(tets) == 0:
         raise MeshingError(f"gmsh produced no tetrahedra for the {body.kind} body")
+    tets = _drop_flat(pts, tets, body)
     tets = _orient(pts, tets)
     uv = np.full((len(pts), 2), np.nan)
     fn = np.unique(free)
     x, yz = cross_section_coordinates(body, ext, pts[fn])
     uv[fn, 0] = x
-    uv[fn, 1] = body.profile.project(yz)
+    uv[fn, 1] = body.profile.project(yz, ext.s_lo, ext.s_hi)
     # the free surface must cover the whole body surface x_lo..x_hi, s_lo..s_hi (else observation
     # points may fall into holes); a misclassified face shows up here, not as a failed point location
     span = np.array([[ext.x_lo, ext.s_lo], [ext.x_hi, ext.s_hi]])

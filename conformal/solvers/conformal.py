@@ -1,4 +1,4 @@
-"""Conformal contact (Li & Kalker): the normal and tangential problems on the curved surface.
+"""Conformal contact (Li 2002): the normal and tangential problems on the curved surface.
 
 The potential contact area is a strip on the rail surface (:class:`~conformal.grid.CurvedGrid`):
 mx elements along the rolling direction x times ms elements along the arc length s of the rail
@@ -43,7 +43,7 @@ operators agree to 2e-15; measured 1e-8 to 2e-7 in the forces at tol 1e-6,
 tests/test_conformal.py).
 
 Wheel-rail scenes (``[model] theory = "conformal"``): one curved strip on the rail covers every
-contact patch of the wheel (:func:`curved_problem_from_wheel_rail`); ``[model]`` keys: influence
+contact patch of the wheel (built by :mod:`conformal.cases.conformal`); ``[model]`` keys: influence
 ("halfspace" | "fe", FE keys fe_* of conformal.influence.fe), maxout, max_mx / max_ms (strip
 size limits), creepage ("surface": from the wheelset motion at every point, or "reference": the
 reference point's creepages spread as a rigid motion, the planar assumption).
@@ -69,9 +69,9 @@ from conformal.grid import CurvedGrid, PlanarGrid
 from conformal.influence.curved import CurvedInfluence, curved_halfspace_kernel
 from conformal.materials import Material
 from conformal.problem import ContactProblem
-from conformal.result import EXTERIOR, Result, TractionField
-from conformal.scene import Friction, Kinematics, ModelSpec
-from conformal.solvers.exact import (Stages, _patch_extent, alternate, convergence_warnings, maxout_option,
+from conformal.result import Result, TractionField
+from conformal.specs import Friction, Kinematics, ModelSpec
+from conformal.solvers.exact import (Stages, patch_extent, alternate, convergence_warnings, maxout_option,
                                      solution_extra, tractions)
 from conformal.solvers.normal import solve_normal
 
@@ -202,7 +202,7 @@ def column_creepages(grid: CurvedGrid, xi: float, eta: float, phi: float
         xi(s) = xi + phi (n_ref x dr)_x,   eta(s) = eta t_ref . t(s),   phi(s) = phi n_ref . n(s).
 
     On a flat strip: xi(y) = xi - phi y, the planar rigid slip.  (With ``[kinematics] speed`` the
-    wheelset's own rotation gives the creepages instead, conformal.geometry.wheelrail.)"""
+    wheelset's own rotation gives the creepages instead, conformal.cases.wheelrail.)"""
     (y0, z0), n0 = reference_point(grid)
     dy, dz = grid.y - y0, grid.z - z0
     cos_d = grid.normal @ n0
@@ -414,7 +414,7 @@ def _result(problem: CurvedProblem, op, op_info: dict, stages: Stages) -> Result
         sx=_real(tr.sx, m), sy=_real(tr.sy, m, True), un=_real(tr.un, m), ux=_real(tr.ux, m),
         uy=_real(tr.uy, m, True), curved=grid, delta=_real(np.broadcast_to(grid.delta, grid.shape).copy(), m, True),
         h=_real(np.asarray(problem.h, float), m))
-    a, b = _patch_extent(dev, normal.contact)
+    a, b = patch_extent(dev, normal.contact)
     w = approach_weights(grid, problem.load_angle)
     approach = float(np.max(normal.approach * w - problem.h)) if problem.overlap_approach else normal.approach
     contact = normal.contact
@@ -497,7 +497,7 @@ def planar_as_curved(problem: ContactProblem) -> CurvedProblem:
 
 def solve(problem: ContactProblem) -> Result:
     """The model entry (conformal.solve.MODELS): a planar problem solved as a flat conformal strip.
-    Wheel-rail scenes take :func:`solve_wheel_rail_conformal` (curved grids) instead."""
+    Wheel-rail scenes take conformal.cases.conformal.solve_wheel_rail_conformal (curved grids) instead."""
     cp = planar_as_curved(problem)
     op, info = influence_operator(cp.grid, cp.material, cp.model, planar=True)
     r = solve_curved(cp, op, info)
@@ -506,125 +506,3 @@ def solve(problem: ContactProblem) -> Result:
         r = replace(r, extra=dict(r.extra, hertz={"a": hz.a, "b": hz.b, "pmax": hz.pmax, "approach": hz.approach,
                                                   "FN": hz.FN}))
     return r
-
-
-# ----------------------------------------------------------------------------- wheel and rail
-def _element_sizes(scene, patches, merged, scale: float) -> tuple[float, float, list[str]]:
-    """(dx, ds, warnings) of a strip over several patches: [geometry] element_size (square
-    elements, CONTACT's DX = DS), else the extents of the most penetrating patch along x and s
-    times [grid] scale over [grid] n elements (the strip gets more elements along s).  At most
-    MAX_ELEMENTS ([model] max_mx, max_ms) along each axis: larger strips get coarser elements."""
-    es = scene.geometry.element_size
-    p, g = patches[0], scene.grid
-    if es is not None:
-        dx = ds = float(es)
-    else:
-        dx = (p.x_range[1] - p.x_range[0]) * g.scale / g.n
-        ds = max(p.s_range[1] - p.s_range[0], 1e-3) * g.scale / g.n
-    warnings = []
-    opts = scene.model.options
-    for axis, lo_hi, key in (("x", merged.x_range, "max_mx"), ("s", merged.s_range, "max_ms")):
-        limit = int(opts.get(key, MAX_ELEMENTS))
-        if limit < 2:
-            raise InputError(f"[model] {key}: must be >= 2, got {limit}")
-        need = (lo_hi[1] - lo_hi[0]) * scale
-        size = dx if axis == "x" else ds
-        if need / size > limit:
-            size = need / limit
-            warnings.append(f"the strip over {len(patches)} patch(es) needs more than {limit} elements along "
-                            f"{axis}: element size {size:.3g} mm instead (raise [model] {key} for a finer grid)")
-            dx, ds = (size, ds) if axis == "x" else (dx, size)
-    return dx, ds, warnings
-
-
-def curved_problem_from_wheel_rail(scene, *, scale: float | None = None) -> CurvedProblem:
-    """The conformal problem of a wheel-rail scene: ONE curved grid on the rail that covers every
-    contact patch of the wheel (tread and flange at once share the strip, and their elastic
-    interaction is included), at the wheelset height of the planar half-space balance.
-
-    h is the signed distance along the local normals at that height; the load is the vertical
-    ``[load] wheel_load`` (load direction vertical in the side frame: w = cos delta) or, with
-    ``[load] approach``, the height itself (approach 0 from there).  Creepages per column: from the
-    wheelset velocities with ``[kinematics] speed`` (the spin follows the contact angle), else from
-    the scene's xi, eta, phi at the reference point (:func:`column_creepages`).  ``[model] creepage
-    = "reference"`` takes the reference point's creepages with the speed too (the assumption of the
-    planar theories; for studies that separate the effect of the geometry from that of the
-    kinematics)."""
-    from conformal.geometry.kinematics import WheelsetMotion
-    from conformal.geometry.patches import curved_grid_for_patch
-    from conformal.geometry.wheelrail import (balance_height, curved_creepages, patch_info, place_scene,
-                                              profile_curves, state_at)
-
-    pl = place_scene(scene)
-    load = scene.load
-    if load.wheel_load is not None:
-        _, st, _ = balance_height(pl, scene)
-    elif load.approach is not None:
-        st = state_at(pl.pair, pl.top, pl.z_first + load.approach, pl.roll, scene, grids=False)
-    else:
-        raise InputError("[load] wheel_load: a wheel_rail scene needs wheel_load (N) or approach (mm)")
-    patches = [pg.patch for pg in st.patches]
-    main = patches[0]
-    wheel = pl.pair.wheel(st.z)
-    g = scene.grid
-    scale = scale or g.scale
-    size_warnings: list[str] = []
-    if len(patches) == 1:   # the grid of conformal.geometry (and of `conformal precompute`)
-        merged = main
-        grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, main, element_size=scene.geometry.element_size,
-                                                   n=g.n, scale=scale, side=pl.pair.side)
-    else:
-        merged = replace(main, s_range=(min(p.s_range[0] for p in patches), max(p.s_range[1] for p in patches)),
-                         x_range=(min(p.x_range[0] for p in patches), max(p.x_range[1] for p in patches)))
-        dx, ds, size_warnings = _element_sizes(scene, patches, merged, scale)
-        grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, merged, sizes=(dx, ds), scale=scale,
-                                                   side=pl.pair.side)
-    m = pl.pair.mirror
-    k, geo = scene.kinematics, scene.geometry
-    creep = scene.model.options.get("creepage", "surface")
-    if creep not in ("surface", "reference"):
-        raise InputError(f"[model] creepage: must be \"surface\" or \"reference\", got {creep!r}")
-    if k.speed is not None:
-        pitch = k.pitch_velocity if k.pitch_velocity is not None else -k.speed / geo.wheel_radius
-        motion = WheelsetMotion(k.speed, pitch, k.yaw_rate, k.roll_rate, k.lateral_velocity)
-        c = curved_creepages(pl.pair, st.z, motion, grid, merged)
-        xi_s, eta_s, phi_s = c.xi, m * c.eta, m * c.phi        # back to the side frame of the grid
-        if creep == "reference":   # the planar theories' assumption: the reference point's creepages
-            xi_s, eta_s, phi_s = column_creepages(grid, *(float(np.interp(grid.s_ref, grid.s, v))
-                                                          for v in (xi_s, eta_s, phi_s)))
-        kin = replace(k, velocity=float(np.interp(grid.s_ref, grid.s, c.velocity)))
-    else:
-        xi_s, eta_s, phi_s = column_creepages(grid, k.xi, m * k.eta, m * k.phi)
-        kin = k
-    info = patch_info(pl.pair, st, st.patches[0], 0)
-    info.update(n_geometric_patches=len(patches), z_ws_reference=st.z, side=pl.pair.side)
-    if st.warnings or size_warnings:
-        info["warnings"] = list(st.warnings) + size_warnings
-    normal = dict(normal_force=load.wheel_load) if load.wheel_load is not None else dict(approach=0.0)
-    wc, rc = profile_curves(geo, scene.base_dir)     # whole profiles for the FE bodies (as conformal.jobs)
-    profiles = dict(rail_points=rc.sample(0.1)[1], wheel_points=wc.sample(0.1)[1])
-    return CurvedProblem(grid=grid, h=h - approach0, material=scene.material, friction=scene.friction,
-                         kinematics=kin, model=scene.model, xi_s=np.asarray(xi_s, float),
-                         eta_s=np.asarray(eta_s, float), phi_s=np.asarray(phi_s, float), load_angle=0.0,
-                         overlap_approach=True,
-                         label=f"{scene.name}:{pl.pair.side}", info=info, **normal, **profiles)
-
-
-def solve_wheel_rail_conformal(scene, *, max_enlarge: int = 2) -> Result:
-    """Solve a wheel-rail scene with the conformal theory (see :func:`curved_problem_from_wheel_rail`).
-
-    With a prescribed wheel load the grid is built around the overlap at the planar balance height;
-    where the conformal solution needs more room (its contact reaches the border of the grid) the
-    grid is rebuilt 1.5 times larger, at most ``max_enlarge`` times."""
-    scale = scene.grid.scale
-    for attempt in range(max_enlarge + 1):
-        problem = curved_problem_from_wheel_rail(scene, scale=scale)
-        result = solve_curved(problem)
-        contact = result.field.status != EXTERIOR
-        if not (contact[0].any() or contact[-1].any() or contact[:, 0].any() or contact[:, -1].any()):
-            break
-        scale *= 1.5
-    z_ws = problem.info["z_ws_reference"] + (result.extra["approach_along_load"]
-                                             if problem.normal_force is not None else 0.0)
-    return replace(result, extra=dict(result.extra, z_ws=z_ws, grid_scale=scale, enlargements=attempt,
-                                      wheel_load=scene.load.wheel_load))

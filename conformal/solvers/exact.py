@@ -1,4 +1,4 @@
-"""Kalker's exact theory on a planar grid (half-space influence numbers): the model "exact".
+"""Kalker's exact theory on a planar grid (half-space influence numbers; Kalker 1990): the model "exact".
 
 The normal problem (seed Eqs. 45-46, :mod:`conformal.solvers.normal`) and the tangential problem
 (seed Eqs. 47-49, :mod:`conformal.solvers.tangential`) on one potential contact grid.
@@ -10,7 +10,7 @@ The normal problem (seed Eqs. 45-46, :mod:`conformal.solvers.normal`) and the ta
   each with the other's coupling displacement, until both stop changing (the Panagiotopoulos
   process, as CONTACT's MAXOUT loop).  The history of changes is in ``Result.extra["outer"]``.
 
-Totals as CONTACT prints them (reference/contact_cases.md, "What the printed totals mean"):
+Totals as CONTACT prints them (the CONTACT cases of tests/reference/contact_cases.json):
 elastic energy dxdy/2000 sum p.u (J); frictional power V/1000 dxdy sum p_t.s_t (W, steady
 rolling, s = relative slip) or frictional work dxdy/1000 sum p_t.S_t (J, shift, S = slip distance).
 """
@@ -51,7 +51,7 @@ def _check_kinematics(problem: ContactProblem) -> None:
             raise InputError(f"[kinematics] {key}: a force F/(mu FN) must lie in (-1, 1), got {v!r}")
 
 
-def _patch_extent(grid: PlanarGrid, contact: np.ndarray) -> tuple[float, float]:
+def patch_extent(grid: PlanarGrid, contact: np.ndarray) -> tuple[float, float]:
     """Half the extent (mm) of the contact elements in x and y, element widths included."""
     if not contact.any():
         return 0.0, 0.0
@@ -273,7 +273,7 @@ def _result(problem, grid, h, op, stages: Stages) -> Result:
     field = TractionField(grid=grid, pn=normal.pn, px=tr.px, py=tr.py, status=tr.status, sx=tr.sx, sy=tr.sy,
                           un=tr.un, ux=tr.ux, uy=tr.uy)
     FN, FX, FY, MZ = field.totals()
-    a, b = _patch_extent(grid, normal.contact)
+    a, b = patch_extent(grid, normal.contact)
     patch_fn = _patches(grid, normal.pn, normal.contact)
     extra = solution_extra(problem, stages, tr, dA)
     extra.update({

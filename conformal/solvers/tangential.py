@@ -1,8 +1,8 @@
 """The tangential problem of Kalker's exact theory: steady rolling and transient shift with Coulomb
-friction (seed Eqs. 47-49; CONTACT's T = 3 and T = 1).
+friction (seed Eqs. 47-49; Kalker 1990 ch. 2 and 5; CONTACT's T = 3 and T = 1).
 
 Given the pressure p_n on the potential contact grid, find the tangential tractions p = (p_x, p_y) on
-body 1 such that in every element I with p_n > 0 (conventions: reference/contact_cases.md)
+body 1 such that in every element I with p_n > 0 (conventions: the CONTACT cases (tests/reference/contact_cases.json))
 
     s_I = w_I + (L p)_I                                          slip (per unit rolled / per shift)
     adhesion:  s_I = 0,                    |p_I| <= mu_static  p_n,I
@@ -96,6 +96,7 @@ import numpy as np
 from scipy import fft as sfft
 
 from conformal.solvers import checks
+from conformal.solvers.krylov import gmres
 from conformal.errors import InputError
 from conformal.result import ADHESION, EXTERIOR, SLIP
 
@@ -276,72 +277,6 @@ class _SlipOperator:
         return np.stack([qx.ravel()[self.idx], qy.ravel()[self.idx]]).astype(float)
 
 
-# ----------------------------------------------------------------------------- GMRES
-def _dot(a: np.ndarray, b: np.ndarray) -> float:
-    # elementwise sums, not BLAS: threaded BLAS on a loaded 2-core machine made ddot 100x slower
-    return float((a * b).sum())
-
-
-def _gmres(matvec, prec, b: np.ndarray, rtol: float, maxit: int, restart: int):
-    """Right-preconditioned restarted GMRES for M x = b.  ``matvec(z)`` returns (M z, extra) with
-    ``extra`` a by-product linear in z (here L V z); returns (x, extra(x), iterations, relres)."""
-    beta0 = math.sqrt(_dot(b, b))
-    x = np.zeros_like(b)
-    ext = None
-    if beta0 == 0.0:
-        return x, ext, 0, 0.0
-    r = b.copy()
-    total = 0
-    relres = 1.0
-    while total < maxit:
-        beta = math.sqrt(_dot(r, r))
-        m_max = min(restart, maxit - total)
-        V = [r / beta]
-        Z, E = [], []
-        H = np.zeros((m_max + 1, m_max))
-        cs, sn = np.zeros(m_max), np.zeros(m_max)
-        g = np.zeros(m_max + 1)
-        g[0] = beta
-        m = 0
-        for k in range(m_max):
-            z = prec(V[k])
-            w, e = matvec(z)
-            Z.append(z)
-            E.append(e)
-            for i in range(k + 1):  # modified Gram-Schmidt
-                H[i, k] = _dot(w, V[i])
-                w = w - H[i, k] * V[i]
-            H[k + 1, k] = math.sqrt(_dot(w, w))
-            V.append(w / H[k + 1, k] if H[k + 1, k] > 0 else w)
-            for i in range(k):  # previous Givens rotations
-                t = cs[i] * H[i, k] + sn[i] * H[i + 1, k]
-                H[i + 1, k] = -sn[i] * H[i, k] + cs[i] * H[i + 1, k]
-                H[i, k] = t
-            rho = math.hypot(H[k, k], H[k + 1, k])
-            cs[k], sn[k] = (H[k, k] / rho, H[k + 1, k] / rho) if rho > 0 else (1.0, 0.0)
-            H[k, k], H[k + 1, k] = rho, 0.0
-            g[k + 1] = -sn[k] * g[k]
-            g[k] = cs[k] * g[k]
-            m = k + 1
-            relres = abs(g[k + 1]) / beta0
-            if relres <= rtol or H[k, k] == 0.0:
-                break
-        y = np.zeros(m)  # back substitution (no LAPACK: see _dot)
-        for i in range(m - 1, -1, -1):
-            y[i] = (g[i] - _dot(H[i, i + 1:m], y[i + 1:])) / H[i, i] if H[i, i] != 0 else 0.0
-        dx_ = sum(yi * zi for yi, zi in zip(y, Z))
-        de = sum(yi * ei for yi, ei in zip(y, E))
-        x = x + dx_
-        ext = de if ext is None else ext + de
-        total += m
-        if relres <= rtol or total >= maxit:
-            break
-        Mx, _ = matvec(x)  # true residual for the restart (one product)
-        r = b - Mx
-        relres = math.sqrt(_dot(r, r)) / beta0
-        if relres <= rtol:
-            break
-    return x, ext, total, relres
 
 
 # ----------------------------------------------------------------------------- the Newton method
@@ -447,7 +382,8 @@ class _Newton:
             qt = np.where(stiff, rt / (sigma + L.diag), t[0] * q[0, isl] + t[1] * q[1, isl])
             return np.concatenate([q[0, ia], q[1, ia], qt, r[2 * nA + nS:]])
 
-        x, Ldx, its, _ = _gmres(matvec, prec, rhs, rtol, GMRES_MAXIT, GMRES_RESTART)
+        x, Ldx, its, _ = gmres(matvec, rhs, precond=prec, tol=rtol, maxit=GMRES_MAXIT, restart=GMRES_RESTART,
+                               extra=True)
         dp = D0 + expand(x)
         ds = LD0 + (Ldx if Ldx is not None else 0.0)
         dcreep = np.zeros(2)

@@ -1,6 +1,6 @@
 """Kalker's creepage and spin coefficients C11, C22, C23, C33 computed with the exact half-space
-theory at vanishing creepage (seed Eq. 13), i.e. in full adhesion, where the steady rolling
-problem is linear.
+theory at vanishing creepage (seed Eq. 13; Kalker 1967, Kalker 1990 ch. 2), i.e. in full adhesion,
+where the steady rolling problem is linear.
 
 For a Hertzian contact with semi-axes a (rolling direction x) and b, scaled so that ab = 1, and
 G = 1, the exact normal problem gives the contact set C on an element grid (conformal.solvers.
@@ -43,6 +43,7 @@ import numpy as np
 from conformal.errors import ConvergenceError, InputError
 from conformal.grid import PlanarGrid
 from conformal.influence.halfspace import HalfSpaceInfluence
+from conformal.solvers.krylov import gmres as krylov_gmres
 from conformal.solvers.normal import solve_normal
 from conformal.theories.hertz import hertz_from_semiaxes
 
@@ -70,59 +71,9 @@ class _Elastic:
 def gmres(matvec: Callable[[np.ndarray], np.ndarray], b: np.ndarray, *,
           precond: Callable[[np.ndarray], np.ndarray] | None = None, tol: float = 1e-10,
           restart: int = 60, maxit: int = 600) -> tuple[np.ndarray, int, float]:
-    """Right-preconditioned restarted GMRES (modified Gram-Schmidt) for A x = b.
-
-    Written with elementwise numpy only: scipy's gmres spends its time in threaded BLAS calls,
-    which were measured 5-20x slower on a busy 2-core machine.  Returns (x, iterations,
-    relative residual |b - A x| / |b|).
-    """
-    M = precond or (lambda v: v)
-    n = b.size
-    x = np.zeros(n)
-    bnorm = math.sqrt(float(np.multiply(b, b).sum())) or 1.0
-    r = b.copy()
-    beta = math.sqrt(float(np.multiply(r, r).sum()))
-    its = 0
-    while its < maxit and beta / bnorm > tol:
-        m = min(restart, maxit - its)
-        V = np.zeros((m + 1, n))
-        Z = np.zeros((m, n))
-        H = np.zeros((m + 1, m))
-        V[0] = r / beta
-        g = np.zeros(m + 1)
-        g[0] = beta
-        cs, sn = np.zeros(m), np.zeros(m)
-        k_used = 0
-        for k in range(m):
-            Z[k] = M(V[k])
-            w = matvec(Z[k])
-            for j in range(k + 1):
-                H[j, k] = float(np.multiply(w, V[j]).sum())
-                w -= H[j, k] * V[j]
-            H[k + 1, k] = math.sqrt(float(np.multiply(w, w).sum()))
-            if H[k + 1, k] > 0:
-                V[k + 1] = w / H[k + 1, k]
-            for j in range(k):  # apply the previous Givens rotations
-                t = cs[j] * H[j, k] + sn[j] * H[j + 1, k]
-                H[j + 1, k] = -sn[j] * H[j, k] + cs[j] * H[j + 1, k]
-                H[j, k] = t
-            d = math.hypot(H[k, k], H[k + 1, k])
-            cs[k], sn[k] = (H[k, k] / d, H[k + 1, k] / d) if d > 0 else (1.0, 0.0)
-            H[k, k] = d
-            H[k + 1, k] = 0.0
-            g[k + 1] = -sn[k] * g[k]
-            g[k] = cs[k] * g[k]
-            its += 1
-            k_used = k + 1
-            if abs(g[k + 1]) / bnorm <= tol:
-                break
-        y = np.zeros(k_used)
-        for i in range(k_used - 1, -1, -1):  # back substitution
-            y[i] = (g[i] - H[i, i + 1:k_used] @ y[i + 1:]) / H[i, i]
-        x += y @ Z[:k_used]
-        r = b - matvec(x)
-        beta = math.sqrt(float(np.multiply(r, r).sum()))
-    return x, its, beta / bnorm
+    """:func:`conformal.solvers.krylov.gmres` (the package's one Krylov solver) returning the true
+    relative residual |b - A x| / |b|: (x, iterations, residual)."""
+    return krylov_gmres(matvec, b, precond=precond, tol=tol, restart=restart, maxit=maxit, true_residual=True)
 
 
 # ----------------------------------------------------------------------------- full-stick rolling

@@ -4,7 +4,7 @@ tabulated it), as functions of the semi-axis ratio a/b and Poisson's ratio nu.
 Sources
 -------
 * Table: Kalker (1990), *Three-dimensional elastic bodies in rolling contact*, App. E, Table E.3
-  (``conformal/data/kalker_coefficients.csv``, copied from ``shared/reference``).  Branch
+  (``conformal/data/kalker_coefficients.csv``, Kalker's 1967 tables as reprinted in Kalker 1990).  Branch
   ``a<=b`` is tabulated in g = a/b, branch ``a>b`` in g = b/a, g = 0.1 ... 1, nu = 0, 0.25, 0.5.
   a is the semi-axis in the rolling direction x.  The csv carries C23(a<=b, g=0.8, nu=0.25) =
   1.25; CONTACT's usetab_table.f90 has the transcription error 1.15 (the test suite checks that

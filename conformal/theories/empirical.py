@@ -162,5 +162,7 @@ def solve(problem):
              **material_notes(problem)}
     if kin.phi != 0.0:
         extra["note_spin"] = "spin phi is not part of this theory and was ignored"
+        extra["warnings"] = [f"theory {theory!r} ignores the spin phi = {kin.phi:.4g} rad/mm (FX, FY without "
+                             "it, no MZ); use fastsim or exact"]
     return Result(theory=theory, FN=hz.FN, FX=FX, FY=FY, MZ=math.nan, a=hz.a, b=hz.b, pmax=hz.pmax,
                   approach=hz.approach, xi=kin.xi, eta=kin.eta, phi=kin.phi, extra=extra)

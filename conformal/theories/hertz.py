@@ -1,4 +1,5 @@
-"""Hertz theory of non-conformal contact by complete elliptic integrals (Johnson 1985, §4.2).
+"""Hertz theory of non-conformal contact by complete elliptic integrals (Hertz 1882; Johnson 1985, §4.2;
+seed Eqs. 16-17 for the combined constants).
 
 The undeformed distance is h = A x² + B y² (A, B > 0, 1/mm); the pressure is the semi-ellipsoid
 p = p0 sqrt(1 - x²/a² - y²/b²).  With e² = 1 - (b/a)² for a >= b and K(e), E(e) the complete

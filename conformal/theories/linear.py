@@ -114,6 +114,7 @@ def solve(problem):
     if ratio > 1.0:
         extra["note"] = ("linear theory exceeds the friction bound |F| <= mu FN (|F|/(mu FN) = %.3g): "
                          "the creepage is too large for it; use fastsim, empirical or exact" % ratio)
+        extra["warnings"] = [extra["note"]]
     return Result(theory="linear", FN=hz.FN, FX=f.FX, FY=f.FY, MZ=f.MZ, a=a, b=b, pmax=hz.pmax,
                   approach=hz.approach, xi=xi, eta=eta, phi=phi, extra=extra)
 

@@ -1,0 +1,47 @@
+"""Cases: orchestration above the solvers.
+
+A wheel-rail case (:mod:`conformal.cases.wheelrail`, :mod:`conformal.cases.conformal`) places the
+wheelset, balances the vertical load with contact solves, builds the planar or curved grids,
+derives the creepages from the wheelset motion and assembles the patches into one result, from
+the geometry, influence and solver layers below.  :mod:`conformal.cases.precompute` plans the FE
+influence numbers a sweep of wheel-rail positions will need.
+"""
+from conformal.cases.conformal import solve_wheel_rail_conformal
+from conformal.cases.wheelrail import problems_from_wheel_rail
+from conformal.cases.wheelrail import solve_wheel_rail as solve_wheel_rail_planar
+
+__all__ = ["problems_from_wheel_rail", "solve_wheel_rail", "solve_wheel_rail_conformal", "solve_wheel_rail_planar"]
+
+
+def solve_wheel_rail(scene):
+    """Solve a wheel-rail scene with its model: the conformal theory on one curved strip per wheel
+    (:func:`~conformal.cases.conformal.solve_wheel_rail_conformal`), every other model per
+    contact patch on its tangent plane (:func:`~conformal.cases.wheelrail.solve_wheel_rail`).
+
+    Parameters
+    ----------
+    scene : conformal.scene.Scene
+        A scene with ``[geometry] kind = "wheel_rail"``.
+
+    Returns
+    -------
+    Result
+        Totals in the contact frames (FN, FX, FY), the track-frame forces on the rail
+        ``extra["FX_track"]``, ``["FY_track"]``, ``["FZ_track"]``, and ``approach``: the wheelset's
+        lowering below its first touch (the meaning of ``[load] approach``).
+
+    Examples
+    --------
+    >>> from conformal.cli import demo_scene_path
+    >>> from conformal.scene import load_scene
+    >>> s = load_scene(demo_scene_path()).with_(model__theory="hertz")
+    >>> r = solve_wheel_rail(s)
+    >>> round(r.extra["FZ_track"]), r.theory           # the 10 kN wheel load, balanced vertically
+    (10000, 'hertz')
+    """
+    if scene.model.theory == "fe_contact":   # direct FE contact of the meshed wheel and rail
+        from conformal.cases.fe_contact import solve_wheel_rail_fe_contact
+        return solve_wheel_rail_fe_contact(scene)
+    if scene.model.theory == "conformal":
+        return solve_wheel_rail_conformal(scene)
+    return solve_wheel_rail_planar(scene)

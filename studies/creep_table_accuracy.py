@@ -1,0 +1,137 @@
+"""Accuracy of a creep-force table against direct exact solves, with FASTSIM beside it.
+
+    python studies/creep_table_accuracy.py [--table TABLE.npz] [--n 300] [--fine 20] [--out DIR]
+
+Random points, uniform in the table's own coordinates (ln a/b, nu, s = rho/(1+rho), theta over
+the full circle, q = nphi/(1+|nphi|); Eqs. T1-T4 of conformal/tables/spec.py), so none lies on a
+node, inside the tabulated ranges.  Reference: :func:`conformal.solvers.exact.solve` from a cold
+start at each point with the table's solver settings (grid_n, tol): the error measured is the
+table's own (interpolation) error.  Reported per point: |F_table - F_exact| / (mu FN) (the vector
+norm over FX, FY) and |MZ error| / (mu FN sqrt(ab)); FASTSIM (conformal.theories.fastsim.
+fastsim_batch, parabolic bound, 24 x 24 slices, Kalker's flexibilities) at the same points against
+the same reference.  ``--fine`` points are also solved on a grid 2.5x finer to show the exact
+solver's own discretisation error at the table's grid_n (what the table inherits).
+
+Writes OUT/accuracy.json, OUT/accuracy_points.csv (every point) and OUT/accuracy.png (default OUT = studies/out/creep_table).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from conformal.tables import evaluate, load_table  # noqa: E402
+from conformal.tables.build import solve_points  # noqa: E402
+from conformal.tables.spec import saturation_scales  # noqa: E402
+from conformal.theories.coefficients import coefficient_arrays  # noqa: E402
+from conformal.theories.fastsim import fastsim_batch  # noqa: E402
+
+G, MU, FN, C = 82000.0, 0.3, 1.0e5, 6.0   # any values: the errors are in units of mu FN
+
+
+def sample(spec, n: int, rng) -> dict:
+    t = rng.uniform(math.log(spec.ratio_min), math.log(spec.ratio_max), n)
+    nu = rng.uniform(spec.nu_min, spec.nu_max, n)
+    # 0.2 % inside the rho edge: the table normalises with its own interpolated C11, C22 (Eq. T1)
+    s = rng.uniform(0.0, 0.998 * spec.s_max, n)
+    th = rng.uniform(0.0, 2 * math.pi, n)
+    q = rng.uniform(-0.998 * spec.q_max, 0.998 * spec.q_max, n)
+    rho = s / (1 - s)
+    return {"ratio": np.exp(t), "nu": nu, "nx": rho * np.cos(th), "ny": rho * np.sin(th),
+            "nphi": q / (1 - np.abs(q)), "rho": rho}
+
+
+def summary(err: np.ndarray) -> dict:
+    return {"max": float(err.max()), "mean": float(err.mean()), "p99": float(np.percentile(err, 99)),
+            "p90": float(np.percentile(err, 90))}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--table", default=None, help="table file (default: the shipped table)")
+    ap.add_argument("--n", type=int, default=300, help="random points")
+    ap.add_argument("--fine", type=int, default=20, help="points also solved on a finer grid")
+    ap.add_argument("--seed", type=int, default=2026)
+    ap.add_argument("--out", default=str(ROOT / "studies" / "out" / "creep_table"))
+    args = ap.parse_args(argv)
+    table = load_table(args.table)
+    spec = table.spec
+    rng = np.random.default_rng(args.seed)
+    p = sample(spec, args.n, rng)
+    t0 = time.perf_counter()
+    ref = solve_points(p["ratio"], p["nu"], p["nx"], p["ny"], p["nphi"], grid_n=spec.grid_n, tol=spec.tol)
+    t_exact = time.perf_counter() - t0
+    a, b = C * np.sqrt(p["ratio"]), C / np.sqrt(p["ratio"])
+    kx, ky, kp = saturation_scales(a, b, FN, MU, G, *coefficient_arrays(p["ratio"], p["nu"]))
+    xi, eta, phi = p["nx"] / kx, p["ny"] / ky, p["nphi"] / kp
+    t0 = time.perf_counter()
+    FX, FY, MZ = evaluate(table, a, b, FN, MU, G, p["nu"], xi, eta, phi)
+    t_table = time.perf_counter() - t0
+    muFN = MU * FN
+    e_tab = np.hypot(FX / muFN - ref[:, 0], FY / muFN - ref[:, 1])
+    e_tab_mz = np.abs(MZ / (muFN * np.sqrt(a * b)) - ref[:, 2])
+    fs = fastsim_batch(a, b, FN, MU, xi, eta, phi, G=G, nu=p["nu"])
+    e_fs = np.hypot(fs.FX / muFN - ref[:, 0], fs.FY / muFN - ref[:, 1])
+    e_fs_mz = np.abs(fs.MZ / (muFN * np.sqrt(a * b)) - ref[:, 2])
+    core = p["rho"] <= 1.5
+    res = {
+        "table": table.path, "content_hash": table.content_hash, "points": args.n, "seed": args.seed,
+        "ranges": table.ranges(), "grid_n": spec.grid_n, "tol": spec.tol,
+        "table_F": summary(e_tab), "table_MZ": summary(e_tab_mz),
+        "table_F_rho_le_1.5": summary(e_tab[core]), "table_F_rho_gt_1.5": summary(e_tab[~core]),
+        "fastsim_F": summary(e_fs), "fastsim_MZ": summary(e_fs_mz),
+        "fastsim_F_rho_le_1.5": summary(e_fs[core]),
+        "time_exact_s_per_point": t_exact / args.n, "time_table_s_per_point": t_table / args.n,
+    }
+    if args.fine > 0:
+        k = np.arange(min(args.fine, args.n))
+        fine_n = int(round(2.5 * spec.grid_n))
+        ref_f = solve_points(p["ratio"][k], p["nu"][k], p["nx"][k], p["ny"][k], p["nphi"][k], grid_n=fine_n, tol=spec.tol)
+        d = np.hypot(*(ref_f[:, :2] - ref[k, :2]).T)
+        res["exact_grid_n_vs_fine"] = {"fine_grid_n": fine_n, "points": int(k.size), **summary(d)}
+        res["table_vs_fine_F"] = summary(np.hypot(FX[k] / muFN - ref_f[:, 0], FY[k] / muFN - ref_f[:, 1]))
+        res["fastsim_vs_fine_F"] = summary(np.hypot(fs.FX[k] / muFN - ref_f[:, 0], fs.FY[k] / muFN - ref_f[:, 1]))
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "accuracy.json").write_text(json.dumps(res, indent=2) + "\n")
+    cols = {"a_over_b": p["ratio"], "nu": p["nu"], "nx": p["nx"], "ny": p["ny"], "nphi": p["nphi"],
+            "fx_exact": ref[:, 0], "fy_exact": ref[:, 1], "mz_exact": ref[:, 2], "err_table": e_tab,
+            "err_table_mz": e_tab_mz, "err_fastsim": e_fs}
+    np.savetxt(out / "accuracy_points.csv", np.column_stack(list(cols.values())), delimiter=",",
+               header=",".join(cols), comments="", fmt="%.6g")
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+        ax[0].semilogy(p["rho"], np.maximum(e_fs, 1e-6), ".", color="tab:red", ms=4, label="FASTSIM")
+        ax[0].semilogy(p["rho"], np.maximum(e_tab, 1e-6), ".", color="tab:blue", ms=4, label="table")
+        ax[0].axhline(0.01, color="k", lw=0.8, ls="--")
+        ax[0].set_xscale("symlog", linthresh=1.0)
+        ax[0].set_xlabel("rho = hypot(nx, ny) (1 = saturation)")
+        ax[0].set_ylabel("|F - F_exact| / (mu FN)")
+        ax[0].legend()
+        ax[1].semilogy(np.abs(p["nphi"]), np.maximum(e_fs, 1e-6), ".", color="tab:red", ms=4, label="FASTSIM")
+        ax[1].semilogy(np.abs(p["nphi"]), np.maximum(e_tab, 1e-6), ".", color="tab:blue", ms=4, label="table")
+        ax[1].axhline(0.01, color="k", lw=0.8, ls="--")
+        ax[1].set_xlabel("|nphi| (normalised spin)")
+        fig.suptitle(f"creep table vs exact solves at {args.n} random points (grid_n = {spec.grid_n})")
+        fig.tight_layout()
+        fig.savefig(out / "accuracy.png", dpi=110)
+    except ImportError:
+        pass
+    print(json.dumps({k: v for k, v in res.items() if k not in ("ranges",)}, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

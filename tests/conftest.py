@@ -1,0 +1,67 @@
+"""Shared fixtures and reference data for the tests.
+
+The reference data (CONTACT's outputs of the standard cases, tests/reference/contact_cases.json)
+is parsed once per session (:func:`reference_cases`), whichever test module asks first.
+"""
+from __future__ import annotations
+
+import json
+from functools import lru_cache
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+REFERENCE = ROOT / "tests" / "reference"
+CONTACT_CASES = REFERENCE / "contact_cases.json"
+SCENES = ROOT / "meshes" / "scenes"
+DEMO = ROOT / "conformal" / "data" / "scenes" / "demo.toml"
+
+
+@lru_cache(maxsize=1)
+def _contact_cases() -> dict:
+    return json.loads(CONTACT_CASES.read_text(encoding="utf-8"))["cases"]
+
+
+def reference_cases() -> dict:
+    """CONTACT's reference cases by name (parsed once; do not modify the returned mapping)."""
+    return _contact_cases()
+
+
+def reference_case(name: str) -> dict:
+    """One reference case; skips the test where the reference file is missing."""
+    if not CONTACT_CASES.is_file():
+        pytest.skip("reference data not available")
+    return _contact_cases()[name]
+
+
+@pytest.fixture(scope="session")
+def contact_cases() -> dict:
+    """CONTACT's reference cases (tests/reference/contact_cases.json), parsed once."""
+    if not CONTACT_CASES.is_file():
+        pytest.skip("reference data not available")
+    return reference_cases()
+
+
+@pytest.fixture(scope="session")
+def demo_scene():
+    """The built-in demo scene (conformal flange-root contact), loaded once."""
+    from conformal.scene import load_scene
+
+    return load_scene(DEMO)
+
+
+@pytest.fixture
+def quadratic_scene():
+    """Factory of a small Hertzian scene: ``quadratic_scene(theory="exact", n=20, xi=1e-3, ...)``
+    (kinematics keys go to [kinematics], grid keys n, scale to [grid])."""
+    from conformal.scene import scene_from_dict
+
+    def make(theory: str = "exact", *, A: float = 1e-3, B: float = 1e-3, normal_force: float = 1e4,
+             n: int = 20, scale: float = 1.1, mu: float = 0.3, **kinematics):
+        return scene_from_dict({"material": {"G": 82000.0, "nu": 0.28}, "friction": {"mu": mu},
+                                "geometry": {"kind": "quadratic", "A": A, "B": B},
+                                "load": {"normal_force": normal_force}, "kinematics": kinematics,
+                                "grid": {"n": n, "scale": scale}, "model": {"theory": theory}})
+
+    return make
