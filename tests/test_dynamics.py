@@ -1,4 +1,4 @@
-"""Wheelset dynamics (issue 9): independent checks of the suspended-wheelset model.
+"""Wheelset dynamics: independent checks of the suspended-wheelset model.
 
 Short simulated times and coarse contact tables keep this file fast.  References are analytic
 (Klingel, Hertz, energy) or an independent numerical route (time integration against eigenvalues).

@@ -204,3 +204,17 @@ def test_gmsh_failure_is_reported_and_finalised(monkeypatch):
     with pytest.raises(MeshingError, match="gmsh failed while building the geometry.*simulated"):
         mesh_body(body, StripPatch.uniform(2, 1.0, 2, 1.0, 10.0))
     assert not gmsh.isInitialized()
+
+
+def test_flat_tetrahedra_are_dropped_unless_a_node_needs_them():
+    """HXT left flat tetrahedra (four nodes in one plane) on the faces between the swept pieces of
+    a worn wheel; their element matrices are singular.  They carry no material and are dropped; a
+    node that only a flat tetrahedron holds is an error, not a silently floating node."""
+    body = BodyModel("block", flat_profile(-1, 1))
+    P = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [0.5, 0.5, 0.0]], dtype=float)
+    good = np.array([[0, 1, 2, 3], [1, 4, 2, 3]])
+    flat = np.array([[0, 1, 4, 2]])                                   # all in z = 0
+    kept = gmsh_body._drop_flat(P[:5], np.vstack([good, flat]), body)
+    assert np.array_equal(kept, good)
+    with pytest.raises(MeshingError, match="flat tetrahedra"):
+        gmsh_body._drop_flat(P, np.vstack([good, [[0, 1, 4, 5]]]), body)   # node 5 only in a flat one
