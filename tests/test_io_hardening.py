@@ -173,9 +173,13 @@ def test_reported_approach_gives_back_the_wheel_load(theory, n):
 
 
 JOB = textwrap.dedent("""
-    import sys, time
+    import signal, sys, time
     from pathlib import Path
     from conformal.jobs import run_tasks
+
+    # Ctrl-C as in a terminal, also where this test runs in a background job (which starts with
+    # SIGINT ignored, and Python then keeps it ignored)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
     def slow(task):
         folder, name, t = task
