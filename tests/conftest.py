@@ -65,3 +65,33 @@ def quadratic_scene():
                                 "grid": {"n": n, "scale": scale}, "model": {"theory": theory}})
 
     return make
+
+
+SWEEP_SCENE = """\
+name = "sweep"
+[material]
+G = 82000.0
+nu = 0.28
+[friction]
+mu = 0.3
+[geometry]
+kind = "wheel_rail"
+wheel_profile = "S1002"
+rail_profile = "UIC60"
+lateral_shift = 0.0
+[load]
+wheel_load = 50000.0
+[grid]
+n = 6
+[model]
+theory = "conformal"
+fe_body_size = 0.7
+"""
+
+
+@pytest.fixture
+def scene_file(tmp_path):
+    """A small wheel-rail scene file (S1002/UIC60, 6 x 6 strip, small FE bodies) for precompute."""
+    p = tmp_path / "sweep.toml"
+    p.write_text(SWEEP_SCENE)
+    return p

@@ -19,27 +19,6 @@ from conformal.meshing.gmsh_body import MeshSpec
 PROFILES = Path(conformal.__file__).parent / "data" / "profiles"
 G, NU = 82000.0, 0.28
 
-SCENE = textwrap.dedent("""\
-    name = "repro"
-    [material]
-    G = 82000.0
-    nu = 0.28
-    [friction]
-    mu = 0.3
-    [geometry]
-    kind = "wheel_rail"
-    wheel_profile = "S1002"
-    rail_profile = "UIC60"
-    lateral_shift = 0.0
-    [load]
-    wheel_load = 50000.0
-    [grid]
-    n = 6
-    [model]
-    theory = "conformal"
-    fe_body_size = 0.7
-    """)
-
 KERNEL_SCRIPT = textwrap.dedent("""\
     import sys, numpy as np
     from conformal.influence.fe import FESettings, body_influence
@@ -71,9 +50,8 @@ def test_same_body_same_kernel_run_to_run_and_across_processes(tmp_path):
     assert np.abs(k1 - k3).max() <= 1e-12 * scale
 
 
-def test_precompute_with_one_or_two_workers_gives_the_same_numbers(tmp_path, capsys):
-    scene = tmp_path / "repro.toml"
-    scene.write_text(SCENE)
+def test_precompute_with_one_or_two_workers_gives_the_same_numbers(scene_file, tmp_path, capsys):
+    scene = scene_file
     kernels = []
     for workers in ("1", "2"):
         cache = tmp_path / f"cache{workers}"

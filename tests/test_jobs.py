@@ -3,7 +3,6 @@ every position, resumption after an interruption, optional Dask."""
 from __future__ import annotations
 
 import sys
-import textwrap
 
 import numpy as np
 import pytest
@@ -14,33 +13,6 @@ from conformal.influence.cache import Cache
 from conformal.cases.precompute import plan, precompute
 from conformal.jobs import parse_sweep, run
 
-SCENE = textwrap.dedent("""\
-    name = "sweep"
-    [material]
-    G = 82000.0
-    nu = 0.28
-    [friction]
-    mu = 0.3
-    [geometry]
-    kind = "wheel_rail"
-    wheel_profile = "S1002"
-    rail_profile = "UIC60"
-    lateral_shift = 0.0
-    [load]
-    wheel_load = 50000.0
-    [grid]
-    n = 6
-    [model]
-    theory = "conformal"
-    fe_body_size = 0.7
-    """)
-
-
-@pytest.fixture
-def scene_file(tmp_path):
-    p = tmp_path / "sweep.toml"
-    p.write_text(SCENE)
-    return p
 
 
 def test_parse_sweep():
@@ -115,7 +87,7 @@ def test_precompute_bad_input(scene_file, tmp_path, capsys):
     assert main(["precompute", str(scene_file), "--sweep", "shift=0:1", "--cache", str(tmp_path)]) == 2
     assert "--sweep" in capsys.readouterr().err
     planar = tmp_path / "planar.toml"
-    planar.write_text(SCENE.replace('kind = "wheel_rail"\nwheel_profile = "S1002"\nrail_profile = "UIC60"\n'
+    planar.write_text(scene_file.read_text().replace('kind = "wheel_rail"\nwheel_profile = "S1002"\nrail_profile = "UIC60"\n'
                                     'lateral_shift = 0.0', 'kind = "quadratic"\nA = 0.001\nB = 0.001')
                       .replace("wheel_load", "normal_force"))
     assert main(["precompute", str(planar), "--sweep", "shift=0", "--cache", str(tmp_path)]) == 2
