@@ -1,25 +1,31 @@
-"""Time and accuracy of the steady-rolling solver (conformal.solvers.tangential) against the grid,
-next to CONTACT's GDsteady on the same case (reference/contact_performance.md, case "circ").
+"""Time and accuracy of the steady-rolling and shift solvers (conformal.solvers.tangential)
+against the grid, next to CONTACT's GDsteady on the same case (reference/contact_performance.md,
+case "circ").
 
 Case: quasi-identical steel, G = 82 000 N/mm², nu = 0.28, A = B = 0.001 1/mm, FN = 100 kN, potential
 area 1.1 x the Hertz circle in n x n square elements, mu = 0.3, xi = 0.001 (steady rolling in +x),
 tol 1e-6.  The normal problem is solved first (conformal.solvers.normal, as CONTACT does), and its
 time is not counted: the tangential time is the one compared with CONTACT's "steady rolling" column
-minus its "normal only" column.  (CONTACT's times are whole-program wall times; its normal part is
-0.05 s at 100 x 100 and 0.14 s at 200 x 200.)
+minus its "normal only" column.  The shift case (CONTACT's T = 1) shifts the same contact by
+0.008 mm (about half the shift of full sliding) from zero tractions.
 
-Per n: the tangential solve, timed as the minimum over ``--repeats`` runs of perf_counter (and of
-process_time: this 2-core machine is shared, wall times vary by up to 2x), Newton iterations,
-FFT products, FX, the adhesion/slip counts and the error of FX and of the traction field against
-the finest grid.  At two sizes also the variants that led to the final method:
+The cost is given in three ways, because wall times on a shared 2-core machine vary by up to 2x:
 
-* ``plain``: semismooth Newton + GMRES with the cumsum/circulant preconditioner, double precision,
-  started from zero;
-* ``+coarse``: started from the solution on a 2x coarser grid (nested iteration, recursively);
-* ``final``: + single-precision FFT products inside GMRES.
+* ``wall_s``: the minimum over ``--repeats`` runs of perf_counter;
+* ``fft_pairs``: the wall time in units of one FFT pair of the padded grid (rfft2 + irfft2 of the
+  2-component field on the 2n x 2n grid, double precision, one thread), timed in the same process
+  right before: the cost of one plain influence product, the unit of the issue's target (<= 150
+  at n = 200);
+* ``products``: the influence products actually spent on the n x n grid, and
+  ``coarse_products`` those of the nested start on coarser grids, weighted by the element count.
 
-Writes studies/out/steady_rolling_speed.csv.  Run: python studies/steady_rolling_speed.py
-[--sizes 25 50 100 150 200 300] [--repeats 3]
+Also per n: Newton iterations, FX, the adhesion/slip counts and the error of FX and of the
+traction field against the finest grid, and the growth exponent of the time with the number of
+elements N = n^2 (np.polyfit of log wall against log N over the sizes run).
+
+Writes studies/out/steady_rolling_speed/{steady_rolling_speed.csv, steady_rolling_speed.md,
+run.json}.  Run: python studies/steady_rolling_speed.py [--sizes 50 100 150 200 300 400]
+[--repeats 3] [--quick] [--out DIR]
 """
 from __future__ import annotations
 
@@ -45,6 +51,9 @@ from conformal.result import ADHESION, SLIP  # noqa: E402
 from conformal.solvers import tangential as tang  # noqa: E402
 from conformal.solvers.normal import solve_normal  # noqa: E402
 from conformal.theories.hertz import hertz_from_curvatures  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _provenance import write_sidecar  # noqa: E402
 
 # CONTACT (revision 2707, 1 thread, this kind of machine): n -> (normal only, GDsteady, FX)
 CONTACT = {25: (0.007, None, -14330.0), 50: (0.012, 0.29, -14110.0), 100: (0.046, 1.17, -13990.0),
@@ -93,22 +102,64 @@ def field_error(grid, sol, fine_grid, fine_sol) -> float:
     return float(np.abs(sol.px - ref).max() / np.abs(fine_sol.px).max())
 
 
+SHIFT = 0.008  # mm: the shift case (about half of the full-sliding shift of this contact)
+
+
+def fft_pair_time(op, repeats: int = 20) -> float:
+    """Seconds of one FFT pair of the padded grid: rfft2 + irfft2 of a (2, Mx, My) double field."""
+    from scipy import fft as sfft
+
+    Mx, My = op.padded_shape
+    x = np.random.default_rng(0).random((2, op.mx, op.my))
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        sfft.irfft2(sfft.rfft2(x, s=(Mx, My)), s=(Mx, My))
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def run_shift(n: int, repeats: int):
+    grid, op, pn = problem(n)
+    wall, sol = np.inf, None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        sol = tang.solve_tangential(op, grid, pn, xi=SHIFT, eta=0.0, phi=0.0, mu_static=MU, mu_kinetic=MU,
+                                    rolling="shift", tol=TOL)
+        wall = min(wall, time.perf_counter() - t0)
+    return grid, pn, sol, wall
+
+
+def growth(sizes, values) -> float:
+    """Exponent q of value ~ N^q (N = n^2), fitted over the sizes given."""
+    return float(np.polyfit(np.log(np.asarray(sizes, float) ** 2), np.log(values), 1)[0])
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[25, 50, 100, 150, 200, 300])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[25, 50, 100, 150, 200, 300, 400])
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--variant-sizes", type=int, nargs="*", default=[100, 200])
+    ap.add_argument("--variant-sizes", type=int, nargs="*", default=[200])
+    ap.add_argument("--quick", action="store_true", help="sizes 25 50 100, one repeat, no variants")
+    ap.add_argument("--out", type=Path, default=ROOT / "studies" / "out" / "steady_rolling_speed")
     args = ap.parse_args(argv)
+    if args.quick:
+        args.sizes, args.repeats, args.variant_sizes = [25, 50, 100], 1, []
     sizes = sorted(args.sizes)
-    results = {n: run(n, args.repeats) for n in sizes}
+    rows = []
+    results = {}
+    for n in sizes:
+        grid, op, pn = problem(n)
+        unit = fft_pair_time(op)
+        results[n] = run(n, args.repeats) + (unit,)
     fine_grid, fine_pn, fine, *_ = results[sizes[-1]]
     FX_fine = float(fine.px.sum() * fine_grid.area)
-    rows = []
     print(f"steady rolling, case circ (mu {MU}, xi {XI}, tol {TOL:g}); finest grid {sizes[-1]}^2: FX = {FX_fine:.1f} N")
-    print(f"{'n':>4} {'contact':>7} {'slip%':>6} {'its':>4} {'prods':>5} {'wall s':>7} {'cpu s':>7} "
-          f"{'CONTACT s':>9} {'ratio':>6} {'FX':>9} {'FX CONTACT':>10} {'dFX/FX':>8} {'dpx/max':>8}")
+    head = (f"{'n':>4} {'contact':>7} {'slip%':>6} {'its':>4} {'prods':>5} {'coarse':>6} {'wall s':>7} "
+            f"{'FFT pairs':>9} {'CONTACT s':>9} {'ratio':>6} {'FX':>9} {'FX CONTACT':>10} {'dFX/FX':>8} {'dpx/max':>8}")
+    print(head)
     for n in sizes:
-        grid, pn, sol, wall, cpu = results[n]
+        grid, pn, sol, wall, cpu, unit = results[n]
         FX = float(sol.px.sum() * grid.area)
         nc = int(np.count_nonzero(sol.status))
         nslip = int(np.count_nonzero(sol.status == SLIP))
@@ -117,15 +168,37 @@ def main(argv=None) -> int:
         ratio = wall / c_steady if c_steady else None
         err_fx = abs(FX - FX_fine) / abs(FX_fine)
         err_p = field_error(grid, sol, fine_grid, fine) if n != sizes[-1] else 0.0
-        row = dict(n=n, variant="final", n_contact=nc, n_slip=nslip, n_adhesion=int(np.count_nonzero(sol.status == ADHESION)),
-                   newton_iterations=sol.iterations, products=sol.products, residual=sol.residual,
-                   converged=sol.converged, wall_s=wall, cpu_s=cpu, contact_gdsteady_s=c_steady,
-                   contact_tangential_s=c_tang, ratio_to_contact=ratio, FX=FX, FX_contact=c_fx,
-                   FX_error_vs_finest=err_fx, px_error_vs_finest=err_p)
+        row = dict(n=n, case="steady", variant="final", n_contact=nc, n_slip=nslip,
+                   n_adhesion=int(np.count_nonzero(sol.status == ADHESION)), newton_iterations=sol.iterations,
+                   products=sol.products, coarse_products=round(sol.coarse_products, 1), residual=sol.residual,
+                   converged=sol.converged, wall_s=wall, cpu_s=cpu, fft_pair_s=unit, fft_pairs=wall / unit,
+                   contact_gdsteady_s=c_steady, contact_tangential_s=c_tang, ratio_to_contact=ratio, FX=FX,
+                   FX_contact=c_fx, FX_error_vs_finest=err_fx, px_error_vs_finest=err_p)
         rows.append(row)
-        print(f"{n:>4} {nc:>7} {100 * nslip / nc:>6.1f} {sol.iterations:>4} {sol.products:>5} {wall:>7.3f} {cpu:>7.3f} "
-              f"{(f'{c_steady:.2f}' if c_steady else '-'):>9} {(f'{ratio:.2f}' if ratio else '-'):>6} {FX:>9.1f} "
-              f"{(f'{c_fx:.0f}' if c_fx else '-'):>10} {err_fx:>8.2e} {err_p:>8.2e}")
+        print(f"{n:>4} {nc:>7} {100 * nslip / nc:>6.1f} {sol.iterations:>4} {sol.products:>5} {sol.coarse_products:>6.1f} "
+              f"{wall:>7.3f} {wall / unit:>9.0f} {(f'{c_steady:.2f}' if c_steady else '-'):>9} "
+              f"{(f'{ratio:.3f}' if ratio else '-'):>6} {FX:>9.1f} {(f'{c_fx:.0f}' if c_fx else '-'):>10} "
+              f"{err_fx:>8.2e} {err_p:>8.2e}")
+    print("\nshift (T = 1), the same contact shifted by", SHIFT, "mm:")
+    for n in sizes:
+        grid, pn, sol, wall = run_shift(n, args.repeats)
+        unit = results[n][-1]
+        FX = float(sol.px.sum() * grid.area)
+        rows.append(dict(n=n, case="shift", variant="final", newton_iterations=sol.iterations, products=sol.products,
+                         coarse_products=round(sol.coarse_products, 1), residual=sol.residual,
+                         converged=sol.converged, wall_s=wall, fft_pair_s=unit, fft_pairs=wall / unit, FX=FX,
+                         n_slip=int(np.count_nonzero(sol.status == SLIP)), n_contact=int(np.count_nonzero(sol.status))))
+        print(f"{n:>4} its {sol.iterations} products {sol.products} + {sol.coarse_products:.1f} wall {wall:.3f} s "
+              f"= {wall / unit:.0f} FFT pairs, FX {FX:.1f}")
+    big = [n for n in sizes if n >= 50]
+    fits = {}
+    for case in ("steady", "shift"):
+        rs = [r for r in rows if r["case"] == case and r["n"] in big]
+        if len(rs) >= 2:
+            fits[case] = dict(wall=growth([r["n"] for r in rs], [r["wall_s"] for r in rs]),
+                              products=growth([r["n"] for r in rs], [r["products"] + r["coarse_products"] for r in rs]))
+    for case, f in fits.items():
+        print(f"growth {case} (n = {big[0]}..{big[-1]}): wall ~ N^{f['wall']:.2f}, products ~ N^{f['products']:.2f}")
     if args.variant_sizes:
         print("\nvariants (what was tried), same case:")
         print(f"{'n':>4} {'variant':>8} {'its':>4} {'prods':>5} {'wall s':>7} {'cpu s':>7} {'FX':>9}")
@@ -133,18 +206,33 @@ def main(argv=None) -> int:
             for v in VARIANTS:
                 grid, pn, sol, wall, cpu = run(n, args.repeats, v)
                 FX = float(sol.px.sum() * grid.area)
-                rows.append(dict(n=n, variant=v, newton_iterations=sol.iterations, products=sol.products,
-                                 residual=sol.residual, converged=sol.converged, wall_s=wall, cpu_s=cpu, FX=FX,
+                rows.append(dict(n=n, case="steady", variant=v, newton_iterations=sol.iterations, products=sol.products,
+                                 coarse_products=round(sol.coarse_products, 1), residual=sol.residual,
+                                 converged=sol.converged, wall_s=wall, cpu_s=cpu, FX=FX,
                                  contact_gdsteady_s=CONTACT.get(n, (None, None))[1]))
                 print(f"{n:>4} {v:>8} {sol.iterations:>4} {sol.products:>5} {wall:>7.3f} {cpu:>7.3f} {FX:>9.1f}")
-    out = ROOT / "studies" / "out"
+    out = args.out
     out.mkdir(parents=True, exist_ok=True)
     keys = list(dict.fromkeys(k for r in rows for k in r))
     with open(out / "steady_rolling_speed.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=keys)
         w.writeheader()
         w.writerows(rows)
-    print(f"\nwrote {out / 'steady_rolling_speed.csv'}")
+    md = ["| n x n | case | Newton its | products (+ coarse) | wall [s] | FFT pairs | CONTACT GDsteady [s] | FX [N] | FX CONTACT [N] | FX error vs finest |",
+          "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        if r["variant"] != "final":
+            continue
+        cs = r.get("contact_gdsteady_s") or "-"
+        err = r.get("FX_error_vs_finest")
+        err = f"{err:.1e}" if err is not None else "-"
+        md.append(f"| {r['n']} | {r['case']} | {r['newton_iterations']} | {r['products']} (+{r['coarse_products']:.0f}) | "
+                  f"{r['wall_s']:.3f} | {r['fft_pairs']:.0f} | {cs} | {r['FX']:.0f} | {r.get('FX_contact') or '-'} | {err} |")
+    for case, f in fits.items():
+        md.append(f"\nGrowth ({case}, n = {big[0]}..{big[-1]}): wall ~ N^{f['wall']:.2f}, products ~ N^{f['products']:.2f}.")
+    (out / "steady_rolling_speed.md").write_text("\n".join(md) + "\n")
+    write_sidecar(out, __file__, args, extra={"growth": fits, "load_average": os.getloadavg()})
+    print(f"\nwrote {out}")
     return 0
 
 

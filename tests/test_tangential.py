@@ -98,7 +98,8 @@ def test_cattaneo_shift_against_contact_and_analytic():
     fx, fy = rel_forces(sol, g, pn, 0.4)
     assert fx == pytest.approx(-0.875, abs=1e-6) and abs(fy) < 1e-6
     # the solved shift: CONTACT prints 0.008155 (4 digits); same discretisation -> same value
-    assert sol.xi == pytest.approx(out["shift_x_mm"], abs=6e-7) and abs(sol.eta) < 1e-9
+    # eta = 0 by symmetry, to the solver's relative tolerance 1e-6 of the shift
+    assert sol.xi == pytest.approx(out["shift_x_mm"], abs=6e-7) and abs(sol.eta) < 1e-6 * sol.xi
     # analytic 0.0081724 (reference.cattaneo_shift); CONTACT's own discretisation error is -0.2 %
     FN = pn.sum() * g.area
     W = ref.cattaneo_shift(-0.875, mu=0.4, FN=FN, a=1.0, G=200.0, nu=0.42)

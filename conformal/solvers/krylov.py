@@ -15,8 +15,9 @@ import numpy as np
 
 
 def dot(a: np.ndarray, b: np.ndarray) -> float:
-    """sum(a * b) with elementwise numpy (no BLAS: see the module docstring)."""
-    return float((a * b).sum())
+    """a . b of 1-D vectors (BLAS ddot: 4x faster than sum(a * b); the callers run under
+    :func:`conformal._threads.single_threaded_blas` or a user's thread setting)."""
+    return float(np.dot(a, b))
 
 
 def gmres(matvec: Callable, b: np.ndarray, *, precond: Callable | None = None, tol: float = 1e-10,
