@@ -9,6 +9,7 @@ import importlib
 import time
 from dataclasses import replace
 
+from conformal.errors import InputError
 from conformal.problem import ContactProblem
 from conformal.result import Result
 
@@ -27,7 +28,16 @@ MODELS = {
 
 def solve_problem(problem: ContactProblem) -> Result:
     """Solve one contact problem with ``problem.model.theory``; wall_s is measured here."""
+    if getattr(problem.kinematics, "direction", 1) == -1:   # rolling in -x: mirrored, solved, mapped back
+        from conformal.solvers.direction import mirrored, unmirror
+
+        return unmirror(solve_problem(mirrored(problem)), problem)
     module = importlib.import_module(MODELS[problem.model.theory])
+    if problem.info.get("line_contact"):   # [geometry] B = 0: plane strain on the half-plane
+        if problem.model.theory != "exact":
+            raise InputError(f"[model] theory: line contact ([geometry] B = 0) is solved by theory \"exact\" "
+                             f"(half-plane influence numbers), not {problem.model.theory!r}")
+        module = importlib.import_module("conformal.solvers.line")
     t0 = time.perf_counter()
     result = module.solve(problem)
     return replace(result, wall_s=time.perf_counter() - t0)

@@ -99,6 +99,13 @@ def problems_from_scene(scene: Scene) -> list[ContactProblem]:
     common = dict(material=scene.material, friction=scene.friction, kinematics=scene.kinematics,
                   model=scene.model, normal_force=load.normal_force, approach=load.approach,
                   label=scene.name)
+    return [_with_inputs(scene, p) for p in _problems(scene, common)]
+
+
+def _problems(scene: Scene, common: dict) -> list[ContactProblem]:
+    geo, load = scene.geometry, scene.load
+    if geo.kind == "quadratic" and geo.B == 0.0:
+        return [_line_problem(scene, common)]
     if geo.kind == "quadratic":
         hz = hertz_from_curvatures(geo.A, geo.B, scene.material, normal_force=load.normal_force,
                                    approach=load.approach)
@@ -111,6 +118,103 @@ def problems_from_scene(scene: Scene) -> list[ContactProblem]:
     grid = _grid_from_spec(scene, hz)
     X, Y = grid.mesh()
     return [ContactProblem(hertz=hz, grid=grid, h=hz.A * X**2 + hz.B * Y**2, **common)]
+
+
+def _read_numbers(path: Path, key: str) -> np.ndarray:
+    """A 2-D table of numbers from ``.npy`` or text (comma or white space separated, '#' comments)."""
+    try:
+        if path.suffix == ".npy":
+            a = np.load(path, allow_pickle=False)
+        else:
+            text = path.read_text(encoding="utf-8").replace(",", " ")
+            rows = [ln.split("#")[0].split() for ln in text.splitlines()]
+            a = np.array([[float(v) for v in r] for r in rows if r], dtype=float)
+    except (OSError, ValueError) as exc:
+        raise InputError(f"{key}: cannot read {path}: {exc}") from None
+    a = np.asarray(a, dtype=float)
+    if a.size == 0 or not np.all(np.isfinite(a)):
+        raise InputError(f"{key}: {path.name} is empty or contains NaN or infinite values")
+    return a
+
+
+def read_rigid_slip(path: Path, grid: PlanarGrid) -> np.ndarray:
+    """Rigid slip per element, added to the rigid slip of the creepages (seed Eq. 47): ``.npy`` of
+    shape (2, mx, my), or text with mx rows (x) of 2 my numbers: w_x of the my columns, then w_y.
+    Units as the creepages: steady rolling -, shift mm."""
+    key = "[kinematics] rigid_slip"
+    a = _read_numbers(Path(path), key)
+    if a.ndim == 2 and a.shape == (grid.mx, 2 * grid.my):
+        a = np.stack([a[:, : grid.my], a[:, grid.my:]])
+    if a.shape != (2, grid.mx, grid.my):
+        raise InputError(f"{key}: {Path(path).name} holds {a.shape}; the grid needs (2, {grid.mx}, {grid.my}) "
+                         f"(.npy) or {grid.mx} rows of {2 * grid.my} numbers (w_x of each column, then w_y)")
+    return a
+
+
+def read_mu_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(s, mu) rows of a friction table: s increasing (mm; y on a planar grid), mu > 0."""
+    key = "[friction] mu_table"
+    a = _read_numbers(Path(path), key)
+    if a.ndim != 2 or a.shape[1] != 2 or a.shape[0] < 1:
+        raise InputError(f"{key}: {Path(path).name} must hold rows of two numbers 's mu', got shape {a.shape}")
+    s, mu = a[:, 0], a[:, 1]
+    if np.any(np.diff(s) <= 0):
+        raise InputError(f"{key}: the s values must increase")
+    if np.any(mu <= 0):
+        raise InputError(f"{key}: every mu must be > 0")
+    return s, mu
+
+
+def _with_inputs(scene: Scene, problem: ContactProblem) -> ContactProblem:
+    """Per-element inputs from files: influence numbers (``[model] influence_file``, read by the
+    exact theory), the rigid slip (``[kinematics] rigid_slip``) and the friction along the profile (``[friction] mu_table``: mu(y) linear between the rows, constant beyond;
+    the bound mu_static p_n and the kinetic mu_kinetic p_n both scale by mu(y)/mu_static)."""
+    kin, fr = scene.kinematics, scene.friction
+    ifile = dict(scene.model.options).get("influence_file")
+    if kin.rigid_slip is None and fr.mu_table is None and ifile is None:
+        return problem
+    info = dict(problem.info)
+    if ifile is not None:
+        if not isinstance(ifile, str) or not ifile:
+            raise InputError(f"[model] influence_file: a file name, got {ifile!r}")
+        path = Path(ifile) if Path(ifile).is_absolute() else Path(scene.base_dir) / ifile
+        if not path.is_file():
+            raise InputError(f"[model] influence_file: no such file: {path}")
+        if info.get("line_contact"):
+            raise InputError("[model] influence_file: not for line contact ([geometry] B = 0)")
+        info["influence_file"] = path
+    if kin.rigid_slip is not None:
+        info["rigid_slip"] = read_rigid_slip(kin.rigid_slip, problem.grid)
+    if fr.mu_table is not None:
+        if kin.fx_rel is not None or kin.fy_rel is not None:
+            raise InputError("[friction] mu_table: prescribed forces (fx_rel, fy_rel) are relative to one mu; "
+                             "give the creepages xi, eta with a friction table")
+        s, mu = read_mu_table(fr.mu_table)
+        mu_y = np.interp(problem.grid.y, s, mu)
+        info["mu_scale"] = np.broadcast_to(mu_y / fr.mu_static, problem.grid.shape).copy()
+    return replace(problem, info=info)
+
+
+def _line_problem(scene: Scene, common: dict) -> ContactProblem:
+    """Line contact, ``[geometry] B = 0`` (conformal.solvers.line): a row of elements along x, one
+    element of 1 mm across, h = A x²; ``normal_force`` is per mm of line length.  The automatic
+    grid covers ``scale`` times the 2-D Hertz half-width (Johnson eq. 4.45) with ``n`` elements."""
+    from conformal.reference import hertz_2d
+
+    geo, load, g = scene.geometry, scene.load, scene.grid
+    if load.normal_force is None:
+        raise InputError("[load] approach: line contact ([geometry] B = 0) needs normal_force (N per mm of "
+                         "line length); the 2-D approach depends on an arbitrary datum")
+    if g.explicit:
+        if g.my != 1 or g.dy != 1.0:
+            raise InputError(f"[grid] my: line contact ([geometry] B = 0) has one element of dy = 1 mm across "
+                             f"the line, got my = {g.my}, dy = {g.dy:g}")
+        grid = _grid_from_spec(scene, None)
+    else:
+        a, _ = hertz_2d(load.normal_force, 1.0 / (2.0 * geo.A), scene.material.E_star)
+        grid = PlanarGrid(g.n, 1, 2.0 * g.scale * a / g.n, 1.0, -g.scale * a, -0.5)
+    X, _ = grid.mesh()
+    return ContactProblem(grid=grid, h=geo.A * X**2, info={"line_contact": True}, **common)
 
 
 def with_grid(problem: ContactProblem, grid: PlanarGrid) -> ContactProblem:

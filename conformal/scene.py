@@ -24,7 +24,7 @@ from typing import Any, Mapping
 
 from conformal.errors import InputError
 from conformal.materials import Material
-from conformal.specs import Friction, Kinematics, ModelSpec  # noqa: F401  (part of the scene API)
+from conformal.specs import Friction, HistoryStep, Kinematics, ModelSpec  # noqa: F401  (part of the scene API)
 
 THEORIES = ("hertz", "linear", "empirical", "johnson_vermeulen", "fastsim", "exact", "conformal", "table", "fe_contact")
 GEOMETRY_KINDS = ("quadratic", "hertz", "table", "wheel_rail")
@@ -49,7 +49,8 @@ MODEL_OPTIONS = {
     "fe_conform": "FE: conforming mesh", "fe_body_size": "FE: body size over the patch",
     "fe_solver": "FE: linear solver", "fe_collocation": "FE: collocation rule",
     "fe_far_field": "FE: far-field boundary condition",
-    **{k: "fe_contact: see conformal.fe_contact.problems" for k in ("fec_n", "fec_h", "fec_order", "fec_growth", "fec_h_max", "fec_body_size", "fec_patch", "fec_far_field", "fec_solver")},
+    "influence_file": "exact: influence numbers read from a file (conformal.influence.contact_file)",
+    **{k: "fe_contact: see conformal.fe_contact.problems" for k in ("fec_n", "fec_h", "fec_order", "fec_growth", "fec_h_max", "fec_body_size", "fec_patch", "fec_far_field", "fec_solver", "fec_estimate")},
 }
 
 #: a wheelset yaw beyond this (rad, about 11 degrees) is outside the contact search's validity
@@ -108,6 +109,8 @@ class WheelRailGeometry:
     smoothing: float = 1.0               # mm, profile smoothing-spline wavelength (0 = interpolate)
     element_size: float | None = None    # mm, square grid elements covering each patch (CONTACT DX = DS)
     patch_combine: float = 8.0           # mm, overlap regions closer than this form one patch
+    wheel_z: str = "down"                # "up": the wheel file gives z positive upwards (negated on reading)
+    rail_z: str = "down"                 # "up": the rail file gives z positive upwards (negated on reading)
 
 
 Geometry = QuadraticGeometry | HertzGeometry | TableGeometry | WheelRailGeometry
@@ -135,10 +138,20 @@ class GridSpec:
     yl: float | None = None
     n: int = 40
     scale: float = 1.1
+    strips: str = "coupled"   # conformal wheel-rail: "coupled" (one strip) | "separate" (one per patch)
 
     @property
     def explicit(self) -> bool:
         return self.dx is not None
+
+
+#: one ``[[history]]`` step (conformal.specs.HistoryStep: the load history with memory of
+#: conformal.solvers.history), validated when built
+HistoryStepSpec = HistoryStep
+
+
+#: the most steps of a history (repeats counted)
+MAX_HISTORY_STEPS = 10000
 
 
 @dataclass(frozen=True)
@@ -152,6 +165,7 @@ class Scene:
     model: ModelSpec
     name: str = "scene"
     base_dir: Path = Path(".")
+    history: tuple = ()        # HistoryStepSpec per [[history]] step (empty: one solve, no history)
 
     def with_model(self, **changes) -> "Scene":
         """The scene with other ``[model]`` values, e.g. ``scene.with_model(theory="exact")``."""
@@ -203,15 +217,28 @@ class Scene:
         f = self.friction
         friction = {"mu": f.mu_kinetic} if f.mu_static == f.mu_kinetic else {"mu_static": f.mu_static,
                                                                                 "mu_kinetic": f.mu_kinetic}
+        if f.mu_table is not None:
+            friction["mu_table"] = str(Path(f.mu_table).resolve())
         geometry = plain(self.geometry)
         geometry = {"kind": geometry.pop("kind"), **geometry}
         if "file" in geometry:
             geometry["file"] = str(Path(geometry["file"]).resolve())
         model = plain(self.model)
         model.update(model.pop("options", {}))
-        return {"name": self.name, "material": material, "friction": friction, "geometry": geometry,
-                "load": plain(self.load), "kinematics": plain(self.kinematics), "grid": plain(self.grid),
-                "model": model}
+        kinematics = plain(self.kinematics)
+        if kinematics.get("direction") == 1:       # the default: not written (older readers)
+            kinematics.pop("direction")
+        if "rigid_slip" in kinematics:
+            kinematics["rigid_slip"] = str(Path(kinematics["rigid_slip"]).resolve())
+        out = {"name": self.name, "material": material, "friction": friction, "geometry": geometry,
+               "load": plain(self.load), "kinematics": kinematics, "grid": plain(self.grid),
+               "model": model}
+        if self.history:
+            d0 = HistoryStepSpec()
+            out["history"] = [{f.name: getattr(h, f.name) for f in fields(h)
+                               if getattr(h, f.name) is not None and getattr(h, f.name) != getattr(d0, f.name)}
+                              for h in self.history]
+        return out
 
 
 def _with_path(scene: "Scene", path: str, value: Any) -> "Scene":
@@ -337,8 +364,32 @@ def _material(data: Any) -> Material:
     return Material(G1, nu1, G2, nu2)
 
 
-def _friction(data: Any) -> Friction:
-    sec = _Section("friction", data if data is not None else {"mu": 0.3}, {"mu", "mu_static", "mu_kinetic"})
+def _input_file(sec: "_Section", key: str, base_dir: Path) -> Path | None:
+    """An optional input file named by ``key``, relative to the scene's folder; must exist."""
+    f = sec.string(key)
+    if f is None:
+        return None
+    if not f:
+        raise sec.error(key, "an empty file name")
+    path = (base_dir / f) if not Path(f).is_absolute() else Path(f)
+    if not path.is_file():
+        raise sec.error(key, f"no such file: {path}")
+    return path
+
+
+def _friction(data: Any, base_dir: Path = Path(".")) -> Friction:
+    data = dict(data) if isinstance(data, Mapping) else data
+    table = None
+    if isinstance(data, dict) and "mu_table" in data:   # friction varying over the profile: (s, mu) rows
+        table = _input_file(_Section("friction", {"mu_table": data["mu_table"]}), "mu_table", base_dir)
+        data.pop("mu_table")
+    fr = _friction_constant(data)
+    return Friction(fr.mu_static, fr.mu_kinetic, table) if table is not None else fr
+
+
+def _friction_constant(data: Any) -> Friction:
+    sec = _Section("friction", data if data is not None else {"mu": 0.3},
+                   {"mu", "mu_static", "mu_kinetic", "mu_table"})
     if sec.has("mu"):
         if sec.has("mu_static") or sec.has("mu_kinetic"):
             raise sec.error("mu", "give either mu or mu_static/mu_kinetic, not both")
@@ -362,8 +413,9 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
     kind = _Section("geometry", raw).choice("kind", GEOMETRY_KINDS)
     if kind == "quadratic":
         sec = _Section("geometry", raw, {"kind", "A", "B"})
+        # B = 0: line contact (plane strain, conformal.solvers.line; the load is per mm of line)
         return QuadraticGeometry(sec.number("A", required=True, positive=True),
-                                 sec.number("B", required=True, positive=True))
+                                 sec.number("B", required=True, nonnegative=True))
     if kind == "hertz":
         sec = _Section("geometry", raw, {"kind", "a", "b"})
         return HertzGeometry(sec.number("a", required=True, positive=True),
@@ -409,6 +461,8 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
         smoothing=sec.number("smoothing", d.smoothing, nonnegative=True),
         element_size=sec.number("element_size", positive=True),
         patch_combine=sec.number("patch_combine", d.patch_combine, nonnegative=True),
+        wheel_z=sec.choice("wheel_z", ("down", "up"), d.wheel_z),
+        rail_z=sec.choice("rail_z", ("down", "up"), d.rail_z),
     )
 
 
@@ -424,10 +478,14 @@ def _load(data: Any, geometry: Geometry) -> Load:
     return Load(**{key: value})
 
 
-def _kinematics(data: Any) -> Kinematics:
+def _kinematics(data: Any, base_dir: Path = Path(".")) -> Kinematics:
     known = {"xi", "eta", "phi", "rolling", "fx_rel", "fy_rel", "velocity",
-             "speed", "pitch_velocity", "yaw_rate", "roll_rate", "lateral_velocity"}
+             "speed", "pitch_velocity", "yaw_rate", "roll_rate", "lateral_velocity", "direction", "rigid_slip"}
     sec = _Section("kinematics", data, known)
+    direction = sec.integer("direction", 1, minimum=-1)
+    if direction not in (1, -1):
+        raise sec.error("direction", f"the rolling direction must be 1 (+x) or -1 (-x), got {direction}")
+    rigid_slip = _input_file(sec, "rigid_slip", base_dir)
     rolling = sec.choice("rolling", ("steady", "shift"), "steady")
     for creep, force in (("xi", "fx_rel"), ("eta", "fy_rel")):
         if sec.has(creep) and sec.has(force):
@@ -441,11 +499,48 @@ def _kinematics(data: Any) -> Kinematics:
                       velocity=sec.number("velocity", 1000.0, positive=True),
                       speed=sec.number("speed", positive=True), pitch_velocity=sec.number("pitch_velocity"),
                       yaw_rate=sec.number("yaw_rate", 0.0), roll_rate=sec.number("roll_rate", 0.0),
-                      lateral_velocity=sec.number("lateral_velocity", 0.0))
+                      lateral_velocity=sec.number("lateral_velocity", 0.0),
+                      direction=direction, rigid_slip=rigid_slip)
+
+
+def _history(data: Any) -> tuple:
+    """The ``[[history]]`` steps (an array of tables), validated; () without."""
+    if data is None:
+        return ()
+    if isinstance(data, Mapping):
+        data = [data]
+    if not isinstance(data, (list, tuple)) or not data or not all(isinstance(d, Mapping) for d in data):
+        raise InputError("[[history]]: an array of tables, one [[history]] section per step")
+    known = {f.name for f in fields(HistoryStepSpec)}
+    steps, total = [], 0
+    for k, d in enumerate(data, 1):
+        sec = _Section(f"history {k}", d, known)
+        if sec.has("normal_force") and sec.has("approach"):
+            raise sec.error("normal_force", "give at most one of normal_force or approach per step")
+        for creep, force in (("xi", "fx_rel"), ("eta", "fy_rel")):
+            if sec.has(creep) and sec.has(force):
+                raise sec.error(force, f"give either {creep} or {force}, not both")
+        rolling = sec.choice("rolling", ("shift", "transient", "steady"), "shift")
+        if sec.has("distance") and rolling != "transient":
+            raise sec.error("distance", "only for rolling = \"transient\"")
+        fx, fy = sec.number("fx_rel"), sec.number("fy_rel")
+        for key, v in (("fx_rel", fx), ("fy_rel", fy)):
+            if v is not None and abs(v) >= 1.0:
+                raise sec.error(key, f"a force F/(mu FN) must lie in (-1, 1), got {v:g}")
+        step = HistoryStepSpec(normal_force=sec.number("normal_force", positive=True),
+                               approach=sec.number("approach", positive=True),
+                               xi=sec.number("xi", 0.0), eta=sec.number("eta", 0.0), phi=sec.number("phi", 0.0),
+                               rolling=rolling, distance=sec.number("distance", positive=True),
+                               fx_rel=fx, fy_rel=fy, repeat=sec.integer("repeat", 1))
+        total += step.repeat
+        if total > MAX_HISTORY_STEPS:
+            raise sec.error("repeat", f"at most {MAX_HISTORY_STEPS} steps in a history")
+        steps.append(step)
+    return tuple(steps)
 
 
 def _grid(data: Any) -> GridSpec:
-    sec = _Section("grid", data, {"mx", "my", "dx", "dy", "xl", "yl", "n", "scale"})
+    sec = _Section("grid", data, {"mx", "my", "dx", "dy", "xl", "yl", "n", "scale", "strips"})
     explicit = [k for k in ("mx", "my", "dx", "dy") if sec.has(k)]
     if explicit and len(explicit) != 4:
         missing = sorted({"mx", "my", "dx", "dy"} - set(explicit))
@@ -453,10 +548,11 @@ def _grid(data: Any) -> GridSpec:
     return GridSpec(mx=sec.integer("mx"), my=sec.integer("my"),
                     dx=sec.number("dx", positive=True), dy=sec.number("dy", positive=True),
                     xl=sec.number("xl"), yl=sec.number("yl"),
-                    n=sec.integer("n", 40, minimum=2), scale=sec.number("scale", 1.1, positive=True))
+                    n=sec.integer("n", 40, minimum=2), scale=sec.number("scale", 1.1, positive=True),
+                    strips=sec.choice("strips", ("coupled", "separate"), "coupled"))
 
 
-def _model(data: Any) -> ModelSpec:
+def _model(data: Any, base_dir: Path = Path(".")) -> ModelSpec:
     if data is not None and not isinstance(data, Mapping):
         raise InputError(f"[model] must be a table, got {type(data).__name__} {data!r}")
     raw = dict(data or {})
@@ -464,6 +560,8 @@ def _model(data: Any) -> ModelSpec:
     _Section("model", raw, core | set(MODEL_OPTIONS))      # unknown keys (with the closest known one)
     sec = _Section("model", {k: v for k, v in raw.items() if k in core})
     options = {k: v for k, v in raw.items() if k not in core}
+    if options.get("table") not in (None, "default"):   # a creep-force table: relative to the scene's folder
+        options["table"] = str(_input_file(_Section("model", options), "table", base_dir).resolve())
     return ModelSpec(theory=sec.choice("theory", THEORIES, "fastsim"),
                      bound=sec.choice("bound", ("parabolic", "elliptic"), "parabolic"),
                      influence=sec.choice("influence", ("halfspace", "fe"), "halfspace"),
@@ -523,6 +621,23 @@ def validate(scene: "Scene") -> "Scene":
         raise InputError(f"[model] theory: must be one of {', '.join(THEORIES)}, got {scene.model.theory!r}"
                          f"{_did_you_mean(scene.model.theory, THEORIES)}")
     geo = scene.geometry
+    kin, fr = scene.kinematics, scene.friction
+    for key, given in (("[kinematics] direction", kin.direction == -1), ("[kinematics] rigid_slip", kin.rigid_slip is not None),
+                       ("[friction] mu_table", fr.mu_table is not None),
+                       ("[model] influence_file", "influence_file" in scene.model.options)):
+        if given and isinstance(geo, WheelRailGeometry):
+            raise InputError(f"{key}: for planar scenes (kind quadratic, hertz, table); not yet for wheel_rail scenes")
+        if given and key != "[kinematics] direction" and scene.model.theory != "exact":
+            raise InputError(f"{key}: only theory \"exact\" uses it (got theory {scene.model.theory!r}); "
+                             "other theories would ignore it")
+    if scene.history:
+        if isinstance(geo, WheelRailGeometry):
+            raise InputError("[[history]]: load histories are for planar scenes (kind quadratic, hertz, table)")
+        if scene.model.theory != "exact":
+            raise InputError(f"[[history]]: a load history is solved by theory \"exact\", got {scene.model.theory!r}")
+        if kin.direction == -1 or kin.rigid_slip is not None or fr.mu_table is not None \
+                or "influence_file" in scene.model.options:
+            raise InputError("[[history]]: not combined with direction = -1, rigid_slip, mu_table or influence_file")
     if isinstance(geo, WheelRailGeometry):
         if abs(geo.yaw) > MAX_YAW:
             raise InputError(f"[geometry] yaw: the wheelset yaw must lie within +-{MAX_YAW:g} rad, got {geo.yaw:g}")
@@ -585,7 +700,7 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: s
     """
     if not isinstance(data, Mapping):
         raise InputError(f"a scene must be a table of sections, got {type(data).__name__}")
-    unknown = sorted(set(data) - set(SECTIONS))
+    unknown = sorted(set(data) - set(SECTIONS) - {"history"})
     if unknown:
         raise InputError(f"[{unknown[0]}]: unknown section{_did_you_mean(unknown[0], SECTIONS)} "
                          f"(known: {', '.join(SECTIONS[1:])})")
@@ -600,10 +715,11 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: s
         raise InputError("[load] normal_force: missing (give normal_force, approach or wheel_load)")
     base_dir = Path(base_dir)
     geometry = _geometry(data.get("geometry"), base_dir)
-    scene = Scene(material=_material(data.get("material")), friction=_friction(data.get("friction")),
+    scene = Scene(material=_material(data.get("material")), friction=_friction(data.get("friction"), base_dir),
                   geometry=geometry, load=_load(data.get("load"), geometry),
-                  kinematics=_kinematics(data.get("kinematics")), grid=_grid(data.get("grid")),
-                  model=_model(data.get("model")), name=str(data.get("name", name)), base_dir=base_dir)
+                  kinematics=_kinematics(data.get("kinematics"), base_dir), grid=_grid(data.get("grid")),
+                  model=_model(data.get("model"), base_dir), name=str(data.get("name", name)), base_dir=base_dir,
+                  history=_history(data.get("history")))
     return validate(scene)
 
 

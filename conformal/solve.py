@@ -60,6 +60,8 @@ def solve_scene(scene: Scene) -> Result:
             from conformal.cases import solve_wheel_rail
 
             out = solve_wheel_rail(scene)
+        elif scene.history:  # [[history]]: steps with memory (seed Eqs. 39-40); the last step's result
+            out = _solve_history(scene)
         else:
             problems = problems_from_scene(scene)
             results = [solve_problem(p) for p in problems]
@@ -68,6 +70,22 @@ def solve_scene(scene: Scene) -> Result:
     if warnings:
         out = replace(out, extra=dict(out.extra, warnings=list(dict.fromkeys(warnings))))
     return replace(out, wall_s=time.perf_counter() - t0)
+
+
+def _solve_history(scene: Scene) -> Result:
+    """A ``[[history]]`` scene: the steps solved in order by :func:`conformal.solvers.history.
+    solve_history` from the scene's load; the result is the last step's, with ``history`` (one
+    summary per applied step) in its extra fields (the JSON's ``history`` list)."""
+    from conformal.solvers.history import solve_history
+
+    problem = problems_from_scene(scene)[0]
+    h = solve_history(problem, list(scene.history))
+    last = h.steps[-1]
+    extra = dict(last.extra, **h.to_dict())
+    earlier = [f"[[history]] step {k}: {w}" for k, r in enumerate(h.steps[:-1], 1) for w in r.warnings]
+    if earlier:   # warnings of the earlier steps (non-convergence, contact at the grid border) join the last's
+        extra["warnings"] = list(dict.fromkeys(earlier + list(last.extra.get("warnings", []))))
+    return replace(last, converged=all(r.converged for r in h.steps), extra=extra)
 
 
 def solve(scene: Any, **overrides: Any) -> Result:

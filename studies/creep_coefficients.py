@@ -5,8 +5,10 @@ the grid convergence.
 Writes
   conformal/data/kalker_c33.csv                   branch,g,nu,C33 (read by the linear theory)
   conformal/data/kalker_coefficients_computed.csv branch,g,nu,C11,C22,C23,C33
-  studies/out/creep_coefficients.csv              per node: Kalker, every grid, extrapolated, error
-  studies/out/creep_coefficients_convergence.csv  convergence at three nodes on finer grids
+  OUT/creep_coefficients.csv              per node: Kalker, every grid, extrapolated, error
+  OUT/creep_coefficients_convergence.csv  convergence at three nodes on finer grids
+  OUT/run.json                            sidecar: commit, arguments, package versions
+with OUT = --out (default studies/out/creep_coefficients).
 
 Method (conformal.theories.c33): Hertz contact with ab = 1, G = 1; exact normal problem; linear
 full-stick steady rolling for xi, eta, phi; the coefficients from seed Eq. 13 with the discrete
@@ -15,7 +17,9 @@ contact area; the grids have n = 32, 48, 64, 96 elements across the short semi-a
 C(n) = C_inf + c / n over them (the discretisation error is first order in the element size; the
 scatter of +-0.5 % from elements entering the contact set averages out in the fit).
 
-Run:  python studies/creep_coefficients.py [--quick]     (about 3 min on 2 cores; --quick: 1 min)
+Run:  python studies/creep_coefficients.py                    (about 3 min on 2 cores)
+      python studies/creep_coefficients.py --quick --out DIR    (g = 0.5 and 1 only, n = 16, 24, 32;
+                                                                 seconds; conformal/data untouched)
 """
 from __future__ import annotations
 
@@ -33,6 +37,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _provenance import output_dir, write_sidecar  # noqa: E402
 from conformal.theories.c33 import (C33_FILE, FULL_FILE, ExactCoefficients, a_over_b,  # noqa: E402
                                     exact_coefficients, reference_nodes, write_tables)
 
@@ -55,10 +62,13 @@ def node(r: float, nu: float, ns) -> tuple[ExactCoefficients, list[ExactCoeffici
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="grids n = 24, 32, 48 only (not written to conformal/data)")
+    ap.add_argument("--quick", action="store_true",
+                    help="nodes g = 0.5 and 1 only, grids n = 16, 24, 32 (not written to conformal/data)")
+    ap.add_argument("--out", default=None,
+                   help="output folder (default studies/out/creep_coefficients; with --quick a temporary folder)")
     args = ap.parse_args(argv)
-    ns = (24, 32, 48) if args.quick else (32, 48, 64, 96)
-    out = ROOT / "studies" / "out"
+    ns = (16, 24, 32) if args.quick else (32, 48, 64, 96)
+    out = output_dir("creep_coefficients", args)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     done: dict[tuple[float, float], tuple[ExactCoefficients, list]] = {}
@@ -68,6 +78,8 @@ def main(argv=None) -> int:
           + " | C33 ours")
     worst = {k: 0.0 for k in ("C11", "C22", "C23")}
     for branch, g, nu, ref in reference_nodes():
+        if args.quick and g not in (0.5, 1.0):
+            continue
         r = a_over_b(branch, g)
         key = (round(r, 12), nu)
         if key not in done:
@@ -115,7 +127,7 @@ def main(argv=None) -> int:
         write_tables(rows, header)
         print(f"wrote {C33_FILE} and {FULL_FILE}")
     # convergence on finer grids at three nodes
-    conv_ns = (16, 24, 32, 48, 64, 96, 128) if not args.quick else (16, 24, 32, 48)
+    conv_ns = (16, 24, 32, 48, 64, 96, 128) if not args.quick else (16, 24, 32)
     with open(out / "creep_coefficients_convergence.csv", "w", encoding="utf-8") as f:
         f.write("a_over_b,nu,n,mx,my,n_contact,C11,C22,C23,C23_phi,C33,gmres_iterations\n")
         for r in (1.0, 0.1, 10.0):
@@ -123,7 +135,10 @@ def main(argv=None) -> int:
                 c = exact_coefficients(r, 0.25, n)
                 f.write(f"{r:g},0.25,{n},{c.mx},{c.my},{c.n_contact},{c.C11:.6g},{c.C22:.6g},{c.C23:.6g},"
                         f"{c.C23_phi:.6g},{c.C33:.6g},{c.iterations}\n")
-    print(f"wrote {out / 'creep_coefficients.csv'} and {out / 'creep_coefficients_convergence.csv'}; "
+    write_sidecar(out, __file__, args, extra={
+        "grids": list(ns), "convergence_grids": list(conv_ns), "wall_s": time.perf_counter() - t0,
+        "max_error_pct_extrapolated": worst, "max_error_pct_finest": finest})
+    print(f"wrote {out / 'creep_coefficients.csv'}, {out / 'creep_coefficients_convergence.csv'} and run.json; "
           f"{time.perf_counter() - t0:.0f} s")
     return 0
 

@@ -1,13 +1,16 @@
 """Kalker's fast theories: speed and error against CONTACT's reference cases.
 
-    python studies/fast_theories_benchmark.py [--n 100000] [--out studies/out]
+    python studies/fast_theories_benchmark.py [--n 100000] [--out studies/out/fast_theories_benchmark]
+    python studies/fast_theories_benchmark.py --quick --out DIR   # batch of 2000, no 880 grid (seconds)
 
 Prints (1) FASTSIM throughput: single calls (slices and grid) and the vectorised batch, with
 the other vectorised fast theories for comparison; (2) the error of each fast theory (Hertz,
 linear, Kalker 1968 empirical, Johnson-Vermeulen, FASTSIM) against CONTACT's exact half-space
 results in tests/reference/contact_cases.json (cases `cattaneo`, `fastsim`, `tractcurv`
 series 1), and FASTSIM against CONTACT's FASTSIM (same variant); (3) FASTSIM's grid
-convergence.  The error table is written to OUT/fast_theories.csv.
+convergence.  The error table is written to OUT/fast_theories.csv, the convergence table to
+OUT/fastsim_convergence.csv and the sidecar (commit, arguments, package versions, throughput) to
+OUT/run.json.
 
 Timings: wall clock and CPU time (the machine's 2 cores may be shared with other jobs).
 """
@@ -27,6 +30,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _provenance import output_dir, write_sidecar  # noqa: E402
 from conformal.grid import PlanarGrid  # noqa: E402
 from conformal.materials import Material  # noqa: E402
 from conformal.theories import empirical as emp  # noqa: E402
@@ -191,11 +197,11 @@ def error_rows() -> list[dict]:
     return rows
 
 
-def convergence_rows() -> list[tuple]:
+def convergence_rows(quick: bool = False) -> list[tuple]:
     """FASTSIM fastsim case (parabolic, CONTACT's L): FY/(mu FN) and MZ against grid size."""
     Lc = fs.Flexibilities(4.937e-5, 5.152e-5, 4.090e-5)
     out = []
-    for n in (44, 220, 880):
+    for n in ((44, 220) if quick else (44, 220, 880)):
         grid = PlanarGrid(n, n, 17.6 / n, 8.8 / n, -8.8, -4.4)
         for disc in ("midpoint", "contact"):
             s = fs.fastsim_grid(8.0, 4.0, 82000.0, 0.3, 0.0, -0.000625, 0.000625, Lc, grid, "parabolic",
@@ -211,13 +217,18 @@ def convergence_rows() -> list[tuple]:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--n", type=int, default=100_000, help="contacts in the batch timing")
-    p.add_argument("--out", default=str(ROOT / "studies" / "out"))
+    p.add_argument("--out", default=None,
+                  help="output folder (default studies/out/fast_theories_benchmark; with --quick a temporary folder)")
+    p.add_argument("--quick", action="store_true", help="batch of 2000 contacts, grids up to 220 (seconds)")
     args = p.parse_args(argv)
+    if args.quick:
+        args.n = min(args.n, 2000)
 
     print("== throughput (contacts per second, best of 2-3 runs: wall clock | CPU time) ==")
     if hasattr(os, "getloadavg"):
         print(f"  (load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)")
-    for name, rate, rate_cpu in throughput(args.n):
+    rates = throughput(args.n)
+    for name, rate, rate_cpu in rates:
         print(f"  {rate:12,.0f} /s | {rate_cpu:12,.0f} /s CPU   {name}")
 
     print("\n== error against CONTACT reference cases ==")
@@ -226,7 +237,7 @@ def main(argv=None) -> int:
     for r in rows:
         rel = "" if not math.isfinite(r["rel_error"]) else f"{100 * r['rel_error']:+.2f}%"
         print(fmt.format(rel=rel, **r))
-    out = Path(args.out)
+    out = output_dir("fast_theories_benchmark", args)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "fast_theories.csv", "w", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
@@ -235,9 +246,17 @@ def main(argv=None) -> int:
     print(f"\nwrote {out / 'fast_theories.csv'} ({len(rows)} rows)")
 
     print("\n== FASTSIM convergence, fastsim case, parabolic, CONTACT's L ==")
-    for n, disc, fy, mz in convergence_rows():
+    conv = convergence_rows(args.quick)
+    for n, disc, fy, mz in conv:
         print(f"  {disc:<9} n = {n:4d}   FY/(mu FN) = {fy:.5f}   MZ = {mz:9.0f} N mm")
     print("  (CONTACT exact: FY/(mu FN) = -0.6074, MZ = -48210; CONTACT FASTSIM 44: -0.6118, 220: -0.6359)")
+    with open(out / "fastsim_convergence.csv", "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(("n", "discretisation", "FY_over_muFN", "MZ_Nmm"))
+        w.writerows((n, disc, f"{fy:.6g}", f"{mz:.6g}") for n, disc, fy, mz in conv)
+    write_sidecar(out, __file__, args, extra={
+        "throughput_per_s": [{"what": name, "wall": rate, "cpu": rate_cpu} for name, rate, rate_cpu in rates]})
+    print(f"wrote {out / 'fastsim_convergence.csv'} and {out / 'run.json'}")
     return 0
 
 

@@ -31,9 +31,7 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -57,6 +55,9 @@ FAR_FIELDS = ("halfspace", "clamped")
 HERTZ_FN = 32847.0   # crowned wheel, Hertz (conformal.theories.hertz at A = 1/920, B = 1/600 per mm)
 
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _provenance import output_dir, write_sidecar  # noqa: E402
 from conformal.errors import ConformalError  # noqa: E402
 
 
@@ -75,25 +76,13 @@ def solve_at(scene_file: str, approach: float, influence: str, **fe) -> dict:
             "wall_s": time.perf_counter() - t0}
 
 
-def _versions() -> dict:
-    import gmsh
-    import scipy
-    import skfem
-
-    try:
-        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
-    except OSError:
-        commit = ""
-    return {"commit": commit, "python": sys.version.split()[0], "numpy": np.__version__,
-            "scipy": scipy.__version__, "scikit-fem": skfem.__version__, "gmsh": gmsh.__version__}
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the crowned wheel at sizes 0.5 and 1 only")
-    ap.add_argument("--out", default=str(OUT), help="output folder")
+    ap.add_argument("--out", default=None,
+                   help="output folder (default studies/out/fe_body_size; with --quick a temporary folder)")
     args = ap.parse_args(argv)
-    out = Path(args.out)
+    out = output_dir("fe_body_size", args)
     out.mkdir(parents=True, exist_ok=True)
     cases = dict(list(CASES.items())[:1]) if args.quick else CASES
     sizes = {far: (0.5, 1.0) for far in FAR_FIELDS} if args.quick else SIZES
@@ -157,8 +146,7 @@ def main(argv=None) -> int:
                      + f"{rows[0]['FN'] / HERTZ_FN - 1:+.3%}, FE (half-space far field) "
                      + ", ".join(f"size {r['body_size']:g}: {r['FN'] / HERTZ_FN - 1:+.3%}" for r in hz))
     (out / "fe_body_size.md").write_text("\n".join(lines) + "\n")
-    (out / "run.json").write_text(json.dumps({"script": "studies/fe_body_size.py", "args": vars(args),
-                                              "versions": _versions(), "summary": summary}, indent=2) + "\n")
+    write_sidecar(out, __file__, args, extra={"summary": summary})
     _plot(rows, cases, out / "fe_body_size.png")
     print("\n".join(lines))
     return 0

@@ -12,8 +12,11 @@ problem, plus the tangential kernel set-up).  Times are the minimum over several
 time.perf_counter() around the calls (imports excluded).  Errors are relative to the finest grid
 (pmax, approach, FX) and to Hertz (pmax, approach).
 
-Writes studies/out/halfspace_scaling.csv and studies/out/halfspace_scaling.png.
-Run: python studies/halfspace_scaling.py [--max-n 316] [--repeats 5]
+Writes halfspace_scaling.csv, halfspace_scaling.png and the sidecar run.json (commit, arguments,
+package versions) to --out (default studies/out/halfspace_scaling).
+
+    python studies/halfspace_scaling.py [--max-n 316] [--repeats 5]
+    python studies/halfspace_scaling.py --quick --out /tmp/hs   # n = 25, 32, 50, one repeat (seconds)
 """
 from __future__ import annotations
 
@@ -31,6 +34,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _provenance import output_dir, write_sidecar  # noqa: E402
 from conformal.grid import PlanarGrid  # noqa: E402
 from conformal.influence.halfspace import HalfSpaceInfluence  # noqa: E402
 from conformal.materials import Material  # noqa: E402
@@ -87,7 +93,12 @@ def main(argv=None) -> int:
     ap.add_argument("--max-n", type=int, default=316, help="largest n (n x n elements), default 316 (1e5)")
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--no-rolling", action="store_true", help="skip steady rolling")
+    ap.add_argument("--quick", action="store_true", help="n = 25, 32, 50 with one repeat (seconds; a test runs it)")
+    ap.add_argument("--out", default=None,
+                   help="output folder (default studies/out/halfspace_scaling; with --quick a temporary folder)")
     args = ap.parse_args(argv)
+    if args.quick:
+        args.max_n, args.repeats = min(args.max_n, 50), 1
     ns = [n for n in (25, 32, 50, 71, 100, 141, 150, 200, 250, 316) if n <= args.max_n]
     rows = []
     print(f"{'n':>4} {'N':>7} {'ncon':>6} | {'normal pc [s]':>13} {'it':>3} | {'plain [s]':>9} {'it':>3} | "
@@ -122,7 +133,7 @@ def main(argv=None) -> int:
         r["pmax_err_hertz"] = r["pmax"] / hz.pmax - 1
         r["approach_err_hertz"] = r["approach"] / hz.approach - 1
         r["FX_err_finest"] = r["FX"] / fin["FX"] - 1 if np.isfinite(fin["FX"]) else np.nan
-    out = ROOT / "studies" / "out"
+    out = output_dir("halfspace_scaling", args)
     out.mkdir(parents=True, exist_ok=True)
     keys = list(rows[0])
     with open(out / "halfspace_scaling.csv", "w", encoding="utf-8") as f:
@@ -136,7 +147,8 @@ def main(argv=None) -> int:
               f"approach {100*r['approach_err_finest']:+.4f} % (Hertz {100*r['approach_err_hertz']:+.4f} %), "
               f"FX {100*r['FX_err_finest']:+.3f} %")
     _plot(rows, out / "halfspace_scaling.png")
-    print(f"wrote {out / 'halfspace_scaling.csv'} and {out / 'halfspace_scaling.png'}")
+    write_sidecar(out, __file__, args, extra={"hertz": {"pmax": hz.pmax, "approach": hz.approach}})
+    print(f"wrote {out / 'halfspace_scaling.csv'}, {out / 'halfspace_scaling.png'} and run.json")
     return 0
 
 

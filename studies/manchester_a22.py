@@ -31,9 +31,11 @@ Known differences (measured; per-case errors and creepages are in the CSV):
   differs by up to 0.0032 rad (reference point 0.02 mm further down the gauge face) and FN = FZ /
   (cos d + (FS/FN) sin d) with CONTACT's angle gives CONTACT's FN (15440 N at 6.5 mm).
 
-Writes CSV and PNG to --out and prints the maxima.
+Writes manchester_a22.csv, manchester_a22.png and the sidecar run.json (commit, arguments, package
+versions) to --out and prints the maxima.
 
     python studies/manchester_a22.py [--element-size 0.2] [--out studies/out/manchester_a22]
+    python studies/manchester_a22.py --quick --out /tmp/m   # right wheel at 0 and 3 mm, 0.4 mm elements
 """
 from __future__ import annotations
 
@@ -52,6 +54,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _provenance import output_dir, write_sidecar  # noqa: E402
 from conformal.geometry.patches import find_patches  # noqa: E402
 from conformal.cases.wheelrail import place_scene, problems_from_wheel_rail, solve_wheel_rail  # noqa: E402
 from conformal.scene import load_scene  # noqa: E402
@@ -80,16 +85,25 @@ def scene_for(side, case, element_size, theory="exact"):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--element-size", type=float, default=0.2)
-    ap.add_argument("--out", default=str(ROOT / "studies" / "out" / "manchester_a22"))
+    ap.add_argument("--out", default=None,
+                   help="output folder (default studies/out/manchester_a22; with --quick a temporary folder)")
     ap.add_argument("--sides", default="right,left")
+    ap.add_argument("--shifts", default="", help="only these lateral shifts y_ws (mm), comma separated")
+    ap.add_argument("--quick", action="store_true",
+                    help="right wheel at 0 and 3 mm with 0.4 mm elements (seconds; a test runs it)")
     args = ap.parse_args(argv)
+    if args.quick:
+        args.sides, args.shifts, args.element_size = "right", args.shifts or "0,3", max(args.element_size, 0.4)
+    only = {round(float(v), 6) for v in args.shifts.split(",") if v.strip()}
     ref = json.loads(REF.read_text())["cases"]["mbench_a22"]
     full = importlib.util.find_spec("conformal.solvers.tangential") is not None
-    out = Path(args.out)
+    out = output_dir("manchester_a22", args)
     out.mkdir(parents=True, exist_ok=True)
     rows = []
     for side in args.sides.split(","):
         for case in ref[side]:
+            if only and round(case["inputs"]["Y_WS_mm"], 6) not in only:
+                continue
             inp, o = case["inputs"], case["outputs"]
             p_ref = o["patches"][0]
             sc = scene_for(side, case, args.element_size)
@@ -156,7 +170,7 @@ def main(argv=None):
         for k in ("FN", "FX", "FS"):
             w = max(rows, key=lambda r: abs(r[f"err_{k}"]))
             wr = max(rows, key=lambda r: r[f"ratio_{k}"])
-            others = max(r[f"ratio_{k}"] for r in rows if r is not wr)
+            others = max((r[f"ratio_{k}"] for r in rows if r is not wr), default=float("nan"))
             print(f"  {k}: max |error| {abs(w[f'err_{k}']):6.1f} N ({w['side']} {w['y_ws']} mm: "
                   f"{100 * abs(w[f'rel_{k}']):.2f} %, {abs(w[f'err_{k}_muFN']):.4f} mu FN); max ratio "
                   f"{wr[f'ratio_{k}']:.2f} ({wr['side']} {wr['y_ws']} mm), next {others:.2f}; "
@@ -170,7 +184,11 @@ def main(argv=None):
                   f"max |error| {max(abs(r[k] - r[f'ref_{k}']) for r in rows):.2g}")
     else:
         print("  forces: exact tangential solver not available; height balanced with normal forces only")
-    print(f"wrote {out / 'manchester_a22.csv'} and {out / 'manchester_a22.png'}")
+    summary = {"max_geo_y_rail_error_mm": geo_err, "max_y_rail_error_mm": pos_err, "cases": len(rows)}
+    if full:
+        summary.update({f"max_ratio_{k}": max(r[f"ratio_{k}"] for r in rows) for k in ("FN", "FX", "FS")})
+    write_sidecar(out, __file__, args, extra={"summary": summary})
+    print(f"wrote {out / 'manchester_a22.csv'}, {out / 'manchester_a22.png'} and run.json")
 
 
 def _plot(rows, path, full):

@@ -6,6 +6,10 @@ and one overview PNG.  Also printed: the secant conicity dr(y)/(2y) at y = 3 mm 
 not the EN 15302 harmonic linearisation) and the measured time per shift.
 
     python studies/profile_sweep.py [--out studies/out/profile_sweep] [--step 0.5]
+    python studies/profile_sweep.py --quick --out DIR   # S1002/UIC60 only, -4 .. 4 mm in 1 mm steps
+
+The sidecar OUT/run.json records the commit, the arguments, the package versions and the secant
+conicities.
 """
 from __future__ import annotations
 
@@ -19,6 +23,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _provenance import output_dir, write_sidecar  # noqa: E402
 from conformal.geometry.sweep import plot, sweep, write_csv  # noqa: E402
 from conformal.scene import WheelRailGeometry  # noqa: E402
 
@@ -41,20 +48,32 @@ PAIRS = {
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--out", default=str(ROOT / "studies" / "out" / "profile_sweep"))
+    ap.add_argument("--out", default=None,
+                   help="output folder (default studies/out/profile_sweep; with --quick a temporary folder)")
     ap.add_argument("--step", type=float, default=0.5)
     ap.add_argument("--max-shift", type=float, default=10.0)
+    ap.add_argument("--pairs", default=",".join(PAIRS), help="profile pairs, comma separated")
+    ap.add_argument("--quick", action="store_true",
+                    help="S1002_UIC60_1in40 only, -4 .. 4 mm in 1 mm steps (seconds; a test runs it)")
     args = ap.parse_args(argv)
-    out = Path(args.out)
+    if args.quick:
+        args.pairs, args.step, args.max_shift = "S1002_UIC60_1in40", 1.0, 4.0
+    unknown = [p for p in args.pairs.split(",") if p not in PAIRS]
+    if unknown:
+        ap.error(f"--pairs: unknown {', '.join(unknown)}; known: {', '.join(PAIRS)}")
+    out = output_dir("profile_sweep", args)
     n = int(round(2 * args.max_shift / args.step)) + 1
     shifts = np.linspace(-args.max_shift, args.max_shift, n)
-    results = {}
-    for name, geo in PAIRS.items():
+    results, summary = {}, {}
+    failed = []
+    for name in args.pairs.split(","):
+        geo = PAIRS[name]
         t0 = time.perf_counter()
         try:
             rows = sweep(geo, shifts)
         except Exception as exc:   # noqa: BLE001 - report and go on with the other pairs
             print(f"{name}: failed: {exc}")
+            failed.append(name)
             continue
         dt = time.perf_counter() - t0
         results[name] = rows
@@ -65,11 +84,15 @@ def main(argv=None):
         flange = [r["shift"] for r in rows if r["contact_angle_right"] < -0.9]
         jumps = [rows[i + 1]["shift"] for i in range(len(rows) - 1)
                  if abs(rows[i + 1]["y_rail_right"] - rows[i]["y_rail_right"]) > 3.0]
+        summary[name] = {"secant_conicity_3mm": conicity, "flange_from_mm": min(flange) if flange else None,
+                         "contact_jumps_before_mm": jumps, "ms_per_shift": dt / len(rows) * 1000}
         print(f"{name:28s} secant conicity dr(3)/6 = {conicity:.4f}  flange contact from y = "
               f"{(min(flange) if flange else float('nan')):5.1f} mm  contact jumps before y = {jumps}  "
               f"({dt / len(rows) * 1000:.0f} ms per shift)")
     _overview(results, out / "overview.png")
-    print(f"wrote CSV and PNG per pair and {out / 'overview.png'}")
+    write_sidecar(out, __file__, args, extra={"summary": summary, "failed": failed})
+    print(f"wrote CSV and PNG per pair, {out / 'overview.png'} and run.json")
+    return 1 if failed else 0
 
 
 def _overview(results, path):
@@ -97,4 +120,4 @@ def _overview(results, path):
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -6,7 +6,8 @@ speed of the creep models.
 
 Writes ``studies/out/seed_wheelset/`` (or ``--out DIR``): ``seed_wheelset.json`` (all numbers),
 ``seed_wheelset.md`` (the tables), the seed-like figures of the fastsim run (fig11..fig15),
-``lateral_by_model.png`` and ``stability.png``.
+``lateral_by_model.png``, ``stability.png`` and the sidecar ``run.json`` (commit, arguments,
+package versions).
 """
 from __future__ import annotations
 
@@ -26,6 +27,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _provenance import output_dir, write_sidecar                                         # noqa: E402
 from conformal.dynamics.contact import interpolation_error                    # noqa: E402
 from conformal.dynamics.model import build_model                              # noqa: E402
 from conformal.dynamics.plots import plot_damping, plot_history               # noqa: E402
@@ -52,9 +56,10 @@ def with_sim(scene, **kw):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="coarse table, short runs")
-    ap.add_argument("--out", default=str(ROOT / "studies" / "out" / "seed_wheelset"))
+    ap.add_argument("--out", default=None,
+                   help="output folder (default studies/out/seed_wheelset; with --quick a temporary folder)")
     args = ap.parse_args(argv)
-    out = Path(args.out)
+    out = output_dir("seed_wheelset", args)
     out.mkdir(parents=True, exist_ok=True)
     scene = load_vehicle_scene(ROOT / "meshes" / "scenes" / "seed_wheelset.toml")
     if args.quick:
@@ -144,6 +149,7 @@ def main(argv=None) -> int:
                  nonlinear=nl.get("fastsim", {}).get("critical_speed"), title="seed wheelset:")
     (out / "seed_wheelset.json").write_text(json.dumps(res, indent=2) + "\n", encoding="utf-8")
     (out / "seed_wheelset.md").write_text(_markdown(res), encoding="utf-8")
+    write_sidecar(out, __file__, args, extra={"linear_critical_speed": vc})
     log(f"wrote {out}")
     return 0
 

@@ -13,10 +13,11 @@ Wall time: the solve as `conformal solve` runs it; for the FE model with the FE 
 read from the cache, and (hollow markers) including their computation.
 
 Writes to --out (default studies/out/speed_vs_error): speed_vs_error.csv, speed_vs_error.md,
-speed_vs_error.png.
+speed_vs_error.png and the sidecar run.json (commit, arguments, package versions).
 
     python studies/speed_vs_error.py            # ~15 minutes the first time (FE), then ~2
-    python studies/speed_vs_error.py --quick    # coarser grids and reference (a few minutes)
+    python studies/speed_vs_error.py --quick --out DIR   # flange root only, n = 12, 16, no FE; the
+                                                         # reference is conformal HS n = 24 (< 1 min)
 """
 from __future__ import annotations
 
@@ -32,6 +33,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _provenance import output_dir, write_sidecar  # noqa: E402
 from conformal.errors import ConformalError  # noqa: E402
 from conformal.scene import load_scene  # noqa: E402
 from conformal.solve import solve_scene  # noqa: E402
@@ -43,16 +47,16 @@ FIELDS = ("scene", "model", "n", "FX_track", "FY_track", "FZ_track", "pmax", "fo
 
 
 def configs(quick: bool):
-    """(label, theory, influence, n) of every model run, and the reference run."""
-    ns = (12, 16, 24) if quick else (16, 24, 32, 48)
+    """(label, theory, influence, n) of every model run, and the reference run.  Quick: no FE
+    (the FE numbers take minutes to compute cold); the reference is the finer half-space one."""
+    ns = (12, 16) if quick else (16, 24, 32, 48)
     out = [(t, t, "halfspace", None) for t, _ in FAST]
     out += [(f"exact n={n}", "exact", "halfspace", n) for n in ns]
     out += [(f"conformal HS n={n}", "conformal", "halfspace", n) for n in ns]
-    fe_ns = (12, 16) if quick else (16, 24, 32)
-    out += [(f"conformal FE n={n}", "conformal", "fe", n) for n in fe_ns]
-    ref = ("conformal FE n=24 (reference)", "conformal", "fe", 24) if quick else \
-        ("conformal FE n=48 (reference)", "conformal", "fe", 48)
-    return out, ref
+    if quick:
+        return out, ("conformal HS n=24 (reference)", "conformal", "halfspace", 24)
+    out += [(f"conformal FE n={n}", "conformal", "fe", n) for n in (16, 24, 32)]
+    return out, ("conformal FE n=48 (reference)", "conformal", "fe", 48)
 
 
 def run(scene, theory, influence, n) -> dict:
@@ -80,14 +84,15 @@ def run(scene, theory, influence, n) -> dict:
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--out", default=str(ROOT / "studies" / "out" / "speed_vs_error"))
+    ap.add_argument("--out", default=None,
+                   help="output folder (default studies/out/speed_vs_error; with --quick a temporary folder)")
     args = ap.parse_args(argv)
-    out = Path(args.out)
+    out = output_dir("speed_vs_error", args)
     out.mkdir(parents=True, exist_ok=True)
     base = load_scene(SCENE)
     runs, ref_cfg = configs(args.quick)
     rows = []
-    for scene_label, y in SCENES:
+    for scene_label, y in (SCENES[1:2] if args.quick else SCENES):
         sc = replace(base, geometry=replace(base.geometry, lateral_shift=y))
         ref_label = ref_cfg[0]
         try:
@@ -120,7 +125,9 @@ def main(argv=None):
         w.writerows(rows)
     write_markdown(rows, out / "speed_vs_error.md")
     plot(rows, out / "speed_vs_error.png", ref_cfg[0])   # per-scene fallbacks are noted in the table
+    write_sidecar(out, __file__, args, extra={"reference": ref_cfg[0]})
     print(f"wrote {out}")
+    return 0
 
 
 def write_markdown(rows, path: Path) -> None:
@@ -181,4 +188,4 @@ def plot(rows, path: Path, ref_label: str) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

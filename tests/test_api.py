@@ -85,6 +85,7 @@ def test_plot3d_takes_a_plotter():
     pl.close()
 
 
+@pytest.mark.slow
 def test_library_code_changes_no_global_state(tmp_path):
     import matplotlib
     import pyvista as pv
@@ -101,6 +102,7 @@ def test_library_code_changes_no_global_state(tmp_path):
     assert [p["num_threads"] for p in threadpool_info()] == threads
 
 
+@pytest.mark.slow
 def test_no_x_server_warning_from_a_3d_plot(tmp_path):
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     p = subprocess.run([sys.executable, "-m", "conformal.cli", "solve", str(DEMO), "--plot", str(tmp_path / "d.png")],

@@ -82,6 +82,7 @@ def test_flat_strip_geometry_and_creepages():
     np.testing.assert_allclose(phi, 5e-3, atol=1e-18)
 
 
+@pytest.mark.slow
 def test_column_creepages_are_a_rigid_motion():
     """On an inclined, curved profile: the velocity v_ref + Omega x dr with Omega = phi V n_ref,
     projected on each column's tangents (independent 3-D vector algebra), gives the column

@@ -89,6 +89,7 @@ def test_each_wheel_carries_W_at_rest():
 
 
 # ----------------------------------------------------------------------------- energy
+@pytest.mark.slow
 def test_energy_conserved_without_creep_and_damping():
     s = scene(contact__creep_model="none", contact__damping=0.0, vehicle__cx=0.0, vehicle__cy=0.0,
               irregularity__amplitude=0.0, simulation__speed=30.0)
@@ -136,6 +137,7 @@ def test_klingel_wavelength_of_a_free_wheelset_on_a_cone():
 
 
 # ----------------------------------------------------------------------------- critical speed
+@pytest.mark.slow
 def test_linear_critical_speed_equals_time_domain_onset():
     p = linear_inputs(scene())
     vc = linear_critical_speed(p)
@@ -145,6 +147,7 @@ def test_linear_critical_speed_equals_time_domain_onset():
     assert onset == pytest.approx(vc, rel=0.02)
 
 
+@pytest.mark.slow
 def test_full_model_linearises_to_the_linear_model():
     """Small-amplitude hunting of the full model (creep model "linear", roll and vertical
     dynamics, contact table) against the eigenvalues of the 2-DOF linear model at 65 m/s."""
@@ -160,6 +163,7 @@ def test_full_model_linearises_to_the_linear_model():
     assert r.summary["decay_rate"] == pytest.approx(-re, rel=0.15)      # 0.28 vs 0.27 1/s measured
 
 
+@pytest.mark.slow
 def test_linear_inputs_against_hertz_and_kalker():
     s = scene()
     p = linear_inputs(s)
@@ -194,6 +198,7 @@ def _curvatures_at_centre(m):
 
 
 # ----------------------------------------------------------------------------- table
+@pytest.mark.slow
 def test_contact_table_interpolation_error_is_small():
     m = build_model(scene())
     e = interpolation_error(m.table, n_points=6)
@@ -229,6 +234,7 @@ def test_creep_model_table_needs_a_table_file(tmp_path):
         build_model(s)
 
 
+@pytest.mark.slow
 def test_creep_table_model_follows_linear_theory_at_small_creepage():
     """The creep table of conformal.tables (exact theory) against Kalker's linear theory: at the
     seed's creepages (< 3e-4) both give the same wheelset motion."""
@@ -259,6 +265,7 @@ def _write_scene(tmp_path, **changes) -> Path:
     return p
 
 
+@pytest.mark.slow
 def test_cli_simulate_and_stability(tmp_path, capsys):
     from conformal.cli import main
     p = _write_scene(tmp_path, **{"t_end = 2.0": "t_end = 0.03", "start = 5.0": "start = 0.0",
@@ -299,6 +306,7 @@ def test_seed_scene_is_table_1():
     assert s.material.G == pytest.approx(2.1e5 / (2 * 1.28))
 
 
+@pytest.mark.slow
 def test_study_quick(tmp_path):
     r = subprocess.run([sys.executable, str(ROOT / "studies" / "seed_wheelset.py"), "--quick", "--out",
                         str(tmp_path)], capture_output=True, text=True, timeout=300)

@@ -139,6 +139,7 @@ def test_clamped_block_is_stiff_by_an_offset_that_shrinks_with_size():
     assert 0.45 < offs[1] / offs[0] < 0.75
 
 
+@pytest.mark.slow
 def test_direct_method_converges_to_split():
     """Plain FE (P2, unit loads on conforming elements, the half-space field on the artificial
     boundaries) approaches the split result (= the half-space) as the loaded column is refined;

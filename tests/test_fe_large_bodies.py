@@ -33,6 +33,7 @@ def _solve(name: str, influence: str, **options):
     return solve_scene(sc.with_model(influence=influence, options=opts))
 
 
+@pytest.mark.slow
 def test_crowned_wheel_on_flat_rail_gives_hertz_at_prescribed_approach(tmp_path, monkeypatch):
     """Crowned wheel (transverse radius 300 mm, rolling radius 460 mm) on a flat rail at an
     approach of 0.05 mm, grid n = 30, default FE settings: Hertz gives FN = 32847 N and
@@ -48,6 +49,7 @@ def test_crowned_wheel_on_flat_rail_gives_hertz_at_prescribed_approach(tmp_path,
     assert fe.FN == pytest.approx(hs.FN, rel=0.003)       # a wheel of R 300/460 against a 10 mm patch
 
 
+@pytest.mark.slow
 def test_split_and_direct_methods_agree_on_the_gauge_corner():
     """R13 gauge corner of the UIC 60 rail (3 x 3 elements of 1 mm): the normal displacement under
     a uniform pressure on the patch, split P1 against direct P2 (loaded column refined to d/4),
@@ -70,6 +72,7 @@ def test_split_and_direct_methods_agree_on_the_gauge_corner():
     assert np.all(us / uh > 1.004) and np.all(ud / uh > 1.003)
 
 
+@pytest.mark.slow
 def test_fe_for_profiles_that_are_not_graphs_over_y(tmp_path, monkeypatch):
     """The deep conformal pair: vertical gauge and flange faces (neither profile is a graph over
     y), rail corner R10 against flange root R10.2, contact angles over tens of degrees.  FE
@@ -84,6 +87,7 @@ def test_fe_for_profiles_that_are_not_graphs_over_y(tmp_path, monkeypatch):
     assert fe.summary()["contact_angle_spread_deg"] > 30.0
 
 
+@pytest.mark.slow
 def test_sphere_on_flat_block_gives_hertz(tmp_path, monkeypatch):
     """The crowned wheel with a rolling radius equal to its transverse radius (300 mm) is a sphere
     on a flat FE block: Hertz FN within 1 % at the prescribed approach (default FE settings)."""

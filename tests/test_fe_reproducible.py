@@ -8,6 +8,7 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import conformal
 from conformal.cli import main
@@ -50,6 +51,7 @@ def test_same_body_same_kernel_run_to_run_and_across_processes(tmp_path):
     assert np.abs(k1 - k3).max() <= 1e-12 * scale
 
 
+@pytest.mark.slow
 def test_precompute_with_one_or_two_workers_gives_the_same_numbers(scene_file, tmp_path, capsys):
     scene = scene_file
     kernels = []

@@ -49,6 +49,7 @@ def test_precompute_caches_every_position_and_resumes(scene_file, tmp_path, caps
     assert "3 already cached, 1 computed" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_interrupted_job_leaves_only_complete_entries(scene_file, tmp_path, monkeypatch):
     """An item interrupted mid-way (KeyboardInterrupt) writes nothing; finished items stay."""
     from conformal import jobs
@@ -75,6 +76,7 @@ def test_interrupted_job_leaves_only_complete_entries(scene_file, tmp_path, monk
     assert sum(it.cached for it in items2) == 1
 
 
+@pytest.mark.slow
 def test_dask_missing_is_a_clear_error(scene_file, tmp_path, monkeypatch, capsys):
     monkeypatch.setitem(sys.modules, "dask.distributed", None)     # import fails as if not installed
     code = main(["precompute", str(scene_file), "--sweep", "shift=0", "--cache", str(tmp_path / "c"),
@@ -105,6 +107,7 @@ def test_local_dask_cluster(scene_file, tmp_path):
     assert len(Cache(tmp_path / "c").entries()) == 2
 
 
+@pytest.mark.slow
 def test_precompute_fills_the_conformal_strip_of_a_multi_patch_scene(tmp_path, monkeypatch):
     """The worn pair at 9.9 mm has two geometric patches; the conformal theory solves them on
     ONE strip (conformal.cases.conformal.curved_problem_from_wheel_rail).  precompute must plan

@@ -34,6 +34,7 @@ def scene_for(side, case, theory="exact", element_size=0.4):
     return replace(s, geometry=geo, kinematics=kin).with_model(theory=theory)
 
 
+@pytest.mark.slow
 def test_reference_points_at_contacts_wheelset_heights(ref):
     """Given CONTACT's solved wheelset height Z_WS, all 42 contact reference points agree: the
     pen²-weighted centre of the interpenetration (see conformal.geometry.patches) lies within
@@ -57,6 +58,7 @@ RIGHT = (0, 1, 4, 9, 10, 12, 13, 16, 20)
 LEFT = (0, 10, 20)
 
 
+@pytest.mark.slow
 def test_contact_positions_with_own_vertical_balance(ref):
     """Our own wheelset height (vertical load balanced by half-space normal solves on 0.4 mm grids;
     the small vertical share of the tangential forces is left out here): contact positions within

@@ -67,6 +67,7 @@ def test_render_shows_the_pressure(flange_result):
     assert np.abs(a.astype(int) - b).sum() > 1e4
 
 
+@pytest.mark.slow
 def test_cli_solve_plot_and_vtu(tmp_path, capsys):
     """`conformal solve --plot --vtu` on a conformal scene writes the PNG (3-D view and developed
     maps) and the VTU files; --vtu with a planar theory is refused with one line (exit 2)."""

@@ -9,6 +9,8 @@ from conformal.geometry.placement import place_rail
 from conformal.geometry.profiles import BUILTIN, builtin_dir, check_points, load_profile, read_points
 from conformal.geometry.spline import fit_curve
 
+SCENES = __import__("pathlib").Path(__file__).resolve().parents[1] / "meshes" / "scenes"
+
 
 def test_builtin_files_are_packaged_and_load():
     for name, entry in BUILTIN.items():
@@ -123,9 +125,31 @@ def test_points_out_of_order():
 
 
 def test_rail_upside_down():
-    p = load_profile("UIC60", "rail").points * np.array([1.0, -1.0])   # z positive upwards
-    with pytest.raises(InputError, match="upside down"):
-        check_points(p, "rail", "flipped")
+    """A rail head with z positive upwards looks like a groove rail (z downwards): both are accepted
+    (issue 11: CONTACT's groove rails were refused), with a warning that names [geometry] rail_z;
+    rail_z = "up" reads such a file back into the head."""
+    from conformal.geometry.profiles import rail_orientation_warning
+
+    head = load_profile("UIC60", "rail").points
+    p = head * np.array([1.0, -1.0])   # z positive upwards
+    checked = check_points(p, "rail", "flipped")
+    assert "rail_z" in rail_orientation_warning(checked, "flipped")
+    assert rail_orientation_warning(head, "UIC60") is None
+    groove = np.loadtxt(SCENES / "groove_rail_r10p02.csv", delimiter=",")
+    inner = groove[np.abs(groove[:, 0]) <= 10.0]          # the groove and its shoulders only
+    assert "groove" in rail_orientation_warning(check_points(inner, "rail", "groove"), "groove")
+
+
+def test_profiles_with_z_upwards_are_read_with_the_key(tmp_path):
+    f = tmp_path / "uic60_up.csv"
+    np.savetxt(f, load_profile("UIC60", "rail").points * np.array([1.0, -1.0]), delimiter=",")
+    back = load_profile(str(f), "rail", z_up=True).points
+    assert np.allclose(back, load_profile("UIC60", "rail").points)
+    w = tmp_path / "s1002_up.csv"
+    np.savetxt(w, load_profile("S1002", "wheel").points * np.array([1.0, -1.0]), delimiter=",")
+    with pytest.raises(InputError, match="wheel_z"):
+        load_profile(str(w), "wheel")
+    assert np.allclose(load_profile(str(w), "wheel", z_up=True).points, load_profile("S1002", "wheel").points)
 
 
 def test_wheel_upside_down():

@@ -7,6 +7,7 @@ import json
 import math
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -120,28 +121,51 @@ def _analytic_table(fun, **kw):
 
 
 def test_interpolation_reproduces_nodes_and_polynomials():
-    """The evaluator is exact (to float32) at the nodes and for functions cubic along ln(a/b), s,
-    theta, q and linear in nu (the tensor spline reproduces them; the fine grid is read linearly,
-    so the test function is linear along the fine cells of s, theta, q)."""
+    """The evaluator (Eq. T5) is exact (to float32) at the nodes and for functions cubic along
+    ln(a/b) anywhere (cubic Hermite with the not-a-knot spline's slopes: the spline itself, which
+    reproduces cubics), cubic along s and theta and quadratic along q (Akima's slopes reproduce
+    quadratics on a uniform axis) at the fine grid's nodes, and linear in nu anywhere."""
     def fun(t, nu, s, th, q):
-        return (t**3 - 2 * t + nu * s, 0.5 * th - q + nu, s * q + t * nu)
+        return (t**3 - 2 * t + nu * s**3, 0.5 * th**3 - q**2 + nu, s * q**2 + t**3 * nu)
 
     from conformal.tables.table import eval_grid
 
-    tab = _analytic_table(fun)
+    tab = _analytic_table(fun, n_spin=7)
     pts = [np.ravel(g) for g in np.meshgrid(*tab.spec.axes(), indexing="ij")]
     assert np.allclose(interpolate(tab, *pts), np.stack(fun(*pts), 1), atol=2e-6)
     rng = np.random.default_rng(3)
     fine = eval_grid(tab).axes
-    # ln(a/b), s, q on the fine grid's nodes, nu and theta anywhere (the function is linear in them)
-    t, s, q = (ax[rng.integers(0, ax.size, 500)] for ax in (fine[0], fine[2], fine[4]))
+    # s, theta, q on the fine grid's nodes (read linearly between them); ln(a/b) and nu anywhere
+    s, th, q = (ax[rng.integers(0, ax.size, 500)] for ax in (fine[2], fine[3], fine[4]))
+    t = rng.uniform(fine[0][0], fine[0][-1], 500)
     nu = rng.uniform(0.2, 0.3, 500)
-    th = rng.uniform(0, math.pi / 2, 500)
     ref = np.stack(fun(t, nu, s, th, q), 1)
-    assert np.allclose(interpolate(tab, t, nu, s, th, q), ref, atol=2e-6)
-    # one material in the batch (the nu cell blended once) equals the general path
-    one = interpolate(tab, t, np.full(500, 0.27), s, th, q)
-    assert np.allclose(one, np.stack(fun(t, np.full(500, 0.27), s, th, q), 1), atol=2e-6)
+    assert np.allclose(interpolate(tab, t, nu, s, th, q), ref, atol=5e-6)
+    # between the fine nodes of a linear function: exact as well (multilinear read)
+    lin = _analytic_table(lambda t, nu, s, th, q: (s + 2 * th - q, nu * q, t + th))
+    x = [rng.uniform(ax[0], ax[-1], 500) for ax in lin.spec.axes()]
+    assert np.allclose(interpolate(lin, *x), np.stack([x[2] + 2 * x[3] - x[4], x[1] * x[4], x[0] + x[3]], 1),
+                       atol=2e-6)
+
+
+def test_akima_along_spin_does_not_ring_past_a_ridge():
+    """A corner in the spin direction (the force's ridge where spin opposes the lateral creepage):
+    Akima's slopes (Akima 1970) keep the cells beyond the corner's neighbours exact, where a
+    not-a-knot spline through the same nodes rings.  f = max(q - q0, 0) with q0 inside a cell."""
+    from scipy.interpolate import CubicSpline
+
+    q0 = 0.01
+    tab = _analytic_table(lambda t, nu, s, th, q: (np.maximum(q - q0, 0.0), 0 * q, 0 * q), n_spin=11)
+    qn = tab.spec.axes()[4]
+    h = qn[1] - qn[0]
+    q = np.linspace(qn[0], qn[-1], 801)
+    far = np.abs(q - q0) > 2.5 * h          # beyond the corner's cell and its neighbours
+    z = np.zeros_like(q)
+    f = interpolate(tab, z, z + 0.25, z + 0.1, z + 0.3, q)[:, 0]
+    exact = np.maximum(q - q0, 0.0)
+    assert np.abs(f - exact)[far].max() < 2e-6
+    spline = CubicSpline(qn, np.maximum(qn - q0, 0.0))(q)
+    assert np.abs(spline - exact)[far].max() > 1e-4
 
 
 def test_outside_the_range_is_never_silent(tiny):
@@ -183,19 +207,23 @@ def test_file_integrity(tiny, tmp_path):
 
 
 def test_throughput_vectorised():
-    """>= 1e6 contacts per CPU second on the shipped table (one material per batch); the floor
-    asserted here is lower to stay robust on a busy machine (studies/creep_table_scaling.py
-    reports the measured rate)."""
+    """>= 1e6 contacts per CPU second on the shipped table with nu varying in the batch, one
+    thread; the floor asserted here is lower to stay robust on a busy machine
+    (studies/creep_table_scaling.py reports the measured rate)."""
+    from threadpoolctl import threadpool_limits
+
     t = load_table()
     rng = np.random.default_rng(0)
     n = 200_000
     a = rng.uniform(4, 8, n)
     b = a / rng.uniform(0.5, 2.0, n)
     xi, eta, phi = rng.uniform(-2e-3, 2e-3, (3, n))
-    evaluate(t, a, b, 1e5, 0.3, G, NU, xi, eta, phi * 1e-2)          # warm (evaluation grid)
-    c0 = time.process_time()
-    FX, FY, MZ = evaluate(t, a, b, 1e5, 0.3, G, NU, xi, eta, phi * 1e-2)
-    rate = n / max(time.process_time() - c0, 1e-9)
+    nu = rng.uniform(0.25, 0.30, n)
+    evaluate(t, a, b, 1e5, 0.3, G, nu, xi, eta, phi * 1e-2)          # warm (evaluation grid)
+    with threadpool_limits(1):
+        c0 = time.process_time()
+        FX, FY, MZ = evaluate(t, a, b, 1e5, 0.3, G, nu, xi, eta, phi * 1e-2)
+        rate = n / max(time.process_time() - c0, 1e-9)
     assert np.all(np.hypot(FX, FY) <= 0.3e5 * 1.01) and rate > 3e5
 
 
@@ -223,12 +251,14 @@ def test_resume_after_a_failed_chunk(tmp_path, monkeypatch, tiny):
     np.testing.assert_allclose(load_table(out).values, tiny.values, rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_process_pool_build_equals_serial(tmp_path, tiny):
     rep = build_table(TableSpec(**TINY), tmp_path / "p.npz", workers=2, progress=False)
     assert rep.solved == 5 and not rep.failed
     np.testing.assert_allclose(load_table(tmp_path / "p.npz").values, tiny.values, rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_build_equals_serial(tmp_path, tiny):
     """The Dask path (LocalCluster, the code path of a real cluster with an address) - not skipped."""
     import dask.distributed  # noqa: F401 - part of the test extra
@@ -255,6 +285,41 @@ def test_cli_build_info_and_bad_spec(tmp_path, capsys, tiny):
     assert len(err) == 1 and "did you mean 'n_rho'" in err[0]
 
 
+def test_refine_adds_exact_nodes_in_a_box(tiny, tmp_path, capsys):
+    """``conformal table refine``: extra q nodes in a box are exact solves (to the warm start's
+    2e-5), the evaluator passes through them, the rest of the table is unchanged, the patch is
+    covered by the content hash, and a bad box is one InputError line (exit 2)."""
+    out = tmp_path / "r.npz"
+    assert main(["table", "refine", tiny.path, "--out", str(out), "--box", "0:1,1:3,0:2", "--q", "0.2:0.3",
+                 "--no-progress"]) == 0
+    assert "4 nodes in 1 chunks: 0 already done, 1 solved" in capsys.readouterr().out
+    r = load_table(out)
+    (p,) = r.patches
+    assert p.box == (0, 1, 1, 3, 0, 2) and np.allclose(p.q, [0.25]) and r.info()["patch_nodes"] == 4
+    s_ax, th_ax = tiny.spec.axes()[2:4]
+    S, TH = np.meshgrid(s_ax[1:3], th_ax, indexing="ij")
+    nodes = [creepages_of_node(si, ti, 0.25) for si, ti in zip(S.ravel(), TH.ravel())]
+    ref = tbuild.solve_points(1.0, NU, *np.array(nodes).T, grid_n=tiny.spec.grid_n, tol=tiny.spec.tol)
+    assert np.allclose(p.values.reshape(-1, 3), ref, atol=2e-5)
+    got = interpolate(r, 0.0, NU, S.ravel(), TH.ravel(), np.full(S.size, 0.25))
+    assert np.allclose(got, ref, atol=2e-5)
+    # at q = 0.25 the unrefined table interpolates (3 q nodes: a parabola) and misses
+    assert np.abs(interpolate(tiny, 0.0, NU, S.ravel(), TH.ravel(), np.full(S.size, 0.25)) - ref).max() > 1e-3
+    # outside the box (s node 0, all q) and at the table's nodes: unchanged
+    x = [np.zeros(5), np.full(5, NU), np.zeros(5), np.zeros(5), np.linspace(-0.5, 0.5, 5)]
+    assert np.allclose(interpolate(r, *x), interpolate(tiny, *x), atol=1e-6)
+    assert r.content_hash != tiny.content_hash
+    with np.load(out) as z:
+        data = {k: z[k] for k in z.files}
+    data["patch0_values"] = data["patch0_values"] * 1.001
+    np.savez(tmp_path / "edited.npz", **data)
+    with pytest.raises(InputError, match="content hash"):
+        load_table(tmp_path / "edited.npz")
+    assert main(["table", "refine", tiny.path, "--out", str(out), "--box", "0:1,1:9,0:2", "--q", "0.2:0.3"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "box" in err[0]
+
+
 # ----------------------------------------------------------------------------- model and shipped table
 def test_scene_theory_table(tiny):
     from conformal.solve import solve_scene
@@ -275,11 +340,84 @@ def test_scene_theory_table(tiny):
         solve(replace(p, kinematics=replace(p.kinematics, fx_rel=0.5)))
 
 
+def test_scene_table_path_is_relative_to_the_scene_file(tiny, tmp_path, monkeypatch):
+    """``[model] table`` in a scene file: a relative path is read from the scene file's folder
+    (not the working directory), an absolute path as it is, "default" is the shipped table; a
+    missing file is one InputError line naming the key; the path survives Scene.with_ and
+    to_dict without being resolved twice."""
+    import shutil
+
+    from conformal.scene import load_scene, scene_from_dict
+    from conformal.solve import solve_scene
+
+    folder = tmp_path / "scenes"
+    (folder / "tables").mkdir(parents=True)
+    shutil.copy(tiny.path, folder / "tables" / "t.npz")
+    xi, eta, phi = _creepages_at(*creepages_of_node(tiny.spec.s_max / 2, 0.0, tiny.spec.q_max))
+    text = _scene(xi, eta, phi, theory="table").to_dict()
+
+    def write(name, table):
+        lines = []
+        for sec, body in text.items():
+            if sec == "name":
+                continue
+            body = dict(body, **({"table": table} if sec == "model" else {}))
+            lines.append(f"[{sec}]")
+            lines += [f"{k} = {json.dumps(v)}" for k, v in body.items()]
+        (folder / name).write_text("\n".join(lines) + "\n")
+        return folder / name
+
+    elsewhere = tmp_path / "work"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    scene = load_scene(write("rel.toml", "tables/t.npz"))
+    want = str((folder / "tables" / "t.npz").resolve())
+    assert scene.model.options["table"] == want
+    r = solve_scene(scene)
+    assert r.extra["table"] == want and r.extra["table_hash"] == tiny.content_hash[:16]
+    again = scene.with_(load__normal_force=2 * FN)
+    assert again.model.options["table"] == want and scene_from_dict(scene.to_dict()).model.options["table"] == want
+    assert load_scene(write("abs.toml", want)).model.options["table"] == want
+    assert load_scene(write("def.toml", "default")).model.options["table"] == "default"
+    with pytest.raises(InputError, match=r"\[model\] table: no such file"):
+        load_scene(write("missing.toml", "t.npz"))        # not looked up in the working directory
+    (elsewhere / "t.npz").write_bytes(b"")                 # ... even where one exists there
+    with pytest.raises(InputError, match="no such file"):
+        load_scene(write("missing.toml", "t.npz"))
+
+
+def _reference_points():
+    path = Path(__file__).parent / "reference" / "creep_table_points.csv"
+    with path.open(encoding="utf-8") as fh:
+        lines = [line for line in fh if not line.startswith("#")]
+    return np.genfromtxt(lines, delimiter=",", names=True)
+
+
+def test_shipped_table_against_stored_exact_solves():
+    """The shipped table at the 300 random points of studies/creep_table_accuracy.py (seed 2026)
+    against the exact solves stored in tests/reference/creep_table_points.csv: max error of
+    F/(mu FN) <= 0.01 and mean <= 0.002 (issue 10's targets).  Measured 0.0077 and 0.0011 (the
+    previous evaluator, cubic splines read on a 2-3x finer grid, before the refinement boxes:
+    0.017 and 0.0019); on 600 fresh points (the study's hold-out set, seed 9) 0.0105 and 0.0011,
+    one point above 0.01 (large creepage between the a/b nodes)."""
+    d = _reference_points()
+    t = load_table()
+    s, th, q, sa, sy = polar(d["nx"], d["ny"], d["nphi"])
+    f = interpolate(t, np.log(d["a_over_b"]), d["nu"], s, th, q)
+    err = np.hypot(sa * f[:, 0] - d["fx_exact"], sa * sy * f[:, 1] - d["fy_exact"])
+    assert d.size == 300 and err.max() <= 0.01 and err.mean() <= 0.002, (err.max(), err.mean())
+    # through the dimensional evaluator (Eq. T1 with the contact's own coefficients): the same
+    a, b = 5.0 * np.sqrt(d["a_over_b"]), 5.0 / np.sqrt(d["a_over_b"])
+    kx, ky, kp = saturation_scales(a, b, 1e5, 0.3, G, *coefficient_arrays(d["a_over_b"], d["nu"]))
+    FX, FY, _ = evaluate(t, a, b, 1e5, 0.3, G, d["nu"], d["nx"] / kx, d["ny"] / ky, d["nphi"] / kp)
+    assert np.allclose(np.stack([FX, FY], 1) / 3e4, np.stack([sa * f[:, 0], sa * sy * f[:, 1]], 1), atol=1e-4)
+
+
 def test_shipped_table_against_direct_exact_solves():
-    """Random points between the nodes of the shipped table against direct exact solves with the
-    table's solver settings.  studies/creep_table_accuracy.py measured over 300 points: max 0.017,
-    mean 0.0019 of mu FN (6 points above the 0.01 target, all at small creepage with spin against
-    the lateral creepage); the bound here is that measured max with a margin."""
+    """Six fresh random points between the nodes of the shipped table against direct exact solves
+    with the table's solver settings (not the points the evaluator was tuned on): measured max
+    0.0068, mean 0.0019 of mu FN; bounded by the issue's 0.01 (max) and 0.004 (twice its mean
+    target: six points are a small sample)."""
     t = load_table()
     s = t.spec
     rng = np.random.default_rng(11)
@@ -296,4 +434,53 @@ def test_shipped_table_against_direct_exact_solves():
     kx, ky, kp = saturation_scales(a, b, 1e5, 0.3, G, *c)
     FX, FY, MZ = evaluate(t, a, b, 1e5, 0.3, G, nu, rho * np.cos(th) / kx, rho * np.sin(th) / ky, nphi / kp)
     err = np.hypot(FX / 3e4 - ref[:, 0], FY / 3e4 - ref[:, 1])
-    assert err.max() < 0.02 and err.mean() < 0.006, err
+    assert err.max() <= 0.01 and err.mean() <= 0.004, err
+
+
+# ----------------------------------------------------------------------------- studies
+def _run_study(name: str, out: Path) -> dict:
+    """``python studies/<name>.py --quick --out OUT``: exit 0 and the sidecar run.json."""
+    import os
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
+    r = subprocess.run([sys.executable, str(root / "studies" / f"{name}.py"), "--quick", "--out", str(out)],
+                       cwd=root, capture_output=True, text=True, timeout=600, env=env)
+    assert r.returncode == 0, f"{name} --quick failed:\n{r.stdout[-2000:]}\n{r.stderr[-3000:]}"
+    side = json.loads((out / "run.json").read_text())
+    assert side["script"] == f"studies/{name}.py" and side["args"]["quick"] is True
+    assert Path(side["args"]["out"]) == out
+    return side
+
+
+@pytest.mark.slow
+def test_accuracy_study_quick(tmp_path):
+    """studies/creep_table_accuracy.py --quick: 20 + 20 hold-out points against exact solves;
+    the table's errors are within the issue's bound and FASTSIM's are larger (Kalker's simplified
+    theory: several % of mu FN away from the exact one)."""
+    _run_study("creep_table_accuracy", tmp_path)
+    res = json.loads((tmp_path / "accuracy.json").read_text())
+    assert res["quick"] and res["points"] == 20 and res["holdout"]["points"] == 20
+    assert res["all_points_table_F"]["max"] <= 0.01
+    assert res["fastsim_F"]["mean"] > 5 * res["table_F"]["mean"]
+    pts = np.genfromtxt(tmp_path / "accuracy_points.csv", delimiter=",", names=True)
+    assert pts.size == 20 and math.isclose(pts["err_table"].max(), res["table_F"]["max"], rel_tol=1e-4)
+
+
+@pytest.mark.slow
+def test_scaling_study_quick(tmp_path):
+    """studies/creep_table_scaling.py --quick: every backend (serial, process pool and Dask
+    LocalCluster with 1 and 2 workers) builds the same 18-node table; the speed-ups are reported
+    with the load they ran under; the evaluator is timed on one thread."""
+    side = _run_study("creep_table_scaling", tmp_path)
+    res = json.loads((tmp_path / "scaling.json").read_text())
+    assert res["quick"] and {(r["backend"], r["workers"]) for r in res["runs"]} == {
+        ("serial", 1), ("pool", 1), ("pool", 2), ("dask", 1), ("dask", 2)}
+    assert all(r["nodes"] == 18 and r["throughput"] > 0 for r in res["runs"])
+    for b in ("pool", "dask"):
+        sp = res["speedup"][b]
+        assert sp["speedup_2_workers"] > 0 and isinstance(sp["loaded"], bool)
+    assert all(v["contacts"] == 100_000 and v["contacts_per_cpu_s"] > 0 for v in res["evaluator"].values())
+    assert side["summary"]["note"] == res["note"]

@@ -94,6 +94,7 @@ def test_vertical_balance_and_summary_with_hertz():
     json.dumps(s)
 
 
+@pytest.mark.slow
 def test_fastsim_balance_includes_tangential_forces():
     """In flange contact the lateral creep force carries a large share of the vertical load
     (CONTACT at 6.5 mm: FN cos(d) = 6181 N, FS sin(d) = 3821 N)."""
@@ -105,6 +106,7 @@ def test_fastsim_balance_includes_tangential_forces():
     assert -1.2 < d < -1.1
 
 
+@pytest.mark.slow
 def test_left_right_symmetry():
     """A centred wheelset without yaw and roll: the left wheel is the mirror image of the right one
     (contact angle, lateral positions, lateral force and spin moment change sign).  Both are balanced

@@ -2,18 +2,28 @@
 patch of the wheel, its creepages from the wheelset motion, and its FE or half-space influence
 numbers (the body shapes handed to :mod:`conformal.influence.fe`).
 
-The solver itself (Li's conformal contact, Li 2002; seed Eqs. 45-49) is :mod:`conformal.solvers.conformal`; this module builds its
-:class:`~conformal.solvers.conformal.CurvedProblem` from a scene.
+The solver itself (Li's conformal contact, Li 2002; seed Eqs. 45-49) is
+:mod:`conformal.solvers.conformal`; this module builds its
+:class:`~conformal.solvers.conformal.CurvedProblem` from a scene, and (issue 11)
+
+* extends a strip wherever its contact reaches an end (:func:`_solve_extending`): never cut;
+* with ``[grid] strips = "separate"`` solves every contact patch on a strip of its own, without
+  elastic interaction, at a common wheelset height (:func:`_solve_separate`);
+* with ``[kinematics] fx_rel`` and ``speed`` solves the wheelset's pitch velocity for that force
+  (free rolling at fx_rel = 0, :func:`_solve_pitch`).
 """
 from __future__ import annotations
 
-from dataclasses import replace
+import math
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
+from scipy.optimize import brentq
 
 from conformal.cases.wheelrail import curved_creepages, loaded_state, patch_info, wheelset_motion
-from conformal.errors import InputError
-from conformal.geometry.patches import curved_grid_for_patch
+from conformal.errors import ConvergenceError, InputError
+from conformal.geometry.patches import Patch, curved_grid_for_patch
 from conformal.geometry.wheelrail import profile_curves
 from conformal.influence.curved import CurvedInfluence
 from conformal.influence.fe import settings_from_options, wheel_rail_kernel
@@ -86,72 +96,435 @@ def curved_problem_from_wheel_rail(scene, *, scale: float | None = None) -> Curv
     planar theories; for studies that separate the effect of the geometry from that of the
     kinematics)."""
     pl, st, _ = loaded_state(scene, grids=False)
-    load = scene.load
-    patches = [pg.patch for pg in st.patches]
-    main = patches[0]
-    wheel = pl.pair.wheel(st.z)
-    g = scene.grid
-    scale = scale or g.scale
-    size_warnings: list[str] = []
-    if len(patches) == 1:   # the grid of conformal.geometry (and of `conformal precompute`)
-        merged = main
-        grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, main, element_size=scene.geometry.element_size,
-                                                   n=g.n, scale=scale, side=pl.pair.side)
-    else:
-        merged = replace(main, s_range=(min(p.s_range[0] for p in patches), max(p.s_range[1] for p in patches)),
-                         x_range=(min(p.x_range[0] for p in patches), max(p.x_range[1] for p in patches)))
-        dx, ds, size_warnings = _element_sizes(scene, patches, merged, scale)
-        grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, merged, sizes=(dx, ds), scale=scale,
-                                                   side=pl.pair.side)
-    m = pl.pair.mirror
-    k, geo = scene.kinematics, scene.geometry
-    creep = scene.model.options.get("creepage", "surface")
-    if creep not in ("surface", "reference"):
-        raise InputError(f"[model] creepage: must be \"surface\" or \"reference\", got {creep!r}")
-    motion = wheelset_motion(scene)
-    if motion is not None:
-        c = curved_creepages(pl.pair, st.z, motion, grid, merged)
-        xi_s, eta_s, phi_s = c.xi, m * c.eta, m * c.phi        # back to the side frame of the grid
-        if creep == "reference":   # the planar theories' assumption: the reference point's creepages
-            xi_s, eta_s, phi_s = column_creepages(grid, *(float(np.interp(grid.s_ref, grid.s, v))
-                                                          for v in (xi_s, eta_s, phi_s)))
-        kin = replace(k, velocity=float(np.interp(grid.s_ref, grid.s, c.velocity)))
-    else:
-        xi_s, eta_s, phi_s = column_creepages(grid, k.xi, m * k.eta, m * k.phi)
-        kin = k
-    info = patch_info(pl.pair, st, st.patches[0], 0)
-    info.update(n_geometric_patches=len(patches), z_ws_reference=st.z, z_first_touch=pl.z_first,
-                side=pl.pair.side)
-    if st.warnings or size_warnings:
-        info["warnings"] = list(st.warnings) + size_warnings
-    normal = dict(normal_force=load.wheel_load) if load.wheel_load is not None else dict(approach=0.0)
-    rail_points, wheel_points = scene_profiles(scene)   # whole profiles for the FE bodies
-    profiles = dict(rail_points=rail_points, wheel_points=wheel_points)
-    return CurvedProblem(grid=grid, h=h - approach0, material=scene.material, friction=scene.friction,
-                         kinematics=kin, model=scene.model, xi_s=np.asarray(xi_s, float),
-                         eta_s=np.asarray(eta_s, float), phi_s=np.asarray(phi_s, float), load_angle=0.0,
-                         overlap_approach=True,
-                         label=f"{scene.name}:{pl.pair.side}", info=info, **normal, **profiles)
+    return StripBuilder.for_scene(scene, pl, st).problem(scale=scale)
 
 
-def solve_wheel_rail_conformal(scene, *, max_enlarge: int = 2) -> Result:
+@dataclass(frozen=True, eq=False)
+class StripBuilder:
+    """Builds the curved strip problems of a wheel at one loaded state: the strip over every patch
+    (``patch`` merged), or a strip fitted to one part of it, and the same strip extended along x
+    or s with its element sizes kept (:meth:`extended`)."""
+
+    scene: Any
+    pl: Any
+    st: Any
+    patch: Patch                 # merged over all patches of the wheel
+    n_patches: int
+
+    @classmethod
+    def for_scene(cls, scene, pl, st) -> "StripBuilder":
+        patches = [pg.patch for pg in st.patches]
+        main = patches[0]
+        merged = main if len(patches) == 1 else replace(
+            main, s_range=(min(p.s_range[0] for p in patches), max(p.s_range[1] for p in patches)),
+            x_range=(min(p.x_range[0] for p in patches), max(p.x_range[1] for p in patches)))
+        return cls(scene, pl, st, merged, len(patches))
+
+    def problem(self, *, scale: float | None = None, patch: Patch | None = None,
+                sizes: tuple[float, float] | None = None, n: int | None = None,
+                approach: float | None = None, label: str = "") -> CurvedProblem:
+        """The strip problem: over ``patch`` (default: all patches), ``sizes`` = (dx, ds) or ``n``
+        elements per axis or the scene's element size; loaded by the wheel load, or, with
+        ``approach``, lowered that far (mm, vertically) below the reference height."""
+        scene, pl, st = self.scene, self.pl, self.st
+        load = scene.load
+        wheel = pl.pair.wheel(st.z)
+        g = scene.grid
+        scale = scale or g.scale
+        size_warnings: list[str] = []
+        target = patch or self.patch
+        if sizes is not None:
+            grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, target, sizes=sizes, scale=scale,
+                                                       side=pl.pair.side)
+        elif self.n_patches == 1 or patch is not None:   # the grid of conformal.geometry (and of precompute)
+            grid, h, approach0 = curved_grid_for_patch(
+                wheel, pl.pair.rail, target, element_size=None if n is not None else scene.geometry.element_size,
+                n=n or g.n, scale=scale, side=pl.pair.side)
+        else:
+            patches = [pg.patch for pg in st.patches]
+            dx, ds, size_warnings = _element_sizes(scene, patches, target, scale)
+            grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, target, sizes=(dx, ds), scale=scale,
+                                                       side=pl.pair.side)
+        merged = self.patch
+        m = pl.pair.mirror
+        k = scene.kinematics
+        creep = scene.model.options.get("creepage", "surface")
+        if creep not in ("surface", "reference"):
+            raise InputError(f"[model] creepage: must be \"surface\" or \"reference\", got {creep!r}")
+        motion = wheelset_motion(scene)
+        if motion is not None:
+            c = curved_creepages(pl.pair, st.z, motion, grid, merged)
+            xi_s, eta_s, phi_s = c.xi, m * c.eta, m * c.phi        # back to the side frame of the grid
+            if creep == "reference":   # the planar theories' assumption: the reference point's creepages
+                xi_s, eta_s, phi_s = column_creepages(grid, *(float(np.interp(grid.s_ref, grid.s, v))
+                                                              for v in (xi_s, eta_s, phi_s)))
+            kin = replace(k, velocity=float(np.interp(grid.s_ref, grid.s, c.velocity)))
+        else:
+            xi_s, eta_s, phi_s = column_creepages(grid, k.xi, m * k.eta, m * k.phi)
+            kin = k
+        info = patch_info(pl.pair, st, st.patches[0], 0)
+        info.update(n_geometric_patches=self.n_patches, z_ws_reference=st.z, z_first_touch=pl.z_first,
+                    side=pl.pair.side)
+        if st.warnings or size_warnings or st.placement_warnings:
+            info["warnings"] = list(st.warnings) + size_warnings + list(st.placement_warnings)
+        if approach is not None:
+            normal = dict(approach=float(approach))
+        else:
+            normal = dict(normal_force=load.wheel_load) if load.wheel_load is not None else dict(approach=0.0)
+        rail_points, wheel_points = scene_profiles(scene)   # whole profiles for the FE bodies
+        profiles = dict(rail_points=rail_points, wheel_points=wheel_points)
+        return CurvedProblem(grid=grid, h=h - approach0, material=scene.material, friction=scene.friction,
+                             kinematics=kin, model=scene.model, xi_s=np.asarray(xi_s, float),
+                             eta_s=np.asarray(eta_s, float), phi_s=np.asarray(phi_s, float), load_angle=0.0,
+                             overlap_approach=True,
+                             label=f"{scene.name}:{pl.pair.side}{label}", info=info, **normal, **profiles)
+
+    def extended(self, problem: CurvedProblem, sides: set[str], *, patch: Patch | None = None,
+                 fraction: float = 0.5, label: str = "") -> CurvedProblem | None:
+        """The strip of ``problem`` extended on ``sides`` ("x_lo", "x_hi", "s_lo", "s_hi") by
+        ``fraction`` of its length along that axis (at least 3 elements), with the same element
+        sizes; None where it cannot grow (an end of the rail profile, or more than the element
+        limits [model] max_mx / max_ms)."""
+        g = problem.grid
+        ref = patch or self.patch
+        dx, ds = g.dx, float(g.ds[0])
+        x_lo = ref.x_ref + g.xl
+        x_hi = x_lo + g.mx * dx
+        s_lo, s_hi = float(g.s_edges[0]), float(g.s_edges[-1])
+        ex = max(fraction * (x_hi - x_lo), 3 * dx)
+        es = max(fraction * (s_hi - s_lo), 3 * ds)
+        length = self.pl.pair.rail.curve.length
+        if ("s_lo" in sides and s_lo <= 1e-9) or ("s_hi" in sides and s_hi >= length - 1e-9):
+            return None
+        x_lo -= ex if "x_lo" in sides else 0.0
+        x_hi += ex if "x_hi" in sides else 0.0
+        s_lo = max(s_lo - es, 0.0) if "s_lo" in sides else s_lo
+        s_hi = min(s_hi + es, length) if "s_hi" in sides else s_hi
+        opts = self.scene.model.options
+        if ((x_hi - x_lo) / dx > int(opts.get("max_mx", MAX_ELEMENTS))
+                or (s_hi - s_lo) / ds > int(opts.get("max_ms", MAX_ELEMENTS))):
+            return None
+        # curved_grid_for_patch adds one element on each side of the range at scale 1
+        target = replace(ref, x_range=(x_lo + dx, x_hi - dx), s_range=(s_lo + ds, s_hi - ds))
+        kw = dict(approach=problem.approach) if problem.normal_force is None else {}
+        return self.problem(scale=1.0, patch=target, sizes=(dx, ds), label=label, **kw)
+
+
+def _edge_sides(problem: CurvedProblem, result: Result) -> set[str]:
+    """The strip ends (side frame) where the contact area of ``result`` reaches the border."""
+    contact = result.field.side_frame("status") != EXTERIOR
+    sides = set()
+    for name, m in (("x_lo", contact[0]), ("x_hi", contact[-1]), ("s_lo", contact[:, 0]), ("s_hi", contact[:, -1])):
+        if m.any():
+            sides.add(name)
+    return sides
+
+
+def _solve_extending(builder: StripBuilder, problem: CurvedProblem, max_extend: int, *, patch=None,
+                     label: str = "") -> tuple[Result, CurvedProblem, int, list[str]]:
+    """Solve ``problem`` and, while its contact area reaches an end of the strip, extend the strip
+    there (same element sizes) and solve again: contact is never cut by the strip.  Returns (result,
+    problem, number of extensions, warnings)."""
+    warnings: list[str] = []
+    for attempt in range(max_extend + 1):
+        result = solve_curved(problem)
+        sides = _edge_sides(problem, result)
+        if not sides:
+            return result, problem, attempt, warnings
+        if attempt == max_extend:
+            break
+        bigger = builder.extended(problem, sides, patch=patch, label=label)
+        if bigger is None:
+            warnings.append(f"the contact reaches the strip's end ({', '.join(sorted(sides))}) where the strip "
+                            "cannot grow (an end of the rail profile, or [model] max_mx / max_ms elements)")
+            return result, problem, attempt, warnings
+        problem = bigger
+    warnings.append(f"the contact still reaches the strip's end ({', '.join(sorted(sides))}) after {max_extend} "
+                    "extensions")
+    return result, problem, max_extend, warnings
+
+
+def _pitch_for_reference_creepage(problem: CurvedProblem, motion, xi_target: float) -> tuple[float, float]:
+    """(pitch velocity, reference rolling radius): the wheelset pitch velocity (rad/s) at which the
+    reference column of ``problem`` has the longitudinal creepage ``xi_target``.
+
+    At the reference point the wheel material moves with v_w = V + pitch R_ref along x (R_ref: the
+    distance of the point below the axle, the reference rolling radius) and the rolling velocity is
+    the mean V_r = (V - pitch R_ref)/2 (conformal.geometry.kinematics), so that
+    xi = -(V + pitch R_ref)/V_r, i.e. pitch R_ref = -V (1 + xi/2)/(1 - xi/2).  R_ref follows from
+    the creepage the problem was built with at its own pitch velocity."""
+    g = problem.grid
+    V = motion.speed
+    xi0 = float(np.interp(g.s_ref, g.s, problem.xi_s))
+    q0 = -V * (1.0 + 0.5 * xi0) / (1.0 - 0.5 * xi0)
+    if motion.pitch_velocity == 0.0:
+        raise InputError("[kinematics] pitch_velocity: a prescribed FX needs a rolling wheel (pitch velocity != 0)")
+    r_ref = q0 / motion.pitch_velocity
+    q = -V * (1.0 + 0.5 * xi_target) / (1.0 - 0.5 * xi_target)
+    return float(q / r_ref), float(r_ref)
+
+
+def solve_wheel_rail_conformal(scene, *, max_enlarge: int = 2, max_pitch: int = 8) -> Result:
+    """Solve a wheel-rail scene with the conformal theory; with ``[kinematics] speed`` and ``fx_rel``
+    (e.g. ``fx_rel = 0``: free rolling) the wheelset's pitch velocity is solved so that FX/(mu FN)
+    takes that value (:func:`_solve_pitch`), else :func:`_solve_conformal` at the scene's motion."""
+    k = scene.kinematics
+    if k.fx_rel is None or k.speed is None:
+        return _solve_conformal(scene, max_enlarge=max_enlarge)
+    return _solve_pitch(scene, max_enlarge=max_enlarge, max_pitch=max_pitch)
+
+
+def _solve_pitch(scene, *, max_enlarge: int, max_pitch: int) -> Result:
+    """Prescribed FX with the wheelset motion: the pitch velocity that gives FX = fx_rel mu FN.
+
+    The tangential solver can meet a prescribed FX by itself, by adding one longitudinal creepage
+    dxi to every column; a change of the pitch velocity instead changes the creepage of column s
+    in proportion to its own rolling radius r(s), which differs across a deep groove by several
+    per cent, and near saturation or at a small mu the force is a steep function of the creepage.
+    So the pitch is found here, in the case layer, by a root search on solves at a given motion:
+    f(xi) = FX/(mu FN) - fx_rel as a function of the reference column's creepage xi (monotone,
+    decreasing), each xi turned into a pitch velocity (:func:`_pitch_for_reference_creepage`)
+    and the column creepages rebuilt from the wheelset motion.  The first guess is the creepage
+    the prescribed-force solve finds (its uniform shift dxi); the bracket widens from there until
+    f changes sign, then Brent's method (xtol 1e-7 of the creepage, at most ``max_pitch`` + 20
+    solves).  The result is the solve at the root's motion: ``pitch_velocity_solved`` (rad/s),
+    ``pitch_creepage_solved`` (the reference column's xi, the JSON ``xi``),
+    ``reference_rolling_radius`` and, for fx_rel = 0, ``pitch_creepage_free``."""
+    target = float(scene.kinematics.fx_rel)
+    plain = replace(scene, kinematics=replace(scene.kinematics, fx_rel=None))
+    state = loaded_state(scene, grids=False)[:2]       # the pitch does not move the planar balance
+    motion0 = wheelset_motion(scene)
+    solves: dict[float, tuple] = {}
+    ref: dict = {}
+
+    def at(xi: float):
+        if xi not in solves:
+            if ref:
+                pitch, _ = _pitch_for_reference_creepage(ref["problem"], ref["motion"], xi)
+                sc = replace(plain, kinematics=replace(plain.kinematics, pitch_velocity=pitch))
+            else:
+                sc = plain
+            res, prob = _solve_conformal(sc, max_enlarge=max_enlarge, with_problem=True, state=state)
+            solves[xi] = (res, prob, wheelset_motion(sc))
+        return solves[xi]
+
+    # the scene's own motion, and the prescribed-force solve for a first guess
+    res0, problem = _solve_conformal(plain, max_enlarge=max_enlarge, with_problem=True, state=state)
+    g = problem.grid
+    xi0 = float(np.interp(g.s_ref, g.s, problem.xi_s))
+    ref.update(problem=problem, motion=motion0)
+    solves[xi0] = (res0, problem, motion0)
+    try:
+        guess = float(_solve_conformal(scene, max_enlarge=max_enlarge, state=state).xi)
+    except ConvergenceError:
+        guess = math.nan
+
+    def f(xi: float) -> float:
+        r = at(xi)[0]
+        return float(r.extra["FX_rel"]) - target
+
+    f0 = f(xi0)
+    # FX falls as xi grows (a positive xi gives FX < 0): the root lies at a larger xi where f0 > 0
+    step = abs(guess - xi0) if math.isfinite(guess) and guess != xi0 else 1e-3
+    step = math.copysign(max(step, 1e-7), f0)
+    lo, flo = xi0, f0
+    hi = xi0 + step
+    for _ in range(max_pitch + 12):
+        fhi = f(hi)
+        if fhi == 0.0 or (fhi > 0) != (flo > 0):
+            break
+        lo, flo = hi, fhi
+        step *= 2.0
+        hi = lo + step
+    else:
+        raise ConvergenceError(f"[kinematics] fx_rel: no pitch velocity gives FX/(mu FN) = {target:g} "
+                               f"(creepage bracket up to {hi:.3g})")
+    if fhi != 0.0:
+        xtol = 1e-7 * max(abs(lo), abs(hi), 1e-6)
+        root = brentq(f, min(lo, hi), max(lo, hi), xtol=xtol, rtol=1e-10, maxiter=max_pitch + 20)
+    else:
+        root = hi
+    result, prob, motion = at(root)
+    xi_ref = float(np.interp(prob.grid.s_ref, prob.grid.s, prob.xi_s))
+    _, r_ref = _pitch_for_reference_creepage(prob, motion, xi_ref)
+    extra = dict(result.extra, pitch_velocity_solved=float(motion.pitch_velocity), pitch_creepage_solved=xi_ref,
+                 reference_rolling_radius=r_ref, pitch_solves=len(solves) + 1,
+                 pitch_creepage_guess=guess, fx_rel_target=target)
+    if target == 0.0:
+        extra["pitch_creepage_free"] = xi_ref
+    return replace(result, extra=extra)
+
+
+def _solve_conformal(scene, *, max_enlarge: int = 6, with_problem: bool = False, state=None):
     """Solve a wheel-rail scene with the conformal theory (see :func:`curved_problem_from_wheel_rail`).
 
     With a prescribed wheel load the grid is built around the overlap at the planar balance height;
-    where the conformal solution needs more room (its contact reaches the border of the grid) the
-    grid is rebuilt 1.5 times larger, at most ``max_enlarge`` times."""
-    scale = scene.grid.scale
-    for attempt in range(max_enlarge + 1):
-        problem = curved_problem_from_wheel_rail(scene, scale=scale)
-        result = solve_curved(problem)
-        contact = result.field.status != EXTERIOR
-        if not (contact[0].any() or contact[-1].any() or contact[:, 0].any() or contact[:, -1].any()):
-            break
-        scale *= 1.5
+    where the conformal solution needs more room (its contact reaches an end of the strip, along x
+    or s) the strip is extended on that side by half its length, with the same elements, at most
+    ``max_enlarge`` times (:func:`_solve_extending`): the contact is never cut by the strip.
+    ``[grid] strips = "separate"`` solves every contact patch on its own strip instead
+    (:func:`_solve_separate`).  ``state`` = (placement, loaded state) of an earlier solve of the same
+    scene with other creepages (they do not move the planar balance the strip is built at)."""
+    pl, st = state if state is not None else loaded_state(scene, grids=False)[:2]
+    builder = StripBuilder.for_scene(scene, pl, st)
+    problem = builder.problem()
+    result, problem, attempt, ext_warn = _solve_extending(builder, problem, max_enlarge)
+    out = _finish(scene, problem, result, attempt, ext_warn)
+    if getattr(scene.grid, "strips", "coupled") == "separate":
+        out, problem = _solve_separate(scene, builder, problem, out, max_enlarge)
+    return (out, problem) if with_problem else out
+
+
+def _finish(scene, problem: CurvedProblem, result: Result, attempt: int, ext_warn: list[str]) -> Result:
     z_ws = problem.info["z_ws_reference"] + (result.extra["approach_along_load"]
-                                             if problem.normal_force is not None else 0.0)
+                                             if problem.normal_force is not None else
+                                             (problem.approach or 0.0))
     # ``approach`` means what [load] approach means: the wheelset's lowering below the height where
     # its first wheel touches; the largest overlap along the local normals is ``overlap_max``
-    return replace(result, approach=float(z_ws - problem.info["z_first_touch"]),
-                   extra=dict(result.extra, z_ws=z_ws, grid_scale=scale, enlargements=attempt,
-                              wheel_load=scene.load.wheel_load, overlap_max=result.approach))
+    extra = dict(result.extra, z_ws=z_ws, grid_scale=scene.grid.scale, enlargements=attempt,
+                 wheel_load=scene.load.wheel_load, overlap_max=result.approach,
+                 strips=getattr(scene.grid, "strips", "coupled"))
+    if ext_warn:
+        extra["warnings"] = list(extra.get("warnings", [])) + ext_warn
+    return replace(result, approach=float(z_ws - problem.info["z_first_touch"]), extra=extra)
+
+
+#: a contact region of the coupled strip carrying less than this share of the normal force is not
+#: given a strip of its own in ``[grid] strips = "separate"`` (its load moves to the others)
+MIN_PART_SHARE = 0.005
+
+
+def _contact_parts(problem: CurvedProblem, result: Result, builder: StripBuilder) -> list[Patch]:
+    """The contact regions of a coupled strip solution (connected sets of contact elements, side
+    frame) as patches for strips of their own: x and s ranges of the region, reference point at
+    its pressure centroid along s; regions under MIN_PART_SHARE of FN are dropped."""
+    from scipy import ndimage
+
+    g = problem.grid
+    pn = result.field.side_frame("pn")
+    contact = result.field.side_frame("status") != EXTERIOR
+    labels, n = ndimage.label(contact)
+    dS = np.broadcast_to(g.area, g.shape)
+    total = float((pn * dS).sum())
+    parts = []
+    x_edges = builder.patch.x_ref + g.xl + np.arange(g.mx + 1) * g.dx
+    for k in range(1, n + 1):
+        mask = labels == k
+        fn = float((pn * dS)[mask].sum())
+        if fn < MIN_PART_SHARE * total:
+            continue
+        rows = np.flatnonzero(mask.any(axis=1))
+        cols = np.flatnonzero(mask.any(axis=0))
+        w = (pn * dS * mask).sum(axis=0)
+        s_ref = float((w * g.s).sum() / w.sum())
+        parts.append((fn, replace(builder.patch, s_range=(float(g.s_edges[cols[0]]), float(g.s_edges[cols[-1] + 1])),
+                                  x_range=(float(x_edges[rows[0]]), float(x_edges[rows[-1] + 1])), s_ref=s_ref)))
+    parts.sort(key=lambda item: -item[0])
+    return [p for _, p in parts]
+
+
+def _solve_separate(scene, builder: StripBuilder, coupled_problem: CurvedProblem, coupled: Result,
+                    max_extend: int, *, sizes: tuple[float, float] | None = None) -> tuple[Result, CurvedProblem]:
+    """``[grid] strips = "separate"``: every contact patch of the coupled solution on a strip of
+    its own, without elastic interaction between the strips (as CONTACT solves the patches of a
+    wheel), each with ``[grid] n`` elements per axis over ``[grid] scale`` times its patch (its
+    own element size), extended where its contact reaches an end.  The strips share the wheelset
+    height: with ``[load] wheel_load`` the common vertical lowering dz below the reference height is
+    found by Brent's method on sum_k FZ_k(dz) = wheel_load (each FZ_k with the tangential
+    tractions, seed Eq. 46); with ``[load] approach`` the height is the scene's.  ``sizes`` = (dx, ds)
+    gives every strip those elements instead (a comparison with the coupled strip at its own sizes).
+
+    The result sums the strips (FN, FX, FY, MZ; FX_track, FY_track, FZ_track in ``extra``) and lists
+    them in ``patches`` and in ``extra["strips"]`` (FN, area, pmax, FY_track, contact angle per
+    strip); ``extra["coupled"]`` keeps the same per-patch values of the coupled strip."""
+    parts = _contact_parts(coupled_problem, coupled, builder)
+    g = scene.grid
+    W = scene.load.wheel_load
+    dz0 = float(coupled.extra["approach_along_load"]) if coupled_problem.normal_force is not None else 0.0
+    # the coupled strip's contact regions are coarse: each strip spans 1.5 times its region
+    scale = max(g.scale, 1.5)
+    problems = [builder.problem(patch=p, n=g.n, scale=scale, approach=dz0, label=f":strip{k}", sizes=sizes)
+                for k, p in enumerate(parts)]
+    warnings: list[str] = []
+    results: list[Result] = []
+    n_ext = [0] * len(parts)
+    for outer in range(4):
+        results = []
+        for k, (p, prob) in enumerate(zip(parts, problems)):
+            r, prob2, ext, w = _solve_extending(builder, prob, max_extend, patch=p, label=f":strip{k}")
+            n_ext[k] += ext
+            problems[k] = prob2
+            results.append(r)
+            if outer == 3:
+                warnings += w
+        if W is None:
+            break
+        cache: dict[float, list[Result]] = {dz0: results}
+
+        def fz(dz: float) -> float:
+            if dz not in cache:
+                cache[dz] = [solve_curved(replace(pr, approach=dz)) for pr in problems]
+            return sum(r.extra["FZ_track"] for r in cache[dz]) - W
+
+        dz = _common_lowering(fz, dz0, W)
+        fz(dz)
+        problems = [replace(pr, approach=dz) for pr in problems]
+        results = cache[dz]
+        dz0 = dz
+        if not any(_edge_sides(pr, r) for pr, r in zip(problems, results)):
+            break
+    finished = [_finish(scene, pr, r, e, []) for pr, r, e in zip(problems, results, n_ext)]
+    tot = {key: sum(r.extra[key] for r in finished) for key in ("FX_track", "FY_track", "FZ_track")}
+    strips = [_part_summary(r, k) for k, r in enumerate(finished)]
+    main = max(finished, key=lambda r: r.FN)
+    extra = {k: v for k, v in main.extra.items() if k not in ("regions", "outer", "grid", "warnings")}
+    extra.update(tot, strips="separate", n_strips=len(finished), separate_strips=strips,
+                 coupled_strip={"FN": coupled.FN, "FX": coupled.FX, "FY": coupled.FY, "pmax": coupled.pmax,
+                          **{k: coupled.extra[k] for k in ("FX_track", "FY_track", "FZ_track")},
+                          "regions": coupled.extra["regions"]},
+                 contact_area=sum(r.extra["contact_area"] for r in finished),
+                 FX_rel=sum(r.FX for r in finished) / (scene.friction.mu_static * sum(r.FN for r in finished)))
+    all_warn = warnings + [w for r in finished for w in r.extra.get("warnings", [])]
+    if all_warn:
+        extra["warnings"] = list(dict.fromkeys(all_warn))
+    out = Result(theory="conformal", FN=sum(r.FN for r in finished), FX=sum(r.FX for r in finished),
+                 FY=sum(r.FY for r in finished), MZ=sum(r.MZ for r in finished), a=main.a, b=main.b,
+                 pmax=max(r.pmax for r in finished), approach=main.approach, xi=main.xi, eta=main.eta,
+                 phi=main.phi, converged=all(r.converged for r in finished),
+                 wall_s=sum(r.wall_s for r in finished), iterations=None, residual=None,
+                 patches=tuple(finished), extra=extra)
+    return out, problems[int(np.argmax([r.FN for r in finished]))]
+
+
+def _common_lowering(fz, dz0: float, W: float, tol: float = 1e-5) -> float:
+    """The lowering dz with fz(dz) = 0 (fz = FZ(dz) - W, increasing): secant steps on
+    (FZ/W)^(2/3), nearly linear in dz for Hertz-like growth, until |fz| <= tol W; Brent's method on
+    the bracket found if the secant steps do not settle in 8 solves."""
+    def g(dz):
+        return math.copysign(abs(fz(dz) / W + 1.0) ** (2.0 / 3.0), fz(dz) + W) - 1.0
+
+    x0, x1 = dz0, dz0 * 1.02 + 1e-6
+    g0, g1 = g(x0), g(x1)
+    pts = [(x0, g0), (x1, g1)]
+    for _ in range(8):
+        if abs(fz(x1)) <= tol * W:
+            return x1
+        if g1 == g0:
+            break
+        x0, g0, x1 = x1, g1, x1 - g1 * (x1 - x0) / (g1 - g0)
+        g1 = g(x1)
+        pts.append((x1, g1))
+    neg = [x for x, v in pts if v < 0]
+    pos = [x for x, v in pts if v > 0]
+    if not (neg and pos):
+        raise ConvergenceError("[grid] strips: could not find the common wheelset height of the separate strips")
+    return brentq(fz, max(neg), min(pos), xtol=1e-12, rtol=1e-10)
+
+
+def _part_summary(r: Result, k: int) -> dict:
+    """Per-strip values of a separate-strips result (real frame)."""
+    g = r.extra["grid"]
+    return {"strip": k, "FN": r.FN, "FX": r.FX, "FS": r.FY, "FY_track": r.extra["FY_track"],
+            "FZ_track": r.extra["FZ_track"], "area": r.extra["contact_area"], "pmax": r.pmax,
+            "contact_angle_min": r.extra["contact_angle_min"], "contact_angle_max": r.extra["contact_angle_max"],
+            "dx": g["dx"], "ds": g["ds"], "mx": g["mx"], "ms": g["ms"], "enlargements": r.extra.get("enlargements", 0)}

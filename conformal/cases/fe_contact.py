@@ -5,6 +5,15 @@ the same height, the same curved potential-contact grid on the rail); the rail a
 meshed from the scene's whole profiles around that grid (:func:`conformal.fe_contact.bodies.wheel_rail_pair`)
 and pressed together by the scene's approach or vertical wheel load
 (:func:`conformal.fe_contact.solver.solve_contact`).  Mesh keys: :mod:`conformal.fe_contact.problems`.
+
+Mesh size (``[model] fec_estimate = "halfspace"``, the default): the contact is first solved on the
+same curved grid with half-space influence numbers, frictionless (:func:`contact_estimate`, a
+second or less); its contact area gives the smaller contact semi-axis a (the element size on the
+contact is h = a / ``fec_n``, unless ``fec_h`` is given) and the finely meshed patch, the box
+around it enlarged by ``fec_patch`` (its half extents times fec_patch), clipped to the grid.  A
+narrow contact (the deep groove: 0.75 mm wide, 12 mm long) so gets elements that resolve its
+width, a wide one no finer elements than it needs.  ``fec_estimate = "grid"``: the whole grid is
+the patch and a = half its smaller extent / 1.1.
 """
 from __future__ import annotations
 
@@ -14,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from conformal.cases.conformal import curved_problem_from_wheel_rail
+from conformal.errors import NoContactError
 from conformal.fe_contact.bodies import wheel_rail_pair
 from conformal.fe_contact.problems import (FEContactRun, common_extra, extent, load_direction,
                                            pressure_along_profile, settings_from_options)
@@ -22,20 +32,59 @@ from conformal.influence.fe import rail_body_from_grid
 from conformal.result import Result
 
 
+def contact_estimate(problem) -> dict:
+    """The contact of a :class:`~conformal.solvers.conformal.CurvedProblem` with half-space
+    influence numbers, frictionless, at the problem's load or approach: the half extents of its
+    elements in contact (``x_half`` about x = 0, ``s_lo``/``s_hi`` in the grid's arc length,
+    ``semi_axis`` = the smaller of x_half and (s_hi - s_lo) / 2) and its FN.  Raises
+    NoContactError where nothing is in contact."""
+    from dataclasses import replace
+
+    from conformal.result import EXTERIOR
+    from conformal.solvers.conformal import solve_curved
+
+    zero = np.zeros(problem.grid.ms)
+    model = replace(problem.model, theory="conformal", influence="halfspace",
+                    options={k: v for k, v in problem.model.options.items() if not str(k).startswith("fec_")})
+    r = solve_curved(replace(problem, model=model, xi_s=zero, eta_s=zero, phi_s=zero))
+    contact = np.asarray(r.field.status) != EXTERIOR
+    if not contact.any():
+        raise NoContactError("fe_contact: the half-space estimate finds no contact")
+    g = problem.grid
+    xe = g.xl + g.dx * np.arange(g.mx + 1)
+    se = np.asarray(g.s_edges, dtype=float)
+    ix = np.where(contact.any(axis=1))[0]
+    js = np.where(contact.any(axis=0))[0]
+    x_half = float(max(abs(xe[ix[0]]), abs(xe[ix[-1] + 1])))
+    s_lo, s_hi = float(se[js[0]]), float(se[js[-1] + 1])
+    return {"x_half": x_half, "s_lo": s_lo, "s_hi": s_hi, "semi_axis": min(x_half, 0.5 * (s_hi - s_lo)),
+            "FN": float(r.FN)}
+
+
 def run_wheel_rail(scene) -> tuple[FEContactRun, Any]:
     """Mesh the rail and the wheel of a wheel-rail scene around the conformal model's curved grid
     (same wheelset position) and solve at the scene's approach or wheel load.  Returns the run and
-    the :class:`~conformal.solvers.conformal.CurvedProblem` it was built from."""
+    the :class:`~conformal.solvers.conformal.CurvedProblem` it was built from.  The mesh size and
+    the fine patch follow the half-space estimate of the contact (see the module docstring)."""
     mesh, st = settings_from_options(scene.model.options)
     problem = curved_problem_from_wheel_rail(scene)
     grid = problem.grid
-    b1, b2 = wheel_rail_pair(grid, problem.rail_points, problem.wheel_points, scene.material, mesh)
+    kw: dict = {}
+    est: dict = {}
+    if mesh.estimate == "halfspace":
+        est = contact_estimate(problem)
+        c = 0.5 * (est["s_lo"] + est["s_hi"])
+        half = 0.5 * (est["s_hi"] - est["s_lo"])
+        kw = {"semi_axis": est["semi_axis"],
+              "box": (mesh.patch * est["x_half"], c - mesh.patch * half, c + mesh.patch * half)}
+    b1, b2 = wheel_rail_pair(grid, problem.rail_points, problem.wheel_points, scene.material, mesh, **kw)
     model = prepare_contact(b1, b2, direction=load_direction(grid), settings=st)
     if problem.normal_force is not None:
         sol = model.solve(normal_force=problem.normal_force)
     else:
         sol = model.solve(approach=problem.approach)
-    return FEContactRun(b1, b2, sol, frame="rail-profile", model=model), problem
+    info = {"estimate": est, "h_contact": float(b1.mesh.patch.dx)}
+    return FEContactRun(b1, b2, sol, frame="rail-profile", model=model, info=info), problem
 
 
 def result_from_run(run: FEContactRun, problem, scene) -> Result:
@@ -61,6 +110,7 @@ def result_from_run(run: FEContactRun, problem, scene) -> Result:
                   "profile_s_ref": float(grid.s_ref), "z_ws_reference": problem.info.get("z_ws_reference")})
     z_ws = problem.info["z_ws_reference"] + sol.approach          # the wheelset moves along d (vertical)
     extra.update({"z_ws": z_ws, "overlap_approach": sol.overlap_approach})
+    extra["fe_contact"].update(run.info)
     return Result(theory="fe_contact", FN=sol.FN, FX=0.0, FY=float(Fy), MZ=0.0, a=a, b=b, pmax=sol.pmax,
                   approach=float(z_ws - problem.info["z_first_touch"]), converged=True, iterations=sol.iterations,
                   extra=extra)
@@ -70,3 +120,35 @@ def solve_wheel_rail_fe_contact(scene) -> Result:
     """theory = "fe_contact" for a wheel-rail scene (see the module docstring)."""
     run, problem = run_wheel_rail(scene)
     return result_from_run(run, problem, scene)
+
+
+def solve_scene_with_run(scene) -> tuple[Result, FEContactRun]:
+    """theory = "fe_contact" for any scene (wheel-rail or quadratic), returning the run as well
+    (the meshed bodies, for :func:`conformal.fe_contact.problems.write_vtu`: ``conformal solve
+    --vtu``).  The result is :func:`conformal.solve.solve_scene`'s, with ``wall_s``."""
+    import time
+    from dataclasses import replace
+
+    from conformal._threads import single_threaded_blas
+    from conformal.errors import InputError
+    from conformal.fe_contact.problems import result_from_quadratic_run, run_quadratic
+    from conformal.problem import problems_from_scene
+    from conformal.scene import scene_warnings
+
+    if scene.model.theory != "fe_contact":
+        raise InputError(f"[model] theory: needs \"fe_contact\", got {scene.model.theory!r}")
+    t0 = time.perf_counter()
+    with single_threaded_blas():
+        if scene.geometry.kind == "wheel_rail":
+            run, problem = run_wheel_rail(scene)
+            result = result_from_run(run, problem, scene)
+        else:
+            problems = problems_from_scene(scene)
+            if len(problems) != 1:
+                raise InputError(f"theory \"fe_contact\": needs one contact problem, the scene gives {len(problems)}")
+            run = run_quadratic(problems[0])
+            result = result_from_quadratic_run(run, problems[0])
+    warnings = scene_warnings(scene) + result.warnings
+    if warnings:
+        result = replace(result, extra=dict(result.extra, warnings=list(dict.fromkeys(warnings))))
+    return replace(result, wall_s=time.perf_counter() - t0), run

@@ -31,6 +31,7 @@ from conformal.errors import ConvergenceError, InputError, NoContactError
 from conformal.geometry.kinematics import Creepages, WheelsetMotion, creepages
 from conformal.geometry.patches import Patch, curved_grid_for_patch, find_patches, planar_grid_for_patch
 from conformal.geometry.placement import WheelRailPair
+from conformal.geometry.profiles import rail_orientation_warning
 from conformal.geometry.search import RailTop
 from conformal.geometry.wheelrail import build_pair, first_touch, profile_curves, wheelset_roll
 from conformal.grid import PlanarGrid
@@ -79,7 +80,66 @@ class PairState:
     z: float
     roll: float                   # track frame
     patches: list[PatchGeometry]
-    warnings: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()            # of the vertical balance (non-convergence)
+    placement_warnings: tuple[str, ...] = ()  # of the placement (flange tip, profile ends, lift)
+
+
+#: warn when a contact lies within this radial distance (mm) of the wheel's flange tip
+FLANGE_TIP_WARN = 2.0
+#: warn when a contact lies within this arc length (mm) of an end of a profile
+PROFILE_END_WARN = 1.0
+#: a wheelset standing more than this (mm) above its nominal height (tape circle on the rail top)
+LIFT_WARN = 3.0
+#: ... whose height changes by more than this (mm) for 0.1 mm of lateral shift: a jump
+JUMP_WARN = 1.0
+
+
+def placement_warnings(scene: Scene, pl: "Placement", st: PairState) -> list[str]:
+    """Warnings about a placement that a careful user must see (issue 11): a contact at the flange
+    tip (within FLANGE_TIP_WARN mm of the tip's radius) or at an end of a profile (within
+    PROFILE_END_WARN mm of arc length), where the result depends on data the profile does not have;
+    and a wheelset lifted more than LIFT_WARN mm above its nominal height (the tape circle on the
+    rail top, z = 0), checked for a jump of the height within 0.1 mm of lateral shift (the flange
+    climbing onto the rail: the vertical placement at a prescribed shift then finds a state the
+    wheelset cannot reach by rolling)."""
+    out: list[str] = []
+    concave = rail_orientation_warning(pl.pair.rail.curve.points, pl.pair.rail.curve.name)
+    if concave and scene.geometry.rail_z == "down":
+        out.append("placement: " + concave)
+    wc = pl.pair.wheel_curve
+    s_w, pts = wc.sample(0.05)
+    k_tip = int(np.argmax(pts[:, 1]))
+    z_tip = float(pts[k_tip, 1])
+    flanged = z_tip > 10.0            # a flange more than 10 mm above the tape circle
+    rail_len = pl.pair.rail.curve.length
+    for pg in st.patches:
+        p = pg.patch
+        z_w = float(wc.point(p.wheel_s)[1])
+        if flanged and z_tip - z_w < FLANGE_TIP_WARN:
+            out.append(f"placement: contact {z_tip - z_w:.2f} mm (radially) from the flange tip of the wheel "
+                       f"(contact angle {math.degrees(pl.pair.mirror * p.delta):.1f} degrees): the wheel rides on its "
+                       "flange; check [geometry] lateral_shift")
+        if p.wheel_s < PROFILE_END_WARN or p.wheel_s > wc.length - PROFILE_END_WARN:
+            out.append("placement: contact at an end of the wheel profile: the profile does not cover it")
+        if p.s_range[0] < PROFILE_END_WARN or p.s_range[1] > rail_len - PROFILE_END_WARN:
+            out.append(f"placement: contact at an end of the rail profile (rail arc length {p.s_range[0]:.2f} .. "
+                       f"{p.s_range[1]:.2f} of {rail_len:.2f} mm): the profile does not cover it")
+    lift = -pl.z_touch
+    if lift > LIFT_WARN:
+        msg = (f"placement: the wheelset stands {lift:.2f} mm above its nominal height (tape circle on the "
+               "rail top)")
+        geo = scene.geometry
+        try:
+            other = place_scene(replace(scene, geometry=replace(geo, lateral_shift=geo.lateral_shift - 0.1)))
+            jump = pl.z_touch - other.z_touch
+            if abs(jump) > JUMP_WARN:
+                msg += (f", and {abs(jump):.2f} mm {'higher' if jump < 0 else 'lower'} than at 0.1 mm less "
+                        "lateral shift: the height jumps (flange climbing onto the rail), a state the rolling "
+                        "wheelset does not reach; check [geometry] lateral_shift")
+        except (InputError, NoContactError, ConvergenceError):
+            pass
+        out.append(msg)
+    return out
 
 
 def _grid_options(scene: Scene) -> dict:
@@ -328,10 +388,11 @@ def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grid
     load = scene.load
     if load.wheel_load is not None:
         _, st, fns = balance_height(pl, scene, ratios)
-        return pl, st, fns
-    if load.approach is None:
+    elif load.approach is None:
         raise InputError("[load] wheel_load: a wheel_rail scene needs wheel_load (N) or approach (mm)")
-    return pl, state_at(pl.pair, pl.top, pl.z_first + load.approach, pl.roll, scene, grids=grids), None
+    else:
+        st, fns = state_at(pl.pair, pl.top, pl.z_first + load.approach, pl.roll, scene, grids=grids), None
+    return pl, replace(st, placement_warnings=tuple(placement_warnings(scene, pl, st))), fns
 
 
 def problems_from_wheel_rail(scene: Scene) -> list[ContactProblem]:
@@ -402,7 +463,10 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8) -> Result:
         _, st, _ = loaded_state(scene, pl)
         problems = problems_at(scene, pl, st, None)
         results = [solve_problem(p) for p in problems]
-        out = combine_patches(results, problems, theory, {"z_ws": st.z, **geo_extra})
+        ext = {"z_ws": st.z, **geo_extra}
+        if st.placement_warnings:
+            ext["warnings"] = list(st.placement_warnings)
+        out = combine_patches(results, problems, theory, ext)
         return replace(out, approach=pl.approach(st.z))
     W = scene.load.wheel_load
     ratios = None
@@ -423,8 +487,8 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8) -> Result:
         raise ConvergenceError(f"[load] wheel_load: the vertical balance did not converge in {max_outer} "
                                f"iterations (FZ = {FZ:.1f} N for {W:g} N)")
     extra = {"z_ws": z, **geo_extra, "wheel_load": W, "balance_iterations": len(history)}
-    if st.warnings:
-        extra["warnings"] = list(st.warnings)
+    if st.warnings or st.placement_warnings:
+        extra["warnings"] = list(st.warnings) + list(st.placement_warnings)
     out = combine_patches(results, problems, theory, extra)
     return replace(out, approach=pl.approach(z), converged=out.converged and not st.warnings)
 

@@ -44,7 +44,11 @@ class ContactMesh:
     growth : increase of the element size per mm of distance from the patch.
     h_max : largest element, relative to the body depth.
     body_size : margin of each body beyond the patch, in patch sizes.
-    patch : the finely meshed patch reaches ``patch`` contact semi-axes from the centre (Hertz).
+    patch : the finely meshed patch reaches ``patch`` contact semi-axes from the centre (Hertz;
+        wheel-rail: ``patch`` times the half extents of the half-space estimate of the contact).
+    estimate : wheel-rail scenes: "halfspace" (contact semi-axis and fine patch from a half-space
+        solve on the same grid, :func:`conformal.cases.fe_contact.contact_estimate`) or "grid"
+        (the whole grid; semi-axis: half its smaller extent / 1.1).
     """
 
     n: int = 4
@@ -53,8 +57,11 @@ class ContactMesh:
     h_max: float = 0.25
     body_size: float = 1.0
     patch: float = 1.3
+    estimate: str = "halfspace"
 
     def __post_init__(self):
+        if self.estimate not in ("halfspace", "grid"):
+            raise InputError(f"[model] fec_estimate: must be \"halfspace\" or \"grid\", got {self.estimate!r}")
         if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
             raise InputError(f"[model] fec_n: must be a whole number >= 1, got {self.n!r}")
         for name in ("growth", "h_max", "body_size", "patch") + (("h",) if self.h is not None else ()):
@@ -189,13 +196,16 @@ def crossed_cylinders(r1: float, r2: float, semi_axes: tuple[float, float], *, m
 
 
 def wheel_rail_pair(grid, rail_points: np.ndarray, wheel_points: np.ndarray, material: Material,
-                    mesh: ContactMesh = ContactMesh(), *, semi_axis: float | None = None
-                    ) -> tuple[ContactBody, ContactBody]:
+                    mesh: ContactMesh = ContactMesh(), *, semi_axis: float | None = None,
+                    box: tuple[float, float, float] | None = None) -> tuple[ContactBody, ContactBody]:
     """Rail (body 1, rail-profile frame) and wheel (body 2, placed by the grid's wheel position)
     around the potential contact area of a :class:`~conformal.grid.CurvedGrid`.
 
     ``semi_axis``: the smaller contact semi-axis (mm) that sets the element size with ``mesh.n``;
     default: half the smaller extent of the grid divided by 1.1 (the grid's usual margin).
+    ``box`` = (x_half, s_lo, s_hi): the finely meshed patch, |x| <= x_half and s_lo <= s <= s_hi in
+    the grid's arc length (e.g. an estimated contact area enlarged by ``mesh.patch``), clipped to
+    the grid; default: the whole grid.
     """
     from conformal.influence.fe import _wheel_axes, rail_body_from_grid, wheel_body_from_grid
 
@@ -206,8 +216,21 @@ def wheel_rail_pair(grid, rail_points: np.ndarray, wheel_points: np.ndarray, mat
     if semi_axis is None:
         semi_axis = 0.5 * min(x_hi - x_lo, float(rpatch.edges[-1] - rpatch.edges[0])) / 1.1
     h = mesh.size(semi_axis)
-    p1 = strip_patch(x_half, float(rpatch.edges[0]), float(rpatch.edges[-1]), h)
-    p2 = strip_patch(x_half, float(wpatch.edges[0]), float(wpatch.edges[-1]), h)
+    s_grid = np.asarray(grid.s_edges, dtype=float)
+    s_lo, s_hi = float(s_grid[0]), float(s_grid[-1])
+    if box is not None:
+        bx, bs_lo, bs_hi = (float(v) for v in box)
+        if not (bx > 0 and bs_hi > bs_lo):
+            raise InputError(f"fe_contact patch: need x_half > 0 and s_lo < s_hi, got {box!r}")
+        x_half = min(x_half, bx)
+        s_lo, s_hi = max(s_lo, bs_lo), min(s_hi, bs_hi)
+        if s_hi <= s_lo:
+            raise InputError(f"fe_contact patch: s = {bs_lo:.3f} .. {bs_hi:.3f} mm lies outside the grid")
+    # grid arc length -> arc length of each FE profile
+    r_lo, r_hi = np.interp([s_lo, s_hi], s_grid, rpatch.edges)
+    w_lo, w_hi = np.interp([s_lo, s_hi], s_grid, wpatch.edges)
+    p1 = strip_patch(x_half, float(r_lo), float(r_hi), h)
+    p2 = strip_patch(x_half, float(w_lo), float(w_hi), h)
     M = _wheel_axes(grid)
     origin = np.asarray(grid.wheel_centre, dtype=float) + float(grid.wheel_radius) * M[:, 2]
     return _pair(rail, p1, wheel, p2, material, mesh, rotation2=M, origin2=origin)

@@ -17,7 +17,10 @@ key                default    meaning
 ``fec_growth``     0.3        increase of the element size per mm away from the contact
 ``fec_h_max``      0.25       largest element, relative to the body depth
 ``fec_body_size``  1.0        margin of the bodies beyond the contact patch, in patch sizes
-``fec_patch``      1.3        fine patch extent in contact semi-axes (quadratic problems)
+``fec_patch``      1.3        fine patch extent in contact semi-axes (quadratic problems; wheel-rail:
+                              in half extents of the half-space estimate of the contact)
+``fec_estimate``   halfspace  wheel-rail: contact size from a half-space solve ("halfspace") or from
+                              the grid ("grid"), see :mod:`conformal.cases.fe_contact`
 ``fec_far_field``  halfspace  cut faces: "halfspace" (Boussinesq field) or "clamped"
 ``fec_solver``     auto       "auto" (pypardiso if installed, else scipy splu), "splu", "pardiso"
 =================  =========  ===========================================================
@@ -25,7 +28,7 @@ key                default    meaning
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
@@ -39,7 +42,8 @@ from conformal.result import Result
 _MESH_KEYS = {"fec_n": "n", "fec_h": "h", "fec_growth": "growth", "fec_h_max": "h_max",
               "fec_body_size": "body_size", "fec_patch": "patch"}
 _SOLVER_KEYS = {"fec_order": "order", "fec_far_field": "far_field", "fec_solver": "solver"}
-KEYS = tuple(sorted(_MESH_KEYS) + sorted(_SOLVER_KEYS))
+_STRING_MESH_KEYS = {"fec_estimate": "estimate"}
+KEYS = tuple(sorted(_MESH_KEYS) + sorted(_STRING_MESH_KEYS) + sorted(_SOLVER_KEYS))
 
 
 def settings_from_options(options: Mapping[str, Any] | None) -> tuple[ContactMesh, FEContactSettings]:
@@ -55,10 +59,13 @@ def settings_from_options(options: Mapping[str, Any] | None) -> tuple[ContactMes
         raise InputError(f"[model] {unknown[0]}: unknown FE contact key (known: {', '.join(KEYS)})")
     mesh_kw, solver_kw = {}, {}
     for k, v in opts.items():
-        if k in ("fec_far_field", "fec_solver"):
+        if k in ("fec_far_field", "fec_solver", "fec_estimate"):
             if not isinstance(v, str):
                 raise InputError(f"[model] {k}: must be a string, got {v!r}")
-            solver_kw[_SOLVER_KEYS[k]] = v
+            if k in _STRING_MESH_KEYS:
+                mesh_kw[_STRING_MESH_KEYS[k]] = v
+            else:
+                solver_kw[_SOLVER_KEYS[k]] = v
         elif k in ("fec_n", "fec_order"):
             if isinstance(v, bool) or not isinstance(v, int):
                 raise InputError(f"[model] {k}: must be a whole number, got {v!r}")
@@ -80,6 +87,7 @@ class FEContactRun:
     solution: FEContactSolution
     frame: str = "contact"          # "contact" (quadratic problems) | "rail-profile" (wheel-rail)
     model: ContactModel | None = None
+    info: dict = field(default_factory=dict)   # wheel-rail: the half-space contact estimate
 
 
 def extent(sol: FEContactSolution) -> tuple[float, float]:
@@ -94,7 +102,7 @@ def common_extra(sol: FEContactSolution, mesh: ContactMesh, st: FEContactSetting
     return {"contact_area": sol.contact_area, "contact_area_bounds": list(sol.contact_area_bounds),
             "pmax_nodal": sol.pmax_nodal, "n_unknowns": sol.n_unknowns,
             "n_contact_nodes": int(sol.active.sum()), "F_load": sol.F_load,
-            "fe_contact": {"n": mesh.n, "h": mesh.h, "order": st.order, "growth": mesh.growth,
+            "fe_contact": {"n": mesh.n, "h": mesh.h, "estimate": mesh.estimate, "order": st.order, "growth": mesh.growth,
                            "h_max": mesh.h_max, "body_size": mesh.body_size, "far_field": st.far_field,
                            **sol.stats}}
 
@@ -123,7 +131,11 @@ def solve(problem) -> Result:
     >>> abs(r.FN / 24296.3 - 1) < 0.03               # doctest: +SKIP
     True
     """
-    run = run_quadratic(problem)
+    return result_from_quadratic_run(run_quadratic(problem), problem)
+
+
+def result_from_quadratic_run(run: FEContactRun, problem) -> Result:
+    """The :class:`Result` of :func:`run_quadratic`."""
     sol = run.solution
     a, b = extent(sol)
     mesh, st = settings_from_options(problem.model.options)

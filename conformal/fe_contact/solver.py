@@ -58,6 +58,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from conformal.errors import ConformalError, ConvergenceError, InputError, NoContactError
+from conformal.influence.factor import Factor, pardiso_available
 from conformal.meshing.gmsh_body import BodyMesh, surface_frame, surface_point
 
 FAR_FIELDS = ("halfspace", "clamped")
@@ -262,41 +263,6 @@ def boussinesq(r: np.ndarray, e: np.ndarray, G: float, nu: float) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- FE pieces
-def _pardiso_available() -> bool:
-    try:
-        import pypardiso  # noqa: F401
-    except Exception:
-        return False
-    return True
-
-
-class _Factor:
-    """Factorised K_ff of one body; solves blocks of right-hand sides."""
-
-    def __init__(self, A: sp.csr_matrix, solver: str):
-        self.kind = solver
-        if solver == "pardiso":
-            import pypardiso
-
-            self._ps = pypardiso.PyPardisoSolver(mtype=2)
-            self._ps.set_statistical_info_off()
-            self._U = sp.triu(A, format="csr")
-            self._U.sort_indices()
-            self._ps.factorize(self._U)
-        else:
-            from scipy.sparse.linalg import splu
-
-            # K_ff is SPD: a symmetric ordering without pivoting (measured on a 30k-dof P2 body:
-            # half the fill and time of COLAMD)
-            self._lu = splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                            options=dict(SymmetricMode=True))
-
-    def solve(self, B: np.ndarray) -> np.ndarray:
-        if self.kind == "pardiso":
-            return self._ps.solve(self._U, np.asfortranarray(B)).reshape(B.shape)
-        return self._lu.solve(B)
-
-
 @dataclass(eq=False)
 class _FEBody:
     points: np.ndarray        # vertices, common frame
@@ -308,7 +274,7 @@ class _FEBody:
     edge_key: np.ndarray      # P2: sorted keys lo * nverts + hi of the mesh edges
     edge_id: np.ndarray
     K_fD: sp.csr_matrix
-    factor: _Factor
+    factor: Factor
     ndofs: int
     order: int
     G: float
@@ -372,7 +338,8 @@ def _fe_body(body: ContactBody, solver: str, max_dofs: int, order: int) -> _FEBo
     free = np.setdiff1d(np.arange(ndofs), D)
     Kf = K[free]
     try:
-        factor = _Factor(Kf[:, free].tocsr(), solver)
+        # K_ff is SPD: a symmetric ordering without pivoting (half the fill and time of COLAMD)
+        factor = Factor(Kf[:, free].tocsr(), solver, ordering="MMD_AT_PLUS_A")
     except MemoryError:
         raise FEContactError(f"out of memory factorising the {body.mesh.body.kind} body ({ndofs} unknowns)") from None
     fb.D, fb.free, fb.D_scalar, fb.K_fD, fb.factor = D, free, D_scalar, Kf[:, D].tocsr(), factor
@@ -527,8 +494,8 @@ def prepare_contact(body1: ContactBody, body2: ContactBody, *, direction=(0.0, 0
     t0 = time.perf_counter()
     solver = settings.solver
     if solver == "auto":
-        solver = "pardiso" if _pardiso_available() else "splu"
-    elif solver == "pardiso" and not _pardiso_available():
+        solver = "pardiso" if pardiso_available() else "splu"
+    elif solver == "pardiso" and not pardiso_available():
         raise InputError("[model] fec_solver: pypardiso is not installed, use \"splu\" or \"auto\"")
 
     # slave side: free-surface triangles of body 1 off the cut faces; quadrature points on them

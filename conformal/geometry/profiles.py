@@ -15,8 +15,10 @@ SIMPACK-like ``.prw``/``.prr`` files (``point.begin ... point.end`` block, '!' c
 keys ``mirror.y``, ``inversion``, ``units.len.f``).
 
 Every defect raises :class:`~conformal.errors.InputError` naming the file: NaN or infinite values,
-too few points, points out of order (the curve turns back), self-intersection, and a wheel or rail
-given upside down (z positive upwards).
+too few points, points out of order (the curve turns back), self-intersection, and a flanged wheel
+given upside down (z positive upwards).  A concave rail (a groove rail, or a head given upside
+down: the points cannot tell them apart) is accepted with a warning; ``[geometry] rail_z = "up"`` /
+``wheel_z = "up"`` read files with z positive upwards.
 
 >>> p = load_profile("S1002", kind="wheel")
 >>> p.name, p.points.shape[1], float(p.points[0, 0])
@@ -252,13 +254,11 @@ def check_points(points: np.ndarray, kind: str, name: str) -> np.ndarray:
 def _check_orientation(p: np.ndarray, kind: str, name: str) -> None:
     """Detect a profile given with z positive upwards (upside down)."""
     z = p[:, 1]
-    top = float(z.min())
     if kind == "rail":
-        # the running surface (smallest z) lies above both ends of a rail head
-        if z[0] <= top + 1e-9 or z[-1] <= top + 1e-9:
-            if z.max() - z[0] > 1.0 and z.max() - z[-1] > 1.0:
-                raise InputError(f"profile {name}: the rail looks upside down (its ends lie above the "
-                                 "running surface); z must be positive downwards")
+        # a rail head given upside down looks like a groove (both are concave seen from above): it is
+        # accepted, and placement_warning names the [geometry] rail_z key (issue 11: CONTACT's groove
+        # rails were refused here)
+        pass
     elif kind == "wheel":
         # a flanged wheel: the flange tip (largest z, towards the rail) lies on the flange side
         zmax, zmin = float(z.max()), float(z.min())
@@ -266,7 +266,8 @@ def _check_orientation(p: np.ndarray, kind: str, name: str) -> None:
         mid = 0.5 * (p[0, 0] + p[-1, 0])
         if zmax - zmin > 10.0 and y_at_min < mid and y_at_max > mid:
             raise InputError(f"profile {name}: the wheel looks upside down (the flange points away from "
-                             "the rail); z must be positive towards the flange tip")
+                             "the rail); z must be positive towards the flange tip, or set [geometry] "
+                             "wheel_z = \"up\" for a file with z positive upwards")
     else:
         raise InputError(f"profile {name}: kind must be 'wheel' or 'rail', got {kind!r}")
 
@@ -292,12 +293,28 @@ def builtin_flange_back(spec: str) -> float | None:
     return None if entry is None else entry.flange_back
 
 
-def load_profile(spec: str, kind: str, base_dir: str | Path = ".") -> Profile:
-    """Read and check a profile given by built-in name or file path."""
+def rail_orientation_warning(points: np.ndarray, name: str) -> str | None:
+    """A warning for a concave rail profile (both ends more than 1 mm above its lowest point, z
+    downwards): a groove rail, or a rail head given with z positive upwards, which the points
+    cannot tell apart; None for a rail head."""
+    z = np.asarray(points, float)[:, 1]
+    top = float(z.min())
+    if (z[0] <= top + 1e-9 or z[-1] <= top + 1e-9) and z.max() - z[0] > 1.0 and z.max() - z[-1] > 1.0:
+        return (f"profile {name}: the rail profile is concave (its ends lie above its lowest point): a groove "
+                "rail; if it is a rail head given with z positive upwards, set [geometry] rail_z = \"up\"")
+    return None
+
+
+def load_profile(spec: str, kind: str, base_dir: str | Path = ".", *, z_up: bool = False) -> Profile:
+    """Read and check a profile given by built-in name or file path.  ``z_up``: the file gives z
+    positive upwards (the opposite of this package's convention, module docstring); z is negated
+    on reading."""
     path, entry = resolve_profile(spec, base_dir)
     if entry is not None and entry.kind != kind:
         raise InputError(f"profile {spec!r} is a {entry.kind} profile, used as a {kind} profile")
     points = read_points(path)
+    if z_up:
+        points = points * np.array([1.0, -1.0])
     if entry is not None:
         if entry.mirror_y:
             points = points * np.array([-1.0, 1.0])

@@ -122,11 +122,52 @@ def _chord_parameter(p: np.ndarray) -> np.ndarray:
     return np.r_[0.0, np.cumsum(np.hypot(*np.diff(p, axis=0).T))]
 
 
+#: a turn of more than this (degrees) between consecutive segments of the points is a kink
+KINK_DEG = 10.0
+#: near a kink the interpolated points are this far apart (mm)
+KINK_STEP = 0.005
+
+
+def kinks(p: np.ndarray, angle_deg: float = KINK_DEG) -> np.ndarray:
+    """Indices of the points where the polyline turns by more than ``angle_deg`` (a kink: a groove's
+    edge, a flange's corner)."""
+    seg = np.diff(p, axis=0)
+    length = np.hypot(*seg.T)
+    cosang = np.einsum("ij,ij->i", seg[:-1], seg[1:]) / (length[:-1] * length[1:])
+    return np.nonzero(cosang < math.cos(math.radians(angle_deg)))[0] + 1
+
+
+def _refine_kinks(p: np.ndarray, step: float = KINK_STEP) -> np.ndarray:
+    """The points with the two segments at every kink divided into pieces of at most ``step``:
+    an interpolating cubic spline overshoots a kink by a fraction of the point spacing there
+    (0.02 mm for a 70-degree groove edge with points 0.1-0.2 mm apart, the groove scenes); on
+    the straight segments next to the kink the overshoot then shrinks with the spacing."""
+    idx = kinks(p)
+    if idx.size == 0:
+        return p
+    split = set()
+    for i in idx:
+        split.update((int(i) - 1, int(i)))       # segments i-1 -> i and i -> i+1
+    out = [p[:1]]
+    for j in range(len(p) - 1):
+        a, b = p[j], p[j + 1]
+        if j in split:
+            n = max(1, int(math.ceil(np.hypot(*(b - a)) / step)))
+            f = np.linspace(0.0, 1.0, n + 1)[1:, None]
+            out.append(a + f * (b - a))
+        else:
+            out.append(p[j + 1:j + 2])
+    return np.concatenate(out)
+
+
 def fit_curve(points: np.ndarray, smoothing: float = 0.0, name: str = "profile") -> ProfileCurve:
-    """Fit a :class:`ProfileCurve` to checked points (n, 2) ordered along the profile."""
-    p = np.asarray(points, dtype=float)
+    """Fit a :class:`ProfileCurve` to checked points (n, 2) ordered along the profile.  With
+    ``smoothing`` = 0 (interpolation) the segments at kinks are subdivided first
+    (:func:`_refine_kinks`), so that the curve does not bulge there."""
+    p_in = np.asarray(points, dtype=float)
     if not (smoothing >= 0 and math.isfinite(smoothing)):
         raise InputError(f"profile {name}: smoothing must be a length >= 0 mm, got {smoothing!r}")
+    p = _refine_kinks(p_in) if smoothing == 0 else p_in
     t = _chord_parameter(p)
     if smoothing > 0:
         dt = t[-1] / (len(t) - 1)
@@ -153,6 +194,9 @@ def fit_curve(points: np.ndarray, smoothing: float = 0.0, name: str = "profile")
     cyz = make_interp_spline(su, np.stack([fy(tu), fz(tu)], axis=-1), k=3)
     # smoothing error: distance of each input point from the curve
     s_pts = np.interp(t, tf, s_of_t)
+    if p is not p_in:   # the given points, not the ones inserted at kinks
+        s_pts = np.interp(_chord_parameter(p_in), _chord_parameter(p), s_pts)
+        p = p_in
     tmp = ProfileCurve(name, length, cyz, p, s_pts, float(smoothing), 0.0, 0.0)
     s_pts = tmp.project(p, s_pts)
     dist = np.linalg.norm(tmp.point(s_pts) - p, axis=1)

@@ -100,6 +100,20 @@ def sweep(geo: WheelRailGeometry, shifts, base_dir: str | Path = ".") -> list[di
     return rows
 
 
+def jump_warnings(rows: list[dict], max_rate: float = 2.0) -> list[str]:
+    """Warnings where the wheelset height jumps between neighbouring shifts: |dz_ws| > 0.5 mm and
+    more than ``max_rate`` times the shift step (steeper than a 63-degree flank): the flange has
+    climbed onto the rail, a state the vertical placement finds but the rolling wheelset does not
+    reach (issue 11)."""
+    out = []
+    for a, b in zip(rows, rows[1:]):
+        dz, dy = b["z_ws"] - a["z_ws"], abs(b["shift"] - a["shift"])
+        if abs(dz) > 0.5 and abs(dz) > max_rate * dy:
+            out.append(f"sweep: the wheelset height jumps by {dz:+.2f} mm between lateral shifts {a['shift']:g} and "
+                       f"{b['shift']:g} mm (flange climbing onto the rail?)")
+    return out
+
+
 def write_csv(rows: list[dict], path: str | Path) -> None:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -25,19 +25,21 @@ from conformal.scene import WheelRailGeometry
 
 # ----------------------------------------------------------------------------- set-up
 @lru_cache(maxsize=32)
-def _curve(spec: str, kind: str, base_dir: str, smoothing: float) -> ProfileCurve:
-    prof = load_profile(spec, kind, base_dir)
+def _curve(spec: str, kind: str, base_dir: str, smoothing: float, z_up: bool = False) -> ProfileCurve:
+    prof = load_profile(spec, kind, base_dir, z_up=z_up)
     return fit_curve(prof.points, smoothing, prof.name)
 
 
 def profile_curves(geo: WheelRailGeometry, base_dir: str | Path = ".") -> tuple[ProfileCurve, ProfileCurve]:
     """(wheel, rail) smoothing-spline curves of a scene's profiles (cached)."""
     try:
-        w = _curve(geo.wheel_profile, "wheel", str(base_dir), float(geo.smoothing))
+        w = _curve(geo.wheel_profile, "wheel", str(base_dir), float(geo.smoothing),
+                   getattr(geo, "wheel_z", "down") == "up")
     except InputError as exc:
         raise InputError(f"[geometry] wheel_profile: {exc}") from None
     try:
-        r = _curve(geo.rail_profile, "rail", str(base_dir), float(geo.smoothing))
+        r = _curve(geo.rail_profile, "rail", str(base_dir), float(geo.smoothing),
+                   getattr(geo, "rail_z", "down") == "up")
     except InputError as exc:
         raise InputError(f"[geometry] rail_profile: {exc}") from None
     return w, r
@@ -92,13 +94,30 @@ def wheelset_roll(geo: WheelRailGeometry, base_dir: str | Path = ".", lateral_sh
     arm = max(geo.flange_back / 2.0 + 70.0, 1.0)
     f0, _ = f(0.0)
     r0 = f0 / (2 * arm)                        # positive roll lowers the right wheel
-    lo, hi = r0 - 2e-3, r0 + 2e-3
-    flo, fhi = f(lo)[0], f(hi)[0]
-    for _ in range(20):
-        if flo * fhi <= 0:
+    # the root NEAREST to this estimate: with a flange at its rail, zr - zl has several roots
+    # (the wheelset on its treads and flange flank, and the flange tip lifted onto the rail, 10 mm
+    # higher); a wide bracket let Brent's method pick either, and the height jumped by 11 mm
+    # between two shifts 0.005 mm apart (issue 11).  Steps double from 1e-5 rad on both sides.
+    fr0 = f(r0)[0]
+    if fr0 == 0.0:
+        return float(r0), float(f(r0)[1])
+    h = 1e-5
+    left, right = (r0, fr0), (r0, fr0)
+    for _ in range(40):
+        h *= 2.0
+        found = []
+        for side, prev in ((-1.0, left), (1.0, right)):
+            r = r0 + side * h
+            fr = f(r)[0]
+            if fr == 0.0 or (fr > 0) != (prev[1] > 0):
+                found.append((min(prev[0], r), max(prev[0], r)))
+            if side < 0:
+                left = (r, fr)
+            else:
+                right = (r, fr)
+        if found:
+            lo, hi = found[0]
             break
-        lo, hi = lo - 4 * (hi - lo), hi + 4 * (hi - lo)
-        flo, fhi = f(lo)[0], f(hi)[0]
     else:
         raise ConvergenceError("[geometry] roll: no roll angle makes both wheels touch their rails")
     roll = brentq(lambda r: f(r)[0], lo, hi, xtol=1e-12, rtol=1e-12)

@@ -9,6 +9,11 @@ exact CONTACT column order, header keywords and units line could NOT be verified
 writes a documented, self-describing text format with that layout, reads it back exactly
 (round trip to the last bit with ``%.17g``), and is the place to adapt once the appendix is at hand.
 
+Numbers read from a file are used by the solvers through :func:`influence_operator` (an operator with
+the interface of :class:`~conformal.influence.curved.CurvedInfluence`); in a scene,
+``[model] influence_file = "numbers.txt"`` (theory "exact") replaces the half-space numbers of the
+planar grid by the file's, which must be for that grid (mx x my elements, dx, widths dy).
+
 Format (ASCII, ``#`` starts a comment, blank lines ignored)::
 
     # any comment lines
@@ -45,6 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from conformal.errors import InputError
+from conformal.influence.curved import CurvedInfluence
 
 FORMAT = "conformal-influence"
 VERSION = 1
@@ -66,6 +72,40 @@ class InfluenceFile:
     @property
     def ms(self) -> int:
         return self.kernel.shape[1]
+
+    def check_grid(self, mx: int, ms: int, dx: float, ds, name: str = "influence file") -> None:
+        """InputError unless the file is for mx x ms elements of length dx and widths ds along s
+        (relative tolerance 1e-6)."""
+        if (self.mx, self.ms) != (int(mx), int(ms)):
+            raise InputError(f"{name}: the file is for {self.mx} x {self.ms} elements, the grid has {mx} x {ms}")
+        if abs(self.dx - dx) > 1e-6 * dx:
+            raise InputError(f"{name}: the file's dx = {self.dx:g} mm, the grid's dx = {dx:g} mm")
+        widths = np.diff(self.s_edges)
+        if not np.allclose(widths, np.broadcast_to(np.asarray(ds, dtype=float), widths.shape), rtol=1e-6, atol=0):
+            raise InputError(f"{name}: the file's element widths along s differ from the grid's")
+
+    def operator(self, K: float = 0.0):
+        """The influence operator of the file's numbers (:class:`FileInfluence`, the interface of
+        conformal.influence.curved.CurvedInfluence that the normal and tangential solvers take);
+        ``K`` is only reported (the coupling is in the numbers themselves)."""
+        op = FileInfluence.from_kernel(self.kernel)
+        object.__setattr__(op, "K", float(K))
+        return op
+
+
+@dataclass(frozen=True, eq=False)
+class FileInfluence(CurvedInfluence):
+    """Influence numbers read from a file, as an x-invariant strip operator; ``K`` for reports."""
+
+    K: float = 0.0
+
+
+def influence_operator(path, *, mx: int, ms: int, dx: float, ds, K: float = 0.0):
+    """Read an influence file and return its operator for a grid of mx x ms elements (dx, widths ds
+    along s), checking that the file belongs to that grid."""
+    f = read_influence_file(path)
+    f.check_grid(mx, ms, dx, ds, name=f"[model] influence_file {Path(str(path)).name}")
+    return f.operator(K)
 
 
 def _check_kernel(kernel: np.ndarray) -> np.ndarray:

@@ -36,7 +36,7 @@ MAXOUT = 50
 def _needs_tangential(problem: ContactProblem, op: HalfSpaceInfluence) -> bool:
     k = problem.kinematics
     return (op.coupled or k.fx_rel is not None or k.fy_rel is not None
-            or any(v != 0.0 for v in (k.xi, k.eta, k.phi)))
+            or any(v != 0.0 for v in (k.xi, k.eta, k.phi)) or problem.info.get("rigid_slip") is not None)
 
 
 def _check_kinematics(problem: ContactProblem) -> None:
@@ -104,9 +104,14 @@ def _tangential(op, grid, pn, problem, extra_u, tol, maxit, p_start):
     from conformal.solvers.tangential import solve_tangential
 
     k, f = problem.kinematics, problem.friction
-    return solve_tangential(op, grid, pn, xi=k.xi, eta=k.eta, phi=k.phi, mu_static=f.mu_static,
+    # per-element inputs (conformal.problem._with_inputs): friction along the profile enters as the
+    # bound mu(s) p_n = mu_static (p_n mu(s)/mu_static); a rigid slip per element adds to w
+    scale = problem.info.get("mu_scale")
+    pn_bound = pn if scale is None else pn * scale
+    return solve_tangential(op, grid, pn_bound, xi=k.xi, eta=k.eta, phi=k.phi, mu_static=f.mu_static,
                             mu_kinetic=f.mu_kinetic, rolling=k.rolling, fx_rel=k.fx_rel, fy_rel=k.fy_rel,
-                            extra_u=extra_u, tol=tol, maxit=maxit, p_start=p_start)
+                            extra_u=extra_u, tol=tol, maxit=maxit, p_start=p_start,
+                            rigid_slip=problem.info.get("rigid_slip"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -174,7 +179,13 @@ def solve(problem: ContactProblem) -> Result:
     maxout = maxout_option(problem.model)
     tol, maxit = problem.model.tol, problem.model.maxit
     mat = problem.material
-    op = HalfSpaceInfluence.for_grid(grid.mx, grid.my, grid.dx, grid.dy, mat)
+    if problem.info.get("influence_file") is not None:   # [model] influence_file: the file's numbers
+        from conformal.influence.contact_file import influence_operator
+
+        op = influence_operator(problem.info["influence_file"], mx=grid.mx, ms=grid.my, dx=grid.dx, ds=grid.dy,
+                                K=mat.K)
+    else:
+        op = HalfSpaceInfluence.for_grid(grid.mx, grid.my, grid.dx, grid.dy, mat)
     load = dict(normal_force=problem.normal_force, approach=problem.approach)
 
     def normal_stage(extra_un, p_start, tang):

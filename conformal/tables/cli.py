@@ -1,7 +1,13 @@
-"""``conformal table build|info``: the command-line side of :mod:`conformal.tables`.
+"""``conformal table build|refine|info``: the command-line side of :mod:`conformal.tables`.
 
     conformal table build SPEC.toml --out TABLE.npz [--workers N] [--scheduler ADDRESS|local]
+    conformal table refine TABLE.npz --out OUT.npz --box T0:T1,S0:S1,TH0:TH1 --q QLO:QHI [--workers N]
     conformal table info [TABLE.npz]
+
+``refine`` adds the midpoints of the q cells in [QLO, QHI] as extra nodes for every node of the
+box (half-open index ranges along ln a/b, s, theta; every nu): a targeted refinement
+(:func:`conformal.tables.build.add_patch`), resumable like ``build``; ``default`` names the
+shipped table.
 """
 from __future__ import annotations
 
@@ -21,6 +27,16 @@ def add_parsers(sub) -> None:
                    help="Dask scheduler address (tcp://host:8786), or 'local' for a Dask LocalCluster")
     b.add_argument("--no-progress", action="store_true", help="no progress bar")
     b.set_defaults(func=cmd_build)
+    r = tsub.add_parser("refine", help="add extra q nodes (cell midpoints) in a box of a built table")
+    r.add_argument("table", help="TABLE.npz ('default': the table shipped with the package)")
+    r.add_argument("--out", required=True, metavar="OUT.npz", help="the refined table file to write")
+    r.add_argument("--box", required=True, metavar="T0:T1,S0:S1,TH0:TH1",
+                   help="node index ranges (half-open) along ln a/b, s, theta")
+    r.add_argument("--q", required=True, metavar="QLO:QHI", help="add the q cell midpoints in [QLO, QHI]")
+    r.add_argument("--workers", type=int, default=1, help="parallel workers (local processes or LocalCluster)")
+    r.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address, or 'local'")
+    r.add_argument("--no-progress", action="store_true", help="no progress bar")
+    r.set_defaults(func=cmd_refine)
     i = tsub.add_parser("info", help="print a table's metadata (default: the shipped table)")
     i.add_argument("table", nargs="?", default=None, help="TABLE.npz (default: the table shipped with the package)")
     i.set_defaults(func=cmd_info)
@@ -33,6 +49,38 @@ def cmd_build(args) -> int:
     spec = load_spec(args.spec)
     rep = build_table(spec, args.out, workers=args.workers, scheduler=args.scheduler,
                       progress=not args.no_progress)
+    for label, why in rep.failed:
+        print(f"conformal: {label}: failed: {why}", file=sys.stderr)
+    print(rep.summary())
+    return 1 if rep.failed else 0
+
+
+def _ranges(text: str, n: int, what: str) -> list[float]:
+    from conformal.errors import InputError
+
+    try:
+        parts = [p.split(":") for p in text.split(",")]
+        if len(parts) != n or any(len(p) != 2 for p in parts):
+            raise ValueError
+        return [float(v) for p in parts for v in p]
+    except ValueError:
+        raise InputError(f"--{what}: expected {','.join(['LO:HI'] * n)}, got {text!r}") from None
+
+
+def cmd_refine(args) -> int:
+    from conformal.errors import InputError
+    from conformal.tables.build import add_patch, midpoints
+    from conformal.tables.table import load_table
+
+    box = _ranges(args.box, 3, "box")
+    if any(v != int(v) for v in box):
+        raise InputError(f"--box: node indices must be integers, got {args.box!r}")
+    q_lo, q_hi = _ranges(args.q, 1, "q")
+    q = midpoints(load_table(args.table).spec, q_lo, q_hi)
+    if q.size == 0:
+        raise InputError(f"--q: no q cell midpoint in [{q_lo:g}, {q_hi:g}]")
+    rep = add_patch(args.table, tuple(int(v) for v in box), q, args.out, workers=args.workers,
+                    scheduler=args.scheduler, progress=not args.no_progress)
     for label, why in rep.failed:
         print(f"conformal: {label}: failed: {why}", file=sys.stderr)
     print(rep.summary())

@@ -1,7 +1,8 @@
 """``[model] theory = "table"``: creep forces from a creep-force table (:mod:`conformal.tables`).
 
-``[model] table = "path.npz"`` names the table (relative paths are relative to the working
-directory; ``"default"`` or no key: the table shipped with the package).  The contact must be
+``[model] table = "path.npz"`` names the table (a relative path is relative to the scene file's
+folder, resolved when the scene is read, :func:`conformal.scene.scene_from_dict` with ``base_dir``;
+``"default"`` or no key: the table shipped with the package).  The contact must be
 Hertzian (quadratic geometry), steady rolling with prescribed creepages, and one friction
 coefficient; the Hertz solution gives a, b, pmax and the approach, the table gives FX, FY, MZ
 (:func:`conformal.tables.table.evaluate`, Eqs. T1-T2).  A point outside the table's ranges is an

@@ -1,0 +1,147 @@
+"""Line contact (B = 0): Kalker's exact theory in plane strain on a row of elements along x, with
+the influence numbers of the elastic half-plane (2-D), not a long 3-D strip.
+
+Two cylinders with parallel axes along y touch along a line; per unit length along y the problem
+is two-dimensional: normal pressure and longitudinal traction in plane strain, lateral traction in
+anti-plane shear.  A line load P on a half-plane displaces the surface by (Johnson 1985, eqs.
+2.19, 2.25; both bodies, combined constants G, nu, E* = G/(1 - nu))
+
+    u_n(x) = -(2/(pi E*)) P ln(|x|/L),    u_x(x) = -(2/(pi E*)) Q_x ln(|x|/L),
+    u_y(x) = -(2/(pi G)) Q_y ln(|x|/L),
+
+up to a rigid-body constant that 2-D elasticity leaves undetermined (the reference length L: the
+depth of the datum).  Integrated over an element of width dx (F(t) = t ln|t| - t)::
+
+    A(x) = -(2/(pi E*)) [F(x + dx/2) - F(x - dx/2) - dx ln L]        (A_nn = A_xx; A_yy with G)
+
+With the normal force prescribed (per unit length) the constant only shifts the approach, and in
+steady rolling only differences of u enter, so forces, pressures, tractions and slip do not depend
+on L; :data:`REFERENCE_FACTOR` sets L = that factor times the length of the grid, which keeps
+the discrete operator positive definite (the logarithmic capacity of the grid, length/4, stays
+below L).  The reported ``approach`` is relative to that datum: a prescribed approach is refused.
+Quasi-identical bodies only (K = 0; the half-plane's normal-tangential coupling is not included).
+
+The grid is a row of mx elements of length dx and width dy = 1 mm, so that FN, FX, FY are per mm
+of line length (N/mm) and MZ per mm (N).  The kernel is a :class:`CurvedInfluence` strip with one
+element across (ms = 1), the operator the normal and tangential solvers take for curved strips.
+
+Checks (tests/test_line_contact.py): 2-D Hertz (half-width and peak pressure, Johnson eq. 4.45)
+and Carter's steady rolling (force, adhesion width and traction, conformal.reference).
+
+>>> import numpy as np
+>>> from conformal.materials import Material
+>>> K = halfplane_kernel(4, 0.1, Material.identical(80000.0, 0.3), 10.0)
+>>> K.shape, bool(np.allclose(K[..., 0, 0], K[..., 2, 2]))
+((7, 1, 1, 3, 3), True)
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from conformal.errors import InputError
+from conformal.grid import PlanarGrid
+from conformal.influence.curved import CurvedInfluence
+from conformal.materials import Material
+from conformal.problem import ContactProblem
+from conformal.result import Result
+from conformal.solvers import exact
+from conformal.solvers.normal import solve_normal
+
+#: the reference length L of the half-plane's logarithm, in grid lengths (mx dx)
+REFERENCE_FACTOR = 2.0
+#: element width across the line (mm): forces are per mm of line length
+UNIT_WIDTH = 1.0
+
+
+def _F(t: np.ndarray) -> np.ndarray:
+    """t ln|t| - t, with 0 at t = 0."""
+    at = np.abs(t)
+    return np.where(at > 0, t * np.log(np.where(at > 0, at, 1.0)), 0.0) - t
+
+
+def halfplane_kernel(mx: int, dx: float, material: Material, ref_length: float) -> np.ndarray:
+    """The x-invariant kernel (2mx-1, 1, 1, 3, 3) of a row of mx elements of length dx on two
+    elastic half-planes (module docstring), components (x, y, n)."""
+    if not (int(mx) >= 1 and dx > 0 and ref_length > 0):
+        raise InputError(f"line contact: need mx >= 1, dx > 0, L > 0 (got {mx}, {dx}, {ref_length})")
+    x = np.arange(-(mx - 1), mx) * float(dx)
+    h = 0.5 * float(dx)
+    base = -(_F(x + h) - _F(x - h) - dx * math.log(ref_length)) * (2.0 / math.pi)
+    K = np.zeros((2 * mx - 1, 1, 1, 3, 3))
+    E_star = material.G / (1.0 - material.nu)
+    K[:, 0, 0, 0, 0] = base / E_star     # u_x from p_x: plane strain
+    K[:, 0, 0, 2, 2] = base / E_star     # u_n from p_n
+    K[:, 0, 0, 1, 1] = base / material.G  # u_y from p_y: anti-plane shear
+    return K
+
+
+@dataclass(frozen=True, eq=False)
+class LineInfluence(CurvedInfluence):
+    """The half-plane operator of a row of elements (ms = 1), with the material's G, nu, K = 0 and
+    the reference length L."""
+
+    G: float = 0.0
+    nu: float = 0.0
+    K: float = 0.0
+    ref_length: float = 0.0
+
+    @classmethod
+    def for_grid(cls, grid: PlanarGrid, material: Material, ref_length: float | None = None) -> "LineInfluence":
+        if grid.my != 1:
+            raise InputError(f"line contact: the grid has one element across the line (my = 1), got my = {grid.my}")
+        L = REFERENCE_FACTOR * grid.mx * grid.dx if ref_length is None else float(ref_length)
+        op = cls.from_kernel(halfplane_kernel(grid.mx, grid.dx, material, L))
+        for k, v in (("G", material.G), ("nu", material.nu), ("ref_length", L)):
+            object.__setattr__(op, k, float(v))
+        return op
+
+
+def line_grid(A: float, FN: float, material: Material, n: int = 40, scale: float = 1.1) -> tuple[float, PlanarGrid]:
+    """2-D Hertz half-width a (Johnson eq. 4.45, R = 1/(2A)) and a row of n elements over
+    [-scale a, scale a], dy = UNIT_WIDTH."""
+    from conformal.reference import hertz_2d
+
+    a, _ = hertz_2d(FN, 1.0 / (2.0 * A), material.E_star)
+    dx = 2.0 * scale * a / n
+    return a, PlanarGrid(int(n), 1, dx, UNIT_WIDTH, -scale * a, -0.5 * UNIT_WIDTH)
+
+
+def check_line_problem(problem: ContactProblem) -> None:
+    if problem.material.K != 0.0:
+        raise InputError("[material] body2: line contact (B = 0) supports quasi-identical bodies only (K = 0): "
+                         "the half-plane's normal-tangential coupling is not implemented")
+    if problem.normal_force is None:
+        raise InputError("[load] approach: line contact (B = 0) needs normal_force (N per mm of line length): "
+                         "the 2-D approach depends on an arbitrary datum")
+    if problem.model.influence != "halfspace":
+        raise InputError("[model] influence: line contact uses the half-plane influence numbers (\"halfspace\")")
+
+
+def solve(problem: ContactProblem) -> Result:
+    """Solve a line-contact problem (grid with my = 1, ``normal_force`` per mm) with the exact
+    theory on the half-plane: normal problem, then steady rolling or shift as the kinematics say."""
+    grid, h = problem.require_grid("line contact")
+    check_line_problem(problem)
+    exact._check_kinematics(problem)
+    tol, maxit = problem.model.tol, problem.model.maxit
+    op = LineInfluence.for_grid(grid, problem.material)
+    FN = problem.normal_force * grid.dy  # N per mm times the unit width
+
+    def normal_stage(extra_un, p_start, tang):
+        return solve_normal(op, grid, h, normal_force=FN, material=problem.material, tol=tol, maxit=maxit,
+                            extra_un=extra_un, p_start=p_start)
+
+    def tangential_stage(pn, extra_u, p_start):
+        return exact._tangential(op, grid, pn, problem, extra_u, tol, maxit, p_start)
+
+    stages = exact.alternate(op, normal_stage, tangential_stage, tangential=exact._needs_tangential(problem, op),
+                             tol=tol, maxout=exact.maxout_option(problem.model))
+    res = exact._result(problem, grid, h, op, stages)
+    extra = dict(res.extra, line_contact=True, reference_length=op.ref_length,
+                 per_unit_length="FN, FX, FY in N/mm, MZ in N (per mm of line length)")
+    extra.pop("hertz", None)
+    # no lateral extent: b is undefined (null in the JSON)
+    return replace(res, b=float("nan"), extra=extra)

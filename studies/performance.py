@@ -1,0 +1,360 @@
+"""Speed of the whole pipeline in one table (issue 13): steady rolling, the normal problem, FE
+influence numbers, the example FE scenes, ``conformal demo`` and (optionally) the test command.
+
+What is measured (every wall time next to the machine's load average when it was taken, because
+on a shared 2-core machine other jobs inflate wall times by up to 3x; CPU times are less
+sensitive):
+
+1. **Steady rolling** (case "circ" of studies/steady_rolling_speed.py: quasi-identical steel,
+   A = B = 0.001 1/mm, FN = 100 kN, 1.1 x the Hertz circle in n x n elements, mu 0.3, xi 0.001,
+   tol 1e-6), n = 50 .. 400: influence products spent on the n x n grid
+   (``TangentialSolution.products``) plus those of the nested start (``coarse_products``, in
+   units of the n x n grid), the wall time, and the wall time in units of one FFT pair of the
+   padded grid; the growth exponents q of cost ~ N^q (N = n^2, np.polyfit of the logs).
+2. **Normal problem** on the same grids: projected-CG iterations and wall time (FFT pairs).
+3. **FE influence numbers, 51 x 39**: the wheel (S1002 tread) and rail (UIC 60 crown) bodies of
+   studies/fe_influence_speed_error.py (0.4 mm elements, default settings), first time (no
+   cache), as :func:`conformal.influence.fe.body_influences` computes them: two processes by
+   default, one after the other with ``--sequential``; wall, CPU of both processes, peak memory
+   of each process, and the stages of each body (meshing, assembly, right-hand sides,
+   factorisation, solve, observation).
+4. **Example FE scenes** (every scene of meshes/scenes with theory "conformal" and
+   influence "fe"; ``--worn`` adds flange_worn_three_patches.toml with influence "fe"): the first
+   solve with an empty cache, each in its own process: wall time, peak memory of the process and
+   of its child (the second body), FN.
+5. **conformal demo**: wall time of the installed command (best of ``--repeats``).
+6. ``--tests``: wall time of the README's test command ``python -m pytest``.
+
+``--quick``: n = 25, 50, 100, a 21 x 15 FE patch instead of 51 x 39, the smallest FE scene only,
+one demo run (used by tests/test_performance_study.py).  Writes
+studies/out/performance/{performance.md, performance.json, run.json}.
+
+    python studies/performance.py [--quick] [--sizes 50 100 200 300 400] [--worn] [--tests]
+"""
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse
+import json
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _provenance import write_sidecar  # noqa: E402
+from steady_rolling_speed import fft_pair_time  # noqa: E402  (one definition of the unit)
+
+OUT = ROOT / "studies" / "out" / "performance"
+SCENES = ROOT / "meshes" / "scenes"
+WORN = "flange_worn_three_patches.toml"
+# targets of issue 13 (2-core machine)
+TARGETS = {"fft_pairs_200": 150, "growth": 1.1, "fe_51x39_s": 8.0, "fe_scene_s": 30.0, "fe_scene_gib": 2.0,
+           "demo_s": 2.5, "tests_s": 120.0}
+
+
+def load() -> float:
+    return float(os.getloadavg()[0]) if hasattr(os, "getloadavg") else float("nan")
+
+
+def _peak_gib(who=resource.RUSAGE_SELF) -> float:
+    return resource.getrusage(who).ru_maxrss / 2**20
+
+
+# ----------------------------------------------------------------------------- 1, 2: half-space
+def circ_problem(n: int):
+    from conformal.grid import PlanarGrid
+    from conformal.influence.halfspace import HalfSpaceInfluence
+    from conformal.materials import Material
+    from conformal.theories.hertz import hertz_from_curvatures
+
+    mat = Material.steel()
+    hz = hertz_from_curvatures(1e-3, 1e-3, mat, normal_force=1e5)
+    grid = PlanarGrid.around_ellipse(hz.a, hz.b, n=n, scale=1.1)
+    X, Y = grid.mesh()
+    op = HalfSpaceInfluence.for_grid(n, n, grid.dx, grid.dy, mat)
+    return grid, op, 1e-3 * (X**2 + Y**2)
+
+
+def halfspace_rows(sizes, repeats: int) -> list[dict]:
+    from conformal.solvers import tangential as tang
+    from conformal.solvers.normal import solve_normal
+
+    rows = []
+    for n in sizes:
+        grid, op, h = circ_problem(n)
+        unit = fft_pair_time(op)
+        la = load()
+        wn, nsol = np.inf, None
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            nsol = solve_normal(op, grid, h, normal_force=1e5, tol=1e-6)
+            wn = min(wn, time.perf_counter() - t0)
+        wt, ct, sol = np.inf, np.inf, None
+        for _ in range(repeats):
+            t0, c0 = time.perf_counter(), time.process_time()
+            sol = tang.solve_tangential(op, grid, nsol.pn, xi=1e-3, eta=0.0, phi=0.0, mu_static=0.3,
+                                        mu_kinetic=0.3, tol=1e-6)
+            wt, ct = min(wt, time.perf_counter() - t0), min(ct, time.process_time() - c0)
+        FX = float(sol.px.sum() * grid.area)
+        rows.append(dict(n=n, fft_pair_s=unit, load=la,
+                         normal_iterations=int(nsol.iterations), normal_wall_s=wn, normal_fft_pairs=wn / unit,
+                         products=int(sol.products), coarse_products=float(sol.coarse_products),
+                         cost_products=float(sol.products + sol.coarse_products),
+                         newton_iterations=int(sol.iterations), converged=bool(sol.converged),
+                         steady_wall_s=wt, steady_cpu_s=ct, steady_fft_pairs=wt / unit, FX=FX))
+        print(f"[steady] n {n}: products {sol.products} + {sol.coarse_products:.1f}, {wt:.3f} s = "
+              f"{wt / unit:.0f} FFT pairs; normal {nsol.iterations} its {wn:.3f} s (load {la:.1f})", flush=True)
+    return rows
+
+
+def growth(sizes, values) -> float | None:
+    """Exponent q of value ~ N^q, N = n^2 (np.polyfit of the logs)."""
+    if len(sizes) < 2:
+        return None
+    return float(np.polyfit(np.log(np.asarray(sizes, float) ** 2), np.log(np.asarray(values, float)), 1)[0])
+
+
+# ----------------------------------------------------------------------------- 3: FE 51 x 39
+def fe_pair(mx: int, ms: int, workers: int) -> dict:
+    """Wheel + rail of studies/fe_influence_speed_error.py, first time (no cache), in this process
+    (and a forked child for the second body when workers = 2)."""
+    from fe_influence_speed_error import D, NU, G, body_and_patch
+
+    from conformal.influence.fe import FESettings, body_influences
+
+    jobs = [(*body_and_patch(kind, mx, ms, D), G, NU, FESettings()) for kind in ("rail", "wheel")]
+    la = load()
+    t0, c0 = time.perf_counter(), time.process_time()
+    kr, kw = body_influences(jobs, cache=False, workers=workers)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    ch = resource.getrusage(resource.RUSAGE_CHILDREN)
+    stages = ("mesh_s", "assemble_s", "rhs_s", "factor_s", "solve_s", "observe_s", "total_s", "dofs", "peak_rss_gib")
+    return dict(mx=mx, ms=ms, workers=workers, wall_s=wall, cpu_s=cpu + ch.ru_utime + ch.ru_stime, load=la,
+                peak_gib=max(_peak_gib(), ch.ru_maxrss / 2**20),
+                rail={k: kr.stats.get(k) for k in stages}, wheel={k: kw.stats.get(k) for k in stages})
+
+
+# ----------------------------------------------------------------------------- 4: FE scenes
+def fe_scene(path: str, influence_fe: bool) -> dict:
+    """First solve of a scene with an empty cache (CONFORMAL_CACHE is set by the caller)."""
+    import conformal
+
+    scene = conformal.load_scene(path)
+    if influence_fe:
+        scene = scene.with_("model.influence", "fe")
+    la = load()
+    t0, c0 = time.perf_counter(), time.process_time()
+    r = conformal.solve(scene)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    ch = resource.getrusage(resource.RUSAGE_CHILDREN)
+    bodies = {}
+
+    def find(d):
+        if isinstance(d, dict):
+            for k, v in d.items():
+                if k in ("rail", "wheel") and isinstance(v, dict) and "total_s" in v:
+                    bodies.setdefault(k, []).append({kk: v.get(kk) for kk in ("total_s", "dofs", "mesh_s",
+                                                                               "factor_s", "solve_s", "peak_rss_gib")})
+                else:
+                    find(v)
+        elif isinstance(d, list):
+            for v in d:
+                find(v)
+
+    find(r.extra)
+    return dict(scene=Path(path).name, influence_fe_override=influence_fe, wall_s=wall,
+                cpu_s=cpu + ch.ru_utime + ch.ru_stime, load=la, peak_gib_self=_peak_gib(),
+                peak_gib_child=ch.ru_maxrss / 2**20, FN=float(r.FN), fe_bodies=bodies)
+
+
+def fe_scenes(quick: bool, worn: bool) -> list[str]:
+    import tomllib
+
+    out = []
+    for p in sorted(SCENES.glob("*.toml")):
+        m = tomllib.loads(p.read_text()).get("model", {})
+        if m.get("theory") == "conformal" and m.get("influence") == "fe":
+            out.append(str(p))
+    if quick:    # the smallest: the crowned wheel on the flat rail
+        out = [p for p in out if Path(p).name == "hertz_crowned_wheel.toml"][:1]
+    return out + ([str(SCENES / WORN)] if worn and not quick else [])
+
+
+def spawn(what: dict, timeout: float, env: dict | None = None) -> dict:
+    cmd = [sys.executable, str(Path(__file__).resolve()), "--one", json.dumps(what)]
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, cwd=ROOT,
+                           env={**os.environ, **(env or {})})
+    except subprocess.TimeoutExpired:
+        return dict(what, error=f"timeout after {timeout:.0f} s")
+    lines = [ln for ln in p.stdout.splitlines() if ln.startswith("{")]
+    if p.returncode != 0 or not lines:
+        tail = (p.stderr.strip().splitlines() or ["failed"])[-1]
+        return dict(what, error=f"exit {p.returncode}: {tail}")
+    return json.loads(lines[-1])
+
+
+# ----------------------------------------------------------------------------- 5, 6: commands
+def timed_command(cmd: list[str], repeats: int, cwd: Path, timeout: float) -> dict:
+    """Best wall time of ``repeats`` runs, with the CPU time of the command and its helper
+    processes (user + system, from the rusage of the children waited for)."""
+    walls, cpus, loads, rc = [], [], [], 0
+    for _ in range(repeats):
+        la = load()
+        r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        p = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout)
+        walls.append(time.perf_counter() - t0)
+        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpus.append(r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime)
+        loads.append(la)
+        rc = rc or p.returncode
+    k = int(np.argmin(walls))
+    return dict(command=" ".join(cmd), wall_s=walls[k], walls=walls, cpu_s=cpus[k], cpus=cpus, load=loads[k], rc=rc)
+
+
+def demo_command() -> list[str]:
+    exe = Path(sys.executable).with_name("conformal")
+    return [str(exe), "demo"] if exe.exists() else [sys.executable, "-m", "conformal.cli", "demo"]
+
+
+# ----------------------------------------------------------------------------- report
+def _f(v, fmt=".2f", none="-"):
+    return none if v is None else format(v, fmt)
+
+
+def report(res: dict, out: Path) -> str:
+    T = TARGETS
+    L = ["# Performance of the pipeline (studies/performance.py)", "",
+         f"Machine: {os.cpu_count()} cores; load average (1 min) when each wall time was taken in its "
+         "row; CPU seconds where given are less sensitive to the load.  Targets: issue 13.", ""]
+    hs = res.get("halfspace", [])
+    if hs:
+        L += ["## Steady rolling and the normal problem (case circ)", "",
+              "| n | products | + nested start | Newton its | steady wall s | steady FFT pairs | normal its | "
+              "normal wall s | normal FFT pairs | FFT pair ms | load |", "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+        for r in hs:
+            L.append(f"| {r['n']} | {r['products']} | {r['coarse_products']:.1f} | {r['newton_iterations']} | "
+                     f"{r['steady_wall_s']:.3f} | {r['steady_fft_pairs']:.0f} | {r['normal_iterations']} | "
+                     f"{r['normal_wall_s']:.3f} | {r['normal_fft_pairs']:.0f} | {1e3 * r['fft_pair_s']:.2f} | {r['load']:.1f} |")
+        g = res.get("growth", {})
+        L += ["", f"Growth with N = n^2 over n = {g.get('sizes')}: products (+ nested start) N^"
+              f"{_f(g.get('products'))}, wall N^{_f(g.get('wall'))} (target N^{T['growth']}); target at "
+              f"n = 200: <= {T['fft_pairs_200']} FFT pairs.", ""]
+    for r in res.get("fe_pair", []):
+        L += [f"## FE influence numbers, wheel + rail, {r['mx']} x {r['ms']} grid of 0.4 mm, first time "
+              f"({r['workers']} process{'es' if r['workers'] > 1 else ''})", ""]
+        if "error" in r:
+            L += [f"failed: {r['error']}", ""]
+            continue
+        L += [f"Wall **{r['wall_s']:.1f} s** (target {T['fe_51x39_s']:g} s at 51 x 39), CPU {r['cpu_s']:.1f} s, "
+              f"peak {r['peak_gib']:.2f} GiB per process, load {r['load']:.1f}.", "",
+              "| body | unknowns | mesh s | assemble s | rhs s | factor s | solve s | observe s | total s | peak GiB |",
+              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+        for b in ("rail", "wheel"):
+            s = r[b]
+            L.append(f"| {b} | {s['dofs']} | " + " | ".join(_f(s[k], ".1f") for k in
+                     ("mesh_s", "assemble_s", "rhs_s", "factor_s", "solve_s", "observe_s", "total_s"))
+                     + f" | {_f(s['peak_rss_gib'])} |")
+        L.append("")
+    if res.get("fe_scenes"):
+        L += ["## Example FE scenes, first solve (empty cache)", "",
+              f"Targets: <= {T['fe_scene_s']:g} s and <= {T['fe_scene_gib']:g} GiB.", "",
+              "| scene | wall s | CPU s | peak GiB (process / child) | FE bodies: total s (unknowns) | FN | load |",
+              "|---|---:|---:|---:|---|---:|---:|"]
+        for r in res["fe_scenes"]:
+            name = r["scene"] + (" (influence fe)" if r.get("influence_fe_override") else "")
+            if "error" in r:
+                L.append(f"| {name} | failed: {r['error']} | | | | | |")
+                continue
+            bodies = "; ".join(f"{k} " + ", ".join(f"{b['total_s']:.1f} ({b['dofs']})" for b in v)
+                               for k, v in r["fe_bodies"].items())
+            L.append(f"| {name} | {r['wall_s']:.1f} | {r['cpu_s']:.1f} | {r['peak_gib_self']:.2f} / "
+                     f"{r['peak_gib_child']:.2f} | {bodies} | {r['FN']:.0f} | {r['load']:.1f} |")
+        L.append("")
+    for key, title, target in (("demo", "`conformal demo`", T["demo_s"]), ("tests", "README test command", T["tests_s"])):
+        r = res.get(key)
+        if r:
+            L += [f"## {title}", "", f"`{r['command']}`: best wall **{r['wall_s']:.1f} s** of {len(r['walls'])} "
+                  f"(all: {', '.join(f'{w:.1f}' for w in r['walls'])}), CPU {r['cpu_s']:.1f} s (all processes), "
+                  f"load {r['load']:.1f}, exit {r['rc']}; target {target:g} s.", ""]
+    text = "\n".join(L) + "\n"
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "performance.md").write_text(text, encoding="utf-8")
+    (out / "performance.json").write_text(json.dumps(res, indent=1, default=str) + "\n", encoding="utf-8")
+    return text
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="small sizes, one small FE case (for the test)")
+    ap.add_argument("--sizes", type=int, nargs="+", default=[50, 100, 200, 300, 400])
+    ap.add_argument("--repeats", type=int, default=3, help="repeats of the half-space solves and the demo (best)")
+    ap.add_argument("--sequential", action="store_true", help="also the FE pair in one process")
+    ap.add_argument("--worn", action="store_true", help="also the worn three-patch scene with FE numbers")
+    ap.add_argument("--tests", action="store_true", help="also time the README's test command")
+    ap.add_argument("--no-demo", action="store_true")
+    ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument("--one", help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if args.one:
+        what = json.loads(args.one)
+        r = fe_pair(what["mx"], what["ms"], what["workers"]) if what["kind"] == "pair" else \
+            fe_scene(what["scene"], what.get("influence_fe", False))
+        print(json.dumps(r, default=str))
+        return 0
+    if args.quick:
+        args.sizes, args.repeats = [25, 50, 100], 1
+    res: dict = {"quick": bool(args.quick), "cpu_count": os.cpu_count(), "load_start": load()}
+    rows = halfspace_rows(sorted(args.sizes), args.repeats)
+    big = [r for r in rows if r["n"] >= 50]
+    res["halfspace"] = rows
+    res["growth"] = {"sizes": [r["n"] for r in big], "products": growth([r["n"] for r in big], [r["cost_products"] for r in big]),
+                     "wall": growth([r["n"] for r in big], [r["steady_wall_s"] for r in big])}
+    mx, ms = (21, 15) if args.quick else (51, 39)
+    res["fe_pair"] = []
+    for workers in ([2, 1] if args.sequential else [2]):
+        r = spawn({"kind": "pair", "mx": mx, "ms": ms, "workers": workers}, timeout=900)
+        res["fe_pair"].append(r)
+        print(f"[fe] {mx} x {ms}, {workers} process(es): " + (r.get("error") or f"{r['wall_s']:.1f} s wall, "
+              f"{r['cpu_s']:.1f} s CPU, {r['peak_gib']:.2f} GiB"), flush=True)
+    res["fe_scenes"] = []
+    for path in fe_scenes(args.quick, args.worn):
+        cache = tempfile.mkdtemp(prefix="conformal_perf_cache_")
+        try:
+            worn = Path(path).name == WORN
+            r = spawn({"kind": "scene", "scene": path, "influence_fe": worn}, timeout=1800,
+                      env={"CONFORMAL_CACHE": cache})
+        finally:
+            shutil.rmtree(cache, ignore_errors=True)
+        res["fe_scenes"].append(r)
+        print(f"[scene] {Path(path).name}: " + (r.get("error") or f"{r['wall_s']:.1f} s, "
+              f"{max(r['peak_gib_self'], r['peak_gib_child']):.2f} GiB"), flush=True)
+    if not args.no_demo:
+        with tempfile.TemporaryDirectory() as tmp:
+            res["demo"] = timed_command(demo_command(), args.repeats, Path(tmp), timeout=300)
+        print(f"[demo] {res['demo']['wall_s']:.2f} s", flush=True)
+    if args.tests:
+        res["tests"] = timed_command([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider"], 1, ROOT,
+                                     timeout=3600)
+        print(f"[tests] {res['tests']['wall_s']:.0f} s", flush=True)
+    res["load_end"] = load()
+    print(report(res, args.out))
+    write_sidecar(args.out, __file__, args, extra={"load_start": res["load_start"], "load_end": res["load_end"]})
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
