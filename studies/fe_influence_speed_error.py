@@ -19,8 +19,10 @@ the self-influence number of the flat-limit reference (truncation offset account
 3. Curvature.  On the R13 gauge corner of the rail (11 x 9 patch) the cheap settings are compared
    with P2 at h = d/2 (no analytic reference there).
 
-Every configuration runs in its own process (peak memory = that process's max RSS).  Output:
-studies/out/fe_influence_speed_error.{json,md,png}.
+Every configuration runs in its own process (peak memory = that process's max RSS).  Output in
+--out (default studies/out/fe_influence_speed_error/; --quick: a temporary folder):
+fe_influence_speed_error.{json,md,png}, the kernels compared in part 3 (fe_kernel_*.npy) and the
+sidecar run.json (commit, arguments, package versions).
 
     python studies/fe_influence_speed_error.py            # all (about 15-25 min on 2 cores)
     python studies/fe_influence_speed_error.py --quick    # a few configurations
@@ -38,7 +40,9 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "studies" / "out"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _provenance import output_dir, write_sidecar  # noqa: E402
+OUT = ROOT / "studies" / "out" / "fe_influence_speed_error"  # set by main (--out)
 PROFILES = ROOT / "conformal" / "data" / "profiles"
 G, NU, D = 82000.0, 0.28, 0.4
 
@@ -98,7 +102,7 @@ def run_one(cfg: dict) -> dict:
                **{k: r.stats[k] for k in ("mesh_s", "assemble_s", "rhs_s", "factor_s", "solve_s", "observe_s")})
     K = r.kernel
     if cfg.get("save"):
-        np.save(OUT / f"fe_kernel_{cfg['save']}.npy", K)
+        np.save(Path(cfg.get("out", OUT)) / f"fe_kernel_{cfg['save']}.npy", K)
     if cfg["kind"] == "block":
         mx = patch.mx
         kx = patch.x_centres[:, None, None]
@@ -273,22 +277,26 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--one", help="run one configuration (JSON) and print its result")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--out", help="output folder (default studies/out/fe_influence_speed_error)")
     args = ap.parse_args(argv)
     sys.path.insert(0, str(ROOT))
     if args.one:
         print(json.dumps(run_one(json.loads(args.one))))
         return
+    global OUT
+    OUT = output_dir("fe_influence_speed_error", args)
     flat, bodies, curv = configurations(args.quick)
     results = {}
     for group, cfgs in (("flat", flat), ("bodies", bodies), ("curvature", curv)):
         results[group] = []
         for cfg in cfgs:
-            r = spawn(cfg)
+            r = spawn(dict(cfg, out=str(OUT)))
             results[group].append(r)
             msg = r.get("error") or (f"{r['wall_s']:.1f} s, {r['dofs']} unknowns, {r['peak_gib']:.2f} GiB"
                                      + (f", e_off {100 * r['e_off']:.2f} %" if "e_off" in r else ""))
             print(f"[{group}] {cfg['name']}: {msg}", flush=True)
     report(results["flat"], results["bodies"], results["curvature"])
+    write_sidecar(OUT, __file__, args)
 
 
 if __name__ == "__main__":
