@@ -208,3 +208,20 @@ def test_speed_vs_error_quick(tmp_path):
     assert float(r["conformal HS n=24 (reference)"]["force_error"]) == 0.0
     e12, e16 = (float(r[f"conformal HS n={n}"]["force_error"]) for n in (12, 16))
     assert e16 < e12 < 0.01
+
+
+@pytest.mark.slow
+def test_fe_influence_speed_error_quick(tmp_path):
+    """The FE speed/error study: with the half-space far field the split method is exact on the flat
+    block (e_off ~ 1e-8 of the self term, roundoff), a clamped block carries the truncation offset
+    (-0.56 % of the self term measured, a few 0.1 %), and its kernels land in --out, not in
+    studies/out."""
+    out = run_study("fe_influence_speed_error", tmp_path / "fise", timeout=900.0)
+    d = json.loads((out / "fe_influence_speed_error.json").read_text())
+    flat = {r["name"]: r for r in d["flat"]}
+    assert flat["split P1 default (half-space far field)"]["e_off"] < 1e-6
+    clamped = flat["split P1 h=d, clamped"]
+    assert -0.01 < clamped["offset_zz"] < -0.002 and clamped["e_off"] < 0.005
+    assert sorted(p.name for p in out.glob("fe_kernel_*.npy")) == ["fe_kernel_gauge_P1_2_0.5.npy",
+                                                                    "fe_kernel_gauge_P2_0.5_None.npy"]
+    assert "| gauge split P1 h=2d col 0.5d |" in (out / "fe_influence_speed_error.md").read_text()
