@@ -59,6 +59,7 @@ import scipy.sparse as sp
 
 from conformal.errors import ConformalError, ConvergenceError, InputError, NoContactError
 from conformal.influence.factor import Factor, pardiso_available
+from conformal.influence.fe import trace_shape, vector_space
 from conformal.meshing.gmsh_body import BodyMesh, surface_frame, surface_point
 
 FAR_FIELDS = ("halfspace", "clamped")
@@ -271,8 +272,7 @@ class _FEBody:
     free: np.ndarray
     D_scalar: np.ndarray      # scalar nodes on the cut faces
     X_scalar: np.ndarray      # (n_scalar, 3) positions of the scalar nodes
-    edge_key: np.ndarray      # P2: sorted keys lo * nverts + hi of the mesh edges
-    edge_id: np.ndarray
+    space: object             # the vector space (conformal.influence.fe.vector_space)
     K_fD: sp.csr_matrix
     factor: Factor
     ndofs: int
@@ -285,50 +285,30 @@ class _FEBody:
         edges (0, 1), (1, 2), (0, 2))."""
         if self.order == 1:
             return tris
-        nv = len(self.points)
+        sp_, nv = self.space, len(self.points)
         out = [tris]
         for a, b in ((0, 1), (1, 2), (0, 2)):
             lo, hi = np.minimum(tris[:, a], tris[:, b]), np.maximum(tris[:, a], tris[:, b])
-            pos = np.searchsorted(self.edge_key, lo.astype(np.int64) * nv + hi)
-            out.append((nv + self.edge_id[np.minimum(pos, self.edge_key.size - 1)])[:, None])
+            pos = np.searchsorted(sp_.edge_key, lo.astype(np.int64) * nv + hi)
+            out.append((nv + sp_.edge_id[np.minimum(pos, sp_.edge_key.size - 1)])[:, None])
         return np.concatenate(out, axis=1)
 
 
-def trace_shape(lam: np.ndarray, order: int) -> np.ndarray:
-    """Lagrange shape functions of a P1 or P2 triangle at barycentric points (..., 3)."""
-    if order == 1:
-        return lam
-    l0, l1, l2 = lam[..., 0], lam[..., 1], lam[..., 2]
-    return np.stack([l0 * (2 * l0 - 1), l1 * (2 * l1 - 1), l2 * (2 * l2 - 1),
-                     4 * l0 * l1, 4 * l1 * l2, 4 * l0 * l2], axis=-1)
-
-
 def _fe_body(body: ContactBody, solver: str, max_dofs: int, order: int) -> _FEBody:
-    from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, MeshTet, asm
+    from skfem import asm
     from skfem.models.elasticity import linear_elasticity
 
     pts = body.points
-    m = MeshTet(pts.T.copy(), body.mesh.tets.T.copy())
-    elem = ElementTetP2() if order == 2 else ElementTetP1()
-    basis = Basis(m, ElementVector(elem), intorder=2 if order == 2 else 1)
+    m, space = vector_space(pts, body.mesh.tets, order)
+    basis, dofmap = space.basis, space.dofmap
     ndofs = basis.N
     if ndofs > max_dofs:
         raise FEContactError(f"the {body.mesh.body.kind} body has {ndofs} unknowns, more than max_dofs = "
                              f"{max_dofs}; coarsen the mesh ([model] fec_n, fec_growth)")
     lam = 2.0 * body.G * body.nu / (1.0 - 2.0 * body.nu)
     K = asm(linear_elasticity(lam, body.G), basis).tocsr()
-    nv = m.nvertices
-    if order == 2:
-        dofmap = np.concatenate([basis.nodal_dofs, basis.edge_dofs], axis=1)
-        key = m.edges[0].astype(np.int64) * nv + m.edges[1]
-        srt = np.argsort(key)
-        edge_key, edge_id = key[srt], srt
-        X_scalar = np.concatenate([pts, 0.5 * (pts[m.edges[0]] + pts[m.edges[1]])])
-    else:
-        dofmap = basis.nodal_dofs
-        edge_key = edge_id = np.zeros(0, dtype=np.int64)
-        X_scalar = pts
-    fb = _FEBody(pts, dofmap, np.zeros(0, int), np.zeros(0, int), np.zeros(0, int), X_scalar, edge_key, edge_id,
+    X_scalar = np.concatenate([pts, 0.5 * (pts[m.edges[0]] + pts[m.edges[1]])]) if order == 2 else pts
+    fb = _FEBody(pts, dofmap, np.zeros(0, int), np.zeros(0, int), np.zeros(0, int), X_scalar, space,
                  None, None, ndofs, order, body.G, body.nu)
     clamped = body.mesh.clamped_tris
     if len(clamped) == 0:

@@ -164,7 +164,7 @@ _DUNAVANT4 = (  # degree-4 rule on the triangle: barycentric points and weights 
     np.array([0.223381589678011] * 3 + [0.109951743655322] * 3))
 
 
-def _trace_shape(lam: np.ndarray, order: int) -> np.ndarray:
+def trace_shape(lam: np.ndarray, order: int) -> np.ndarray:
     """Lagrange shape functions of a triangle (trace of P1/P2 tets) at barycentric points (..., 3).
     P2 order: vertices 0, 1, 2, then edges (0,1), (1,2), (0,2)."""
     if order == 1:
@@ -201,9 +201,15 @@ class _Space:
 
 
 def _space(bm: BodyMesh, order: int) -> tuple[object, _Space]:
+    return vector_space(bm.points, bm.tets, order)
+
+
+def vector_space(points: np.ndarray, tets: np.ndarray, order: int) -> tuple[object, _Space]:
+    """The skfem mesh and the P1/P2 vector space of a tetrahedral body (points (n, 3), tets
+    (t, 4)), with the scalar-node numbering of its surface traces (also used by conformal.fe_contact)."""
     from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, MeshTet
 
-    m = MeshTet(bm.points.T.copy(), bm.tets.T.copy())
+    m = MeshTet(points.T.copy(), tets.T.copy())
     elem = ElementTetP2() if order == 2 else ElementTetP1()
     basis = Basis(m, ElementVector(elem), intorder=2 if order == 2 else 1)
     nv = m.nvertices
@@ -253,7 +259,7 @@ def _rule_matrix(space: "_Space", nodes: np.ndarray, lam: np.ndarray, w: np.ndar
     """(n_scalar, F*q) matrix of w_q |T| phi_a(q) for a quadrature rule (lam (q, 3), w (q,))."""
     q = lam.shape[0]
     F = nodes.shape[0]
-    phi = _trace_shape(lam, space.order)                 # (q, a)
+    phi = trace_shape(lam, space.order)                 # (q, a)
     rows = np.repeat(nodes[:, None, :], q, axis=1).ravel()
     cols = np.repeat(np.arange(F * q), nodes.shape[1])
     vals = (phi[None, :, :] * (area[:, None] * w[None, :])[:, :, None]).ravel()
@@ -350,7 +356,7 @@ def _trace_interpolation(surf: _Surface, space: _Space, uv: np.ndarray) -> sp.cs
                            "meshed surface")
     lam = np.clip(lam, 0.0, None)
     lam /= lam.sum(axis=1, keepdims=True)
-    phi = _trace_shape(lam, space.order)
+    phi = trace_shape(lam, space.order)
     nodes = space.scalar_nodes(surf.tris[f])
     rows = np.repeat(np.arange(len(uv)), nodes.shape[1])
     return sp.csr_matrix((phi.ravel(), (rows, nodes.ravel())), shape=(len(uv), space.n_scalar))
