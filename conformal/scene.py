@@ -118,11 +118,14 @@ Geometry = QuadraticGeometry | HertzGeometry | TableGeometry | WheelRailGeometry
 
 @dataclass(frozen=True)
 class Load:
-    """Exactly one of normal_force (N), approach (mm) or wheel_load (vertical, N)."""
+    """Exactly one of normal_force (N), approach (mm) or wheel_load (N), and for wheel-rail scenes
+    with the conformal theory the direction of the wheel load, ``load_angle`` (rad, as a contact
+    angle in the JSON's convention: 0 = vertical; the wheel is pressed along that direction)."""
 
     normal_force: float | None = None
     approach: float | None = None
     wheel_load: float | None = None
+    load_angle: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -187,7 +190,7 @@ class Scene:
         >>> s2.load.normal_force, s2.model.options["maxout"], s.load.normal_force
         (20000.0, 5, 10000.0)
         >>> s.with_("load.approach", 0.01).load        # one load replaces the other
-        Load(normal_force=None, approach=0.01, wheel_load=None)
+        Load(normal_force=None, approach=0.01, wheel_load=None, load_angle=0.0)
         """
         if key is not None:
             changes = {key: value, **changes}
@@ -231,7 +234,8 @@ class Scene:
         if "rigid_slip" in kinematics:
             kinematics["rigid_slip"] = str(Path(kinematics["rigid_slip"]).resolve())
         out = {"name": self.name, "material": material, "friction": friction, "geometry": geometry,
-               "load": plain(self.load), "kinematics": kinematics, "grid": plain(self.grid),
+               "load": {k: v for k, v in plain(self.load).items() if not (k == "load_angle" and v == 0.0)},
+               "kinematics": kinematics, "grid": plain(self.grid),
                "model": model}
         if self.history:
             d0 = HistoryStepSpec()
@@ -261,7 +265,9 @@ def _with_path(scene: "Scene", path: str, value: Any) -> "Scene":
     if key not in names:
         raise InputError(f"[{sec}] {key}: unknown key{_did_you_mean(key, sorted(names))}")
     if sec == "load":            # exactly one of normal_force, approach, wheel_load: the new one replaces
-        return replace(scene, load=_load({key: value}, scene.geometry))
+        kept = {"load_angle": obj.load_angle} if key != "load_angle" else {
+            k: getattr(obj, k) for k in ("normal_force", "approach", "wheel_load") if getattr(obj, k) is not None}
+        return replace(scene, load=_load({**kept, key: value}, scene.geometry))
     if isinstance(value, int) and not isinstance(value, bool) and isinstance(getattr(obj, key), float):
         value = float(value)
     return replace(scene, **{sec: replace(obj, **{key: value})})
@@ -467,7 +473,7 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
 
 
 def _load(data: Any, geometry: Geometry) -> Load:
-    sec = _Section("load", data, {"normal_force", "approach", "wheel_load"})
+    sec = _Section("load", data, {"normal_force", "approach", "wheel_load", "load_angle"})
     given = [k for k in ("normal_force", "approach", "wheel_load") if sec.has(k)]
     if len(given) != 1:
         raise sec.error("normal_force", "give exactly one of normal_force (N), approach (mm) or wheel_load (N)")
@@ -475,7 +481,13 @@ def _load(data: Any, geometry: Geometry) -> Load:
     if key == "wheel_load" and geometry.kind != "wheel_rail":
         raise sec.error("wheel_load", "only for [geometry] kind = \"wheel_rail\"; use normal_force")
     value = sec.number(key, positive=True)
-    return Load(**{key: value})
+    angle = sec.number("load_angle", 0.0)
+    if angle != 0.0 and geometry.kind != "wheel_rail":
+        raise sec.error("load_angle", "only for [geometry] kind = \"wheel_rail\" (the load of other scenes is "
+                        "along the contact normal)")
+    if not abs(angle) < 1.4:
+        raise sec.error("load_angle", f"must lie within +-1.4 rad (80 degrees) of the vertical, got {angle!r}")
+    return Load(**{key: value}, load_angle=angle)
 
 
 def _kinematics(data: Any, base_dir: Path = Path(".")) -> Kinematics:

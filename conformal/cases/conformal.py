@@ -87,8 +87,10 @@ def curved_problem_from_wheel_rail(scene, *, scale: float | None = None) -> Curv
     contact patch of the wheel (tread and flange at once share the strip, and their elastic
     interaction is included), at the wheelset height of the planar half-space balance.
 
-    h is the signed distance along the local normals at that height; the load is the vertical
-    ``[load] wheel_load`` (load direction vertical in the side frame: w = cos delta) or, with
+    h is the signed distance along the local normals at that height; the load is ``[load]
+    wheel_load`` along the load direction (vertical, or ``[load] load_angle`` from it, the wheel
+    pressed along that direction from the height of the vertical balance: w = cos(delta - load
+    angle), seed Eqs. 45-46) or, with
     ``[load] approach``, the height itself (approach 0 from there).  Creepages per column: from the
     wheelset velocities with ``[kinematics] speed`` (the spin follows the contact angle), else from
     the scene's xi, eta, phi at the reference point (:func:`column_creepages`).  ``[model] creepage
@@ -125,7 +127,8 @@ class StripBuilder:
                 approach: float | None = None, label: str = "") -> CurvedProblem:
         """The strip problem: over ``patch`` (default: all patches), ``sizes`` = (dx, ds) or ``n``
         elements per axis or the scene's element size; loaded by the wheel load, or, with
-        ``approach``, lowered that far (mm, vertically) below the reference height."""
+        ``approach``, moved that far (mm) along the load direction (vertical unless ``[load]
+        load_angle``) from the reference height."""
         scene, pl, st = self.scene, self.pl, self.st
         load = scene.load
         wheel = pl.pair.wheel(st.z)
@@ -175,7 +178,8 @@ class StripBuilder:
         profiles = dict(rail_points=rail_points, wheel_points=wheel_points)
         return CurvedProblem(grid=grid, h=h - approach0, material=scene.material, friction=scene.friction,
                              kinematics=kin, model=scene.model, xi_s=np.asarray(xi_s, float),
-                             eta_s=np.asarray(eta_s, float), phi_s=np.asarray(phi_s, float), load_angle=0.0,
+                             eta_s=np.asarray(eta_s, float), phi_s=np.asarray(phi_s, float),
+                             load_angle=m * load.load_angle,     # the side frame (left wheel mirrored)
                              overlap_approach=True,
                              label=f"{scene.name}:{pl.pair.side}{label}", info=info, **normal, **profiles)
 
@@ -376,9 +380,8 @@ def _solve_conformal(scene, *, max_enlarge: int = 6, with_problem: bool = False,
 
 
 def _finish(scene, problem: CurvedProblem, result: Result, attempt: int, ext_warn: list[str]) -> Result:
-    z_ws = problem.info["z_ws_reference"] + (result.extra["approach_along_load"]
-                                             if problem.normal_force is not None else
-                                             (problem.approach or 0.0))
+    along = result.extra["approach_along_load"] if problem.normal_force is not None else (problem.approach or 0.0)
+    z_ws = problem.info["z_ws_reference"] + along * math.cos(problem.load_angle)   # its vertical part
     # ``approach`` means what [load] approach means: the wheelset's lowering below the height where
     # its first wheel touches; the largest overlap along the local normals is ``overlap_max``
     extra = dict(result.extra, z_ws=z_ws, grid_scale=scene.grid.scale, enlargements=attempt,
@@ -429,9 +432,9 @@ def _solve_separate(scene, builder: StripBuilder, coupled_problem: CurvedProblem
     its own, without elastic interaction between the strips (as CONTACT solves the patches of a
     wheel), each with ``[grid] n`` elements per axis over ``[grid] scale`` times its patch (its
     own element size), extended where its contact reaches an end.  The strips share the wheelset
-    height: with ``[load] wheel_load`` the common vertical lowering dz below the reference height is
-    found by Brent's method on sum_k FZ_k(dz) = wheel_load (each FZ_k with the tangential
-    tractions, seed Eq. 46); with ``[load] approach`` the height is the scene's.  ``sizes`` = (dx, ds)
+    height: with ``[load] wheel_load`` the common lowering dz along the load direction below the
+    reference height is found by Brent's method on sum_k F_k(dz) = wheel_load (F_k: the force along
+    the load direction, :func:`force_along_load`, with the tangential tractions, seed Eq. 46); with ``[load] approach`` the height is the scene's.  ``sizes`` = (dx, ds)
     gives every strip those elements instead (a comparison with the coupled strip at its own sizes).
 
     The result sums the strips (FN, FX, FY, MZ; FX_track, FY_track, FZ_track in ``extra``) and lists
@@ -461,10 +464,10 @@ def _solve_separate(scene, builder: StripBuilder, coupled_problem: CurvedProblem
             break
         cache: dict[float, list[Result]] = {dz0: results}
 
-        def fz(dz: float) -> float:
+        def fz(dz: float) -> float:    # the force along the load direction, less the wheel load
             if dz not in cache:
                 cache[dz] = [solve_curved(replace(pr, approach=dz)) for pr in problems]
-            return sum(r.extra["FZ_track"] for r in cache[dz]) - W
+            return sum(force_along_load(r.extra, scene.load.load_angle) for r in cache[dz]) - W
 
         dz = _common_lowering(fz, dz0, W)
         fz(dz)
@@ -494,6 +497,12 @@ def _solve_separate(scene, builder: StripBuilder, coupled_problem: CurvedProblem
                  wall_s=sum(r.wall_s for r in finished), iterations=None, residual=None,
                  patches=tuple(finished), extra=extra)
     return out, problems[int(np.argmax([r.FN for r in finished]))]
+
+
+def force_along_load(extra: dict, load_angle: float) -> float:
+    """The force on the rail along the load direction (seed Eq. 46): FZ_track cos(angle) - FY_track
+    sin(angle), ``load_angle`` as in ``[load]`` (the JSON's convention; the track frame)."""
+    return extra["FZ_track"] * math.cos(load_angle) - extra["FY_track"] * math.sin(load_angle)
 
 
 def _common_lowering(fz, dz0: float, W: float, tol: float = 1e-5) -> float:

@@ -14,19 +14,27 @@ depth of the datum).  Integrated over an element of width dx (F(t) = t ln|t| - t
 
     A(x) = -(2/(pi E*)) [F(x + dx/2) - F(x - dx/2) - dx ln L]        (A_nn = A_xx; A_yy with G)
 
+Dissimilar bodies couple the normal and longitudinal problems (Johnson eqs. 2.19b, 2.25b): a
+normal line load displaces the surfaces along x by -(K/G) P sgn(x) and a tangential one along the
+normal by +(K/G) Q_x sgn(x), with Kalker's difference parameter K = (G/4)((1 - 2 nu1)/G1 -
+(1 - 2 nu2)/G2), the limit b -> infinity of the half-space's K terms (the integral over y of
+x/r^2 is pi sgn x).  Over an element (sgn integrated: 2 clip(x, -dx/2, dx/2))::
+
+    A_xn(x) = -A_nx(x) = -(K/G) 2 clip(x, -dx/2, dx/2)
+
 With the normal force prescribed (per unit length) the constant only shifts the approach, and in
 steady rolling only differences of u enter, so forces, pressures, tractions and slip do not depend
 on L; :data:`REFERENCE_FACTOR` sets L = that factor times the length of the grid, which keeps
 the discrete operator positive definite (the logarithmic capacity of the grid, length/4, stays
 below L).  The reported ``approach`` is relative to that datum: a prescribed approach is refused.
-Quasi-identical bodies only (K = 0; the half-plane's normal-tangential coupling is not included).
 
 The grid is a row of mx elements of length dx and width dy = 1 mm, so that FN, FX, FY are per mm
 of line length (N/mm) and MZ per mm (N).  The kernel is a :class:`CurvedInfluence` strip with one
 element across (ms = 1), the operator the normal and tangential solvers take for curved strips.
 
-Checks (tests/test_line_contact.py): 2-D Hertz (half-width and peak pressure, Johnson eq. 4.45)
-and Carter's steady rolling (force, adhesion width and traction, conformal.reference).
+Checks (tests/test_line_contact.py): 2-D Hertz (half-width and peak pressure, Johnson eq. 4.45),
+Carter's steady rolling (force, adhesion width and traction, conformal.reference), and for
+dissimilar bodies the middle section of a long Hertzian contact (b = 20 a) of the 3-D exact theory.
 
 >>> import numpy as np
 >>> from conformal.materials import Material
@@ -75,13 +83,17 @@ def halfplane_kernel(mx: int, dx: float, material: Material, ref_length: float) 
     K[:, 0, 0, 0, 0] = base / E_star     # u_x from p_x: plane strain
     K[:, 0, 0, 2, 2] = base / E_star     # u_n from p_n
     K[:, 0, 0, 1, 1] = base / material.G  # u_y from p_y: anti-plane shear
+    if material.K != 0.0:                 # dissimilar bodies (module docstring)
+        coupling = -(material.K / material.G) * 2.0 * np.clip(x, -h, h)
+        K[:, 0, 0, 0, 2] = coupling       # u_x from p_n
+        K[:, 0, 0, 2, 0] = -coupling      # u_n from p_x
     return K
 
 
 @dataclass(frozen=True, eq=False)
 class LineInfluence(CurvedInfluence):
-    """The half-plane operator of a row of elements (ms = 1), with the material's G, nu, K = 0 and
-    the reference length L."""
+    """The half-plane operator of a row of elements (ms = 1), with the material's G, nu, K and the
+    reference length L."""
 
     G: float = 0.0
     nu: float = 0.0
@@ -94,7 +106,7 @@ class LineInfluence(CurvedInfluence):
             raise InputError(f"line contact: the grid has one element across the line (my = 1), got my = {grid.my}")
         L = REFERENCE_FACTOR * grid.mx * grid.dx if ref_length is None else float(ref_length)
         op = cls.from_kernel(halfplane_kernel(grid.mx, grid.dx, material, L))
-        for k, v in (("G", material.G), ("nu", material.nu), ("ref_length", L)):
+        for k, v in (("G", material.G), ("nu", material.nu), ("K", material.K), ("ref_length", L)):
             object.__setattr__(op, k, float(v))
         return op
 
@@ -110,9 +122,6 @@ def line_grid(A: float, FN: float, material: Material, n: int = 40, scale: float
 
 
 def check_line_problem(problem: ContactProblem) -> None:
-    if problem.material.K != 0.0:
-        raise InputError("[material] body2: line contact (B = 0) supports quasi-identical bodies only (K = 0): "
-                         "the half-plane's normal-tangential coupling is not implemented")
     if problem.normal_force is None:
         raise InputError("[load] approach: line contact (B = 0) needs normal_force (N per mm of line length): "
                          "the 2-D approach depends on an arbitrary datum")
