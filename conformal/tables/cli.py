@@ -1,7 +1,7 @@
 """``conformal table build|refine|info``: the command-line side of :mod:`conformal.tables`.
 
     conformal table build SPEC.toml --out TABLE.npz [--workers N] [--scheduler ADDRESS|local]
-    conformal table refine TABLE.npz --out OUT.npz --box T0:T1,S0:S1,TH0:TH1 --q QLO:QHI [--workers N]
+    conformal table refine TABLE.npz --out OUT.npz --box T0:T1,S0:S1,TH0:TH1 --q=QLO:QHI [--workers N]
     conformal table info [TABLE.npz]
 
 ``refine`` adds the midpoints of the q cells in [QLO, QHI] as extra nodes for every node of the
@@ -32,7 +32,7 @@ def add_parsers(sub) -> None:
     r.add_argument("--out", required=True, metavar="OUT.npz", help="the refined table file to write")
     r.add_argument("--box", required=True, metavar="T0:T1,S0:S1,TH0:TH1",
                    help="node index ranges (half-open) along ln a/b, s, theta")
-    r.add_argument("--q", required=True, metavar="QLO:QHI", help="add the q cell midpoints in [QLO, QHI]")
+    r.add_argument("--q", required=True, metavar="QLO:QHI", help="add the q cell midpoints in [QLO, QHI] (write --q=QLO:QHI when QLO < 0)")
     r.add_argument("--workers", type=int, default=1, help="parallel workers (local processes or LocalCluster)")
     r.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address, or 'local'")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
