@@ -1,7 +1,7 @@
 """A creep-force table in memory and on disk (NPZ), and its vectorised evaluator.
 
 File layout (``numpy.savez``, no pickles): ``values`` (n_ratio, n_nu, n_rho, n_theta, n_spin, 3)
-= (fx, fy, mz) of Eq. T2 at the nodes; ``c11, c22, c23`` (n_ratio, n_nu): the linear-theory
+= (fx, fy, mz) of Eq. T2 at the nodes (float32); ``c11, c22, c23`` (n_ratio, n_nu): the linear-theory
 coefficients used in Eq. T1 at the (a/b, nu) nodes; ``meta``: JSON text (spec, ranges, grid,
 solver tolerance, code version, build statistics); ``content_hash``: sha256 over the arrays and
 ``meta``, verified on load (a corrupt or edited file raises InputError, never loads silently).
@@ -22,12 +22,16 @@ the spin axis, where spin opposes the lateral creepage and the contact reaches f
 not-a-knot spline rings into the neighbouring cells; Akima's slopes do not) and those of mz by a
 not-a-knot spline (mz rises steeply but smoothly with small spin on slender contacts, a/b -> 0.25,
 where Akima's slopes are the worse: measured 0.057 against 0.027 of mu FN sqrt(ab) at the worst of
-600 points), then by not-a-knot cubic splines along s and theta (linear in nu), sampled once on a
-grid ``REFINE`` times finer along s, theta, q (:func:`eval_grid`); H_t is the cubic Hermite basis
+600 points), then along s by the monotone cubic of Fritsch and Carlson (PCHIP) for fx, fy (the
+force bends sharply where the contact reaches full slip, up to rho = 4; a spline overshot that knee
+by 0.013 of mu FN) and a not-a-knot spline for mz, along theta by not-a-knot cubic splines (linear
+in nu), sampled once on a
+grid :func:`refine` times finer along s, theta, q (at least 43 x 25 x 89 points; :func:`eval_grid`);
+H_t is the cubic Hermite basis
 along ln(a/b) with the slopes of the not-a-knot spline through the a/b nodes (so the spline
 itself, no resampling along t), L the linear weights on the fine grid (:func:`interpolate`).
 Measured on the shipped table (studies/creep_table_scaling.py): about 1.5e6 contacts per CPU
-second on a loaded machine, varying nu included; the evaluation grid takes about 64 MB.  Then
+second, varying nu included; the evaluation grid takes about 173 MB (float32).  Then
 F = mu FN (fx, fy) and MZ = mu FN sqrt(ab) mz (Eq. T2).
 Points outside the tabulated a/b, nu, rho or spin ranges raise InputError (``outside="error"``,
 default), or give NaN with a RuntimeWarning (``outside="nan"``), or are clamped onto the range
@@ -99,6 +103,9 @@ class CreepTable:
     patches: tuple = ()
 
     def __post_init__(self):
+        # node values in float32 (7 digits; the solves' tolerance is 1e-6): half the file size, and
+        # the same content hash in memory and on disk
+        object.__setattr__(self, "values", np.asarray(self.values, dtype=np.float32))
         shape = self.spec.shape
         if self.values.shape != shape + (N_OUT,):
             raise InputError(f"creep table: values have shape {self.values.shape}, the spec needs "
@@ -229,11 +236,28 @@ _loaded: dict[str, tuple[int, CreepTable]] = {}
 
 
 # ----------------------------------------------------------------------------- evaluation
-#: refinement factors of the evaluation grid along (ln a/b, nu, s, theta, q); ln a/b is not
-#: refined (cubic Hermite between its nodes), nu is linear.  Chosen on the 300 points of
-#: studies/creep_table_accuracy.py: (1, 1, 2, 3, 4) max 0.0077 / mean 0.0012 of mu FN with a 64 MB
-#: grid; (1, 1, 2, 3, 3) 0.0090 / 0.0012 with 48 MB; (1, 1, 2, 2, 3) 0.0094 / 0.0014 with 32 MB
-REFINE = (1, 1, 2, 3, 4)
+#: the least number of points of the evaluation grid along (ln a/b, nu, s, theta, q) (0: the nodes;
+#: ln a/b is cubic Hermite between its nodes, nu linear).  Chosen on the 300 points of
+#: studies/creep_table_accuracy.py with the 7 x 22 x 9 x 23-node table: factors (1, 1, 2, 3, 4), max
+#: 0.0077 / mean 0.0012 of mu FN with a 64 MB grid; (1, 1, 2, 3, 3) 0.0090 / 0.0012 with 48 MB;
+#: (1, 1, 2, 2, 3) 0.0094 / 0.0014 with 32 MB
+MIN_SAMPLES = (0, 0, 43, 25, 89)
+
+
+def refine(spec) -> tuple:
+    """How many times finer than the table's nodes the evaluation grid samples each axis (ln a/b,
+    nu, s, theta, q): the least whole factor that gives at least ``MIN_SAMPLES`` points along s,
+    theta and q (the nodes themselves along ln a/b and nu): (1, 1, 2, 3, 4) for 22 x 9 x 23 nodes,
+    (1, 1, 2, 2, 2) for the shipped table's 32 x 13 x 45 (63 x 25 x 89 samples).
+
+    >>> from conformal.tables.spec import TableSpec
+    >>> refine(TableSpec(n_rho=22, n_theta=9, n_spin=23)), refine(TableSpec(n_rho=32, n_theta=13, n_spin=45))
+    ((1, 1, 2, 3, 4), (1, 1, 2, 2, 2))
+    """
+    n = (spec.n_ratio, spec.n_nu, spec.n_rho, spec.n_theta, spec.n_spin)
+    return tuple(1 if m == 0 or k < 2 else max(1, math.ceil((m - 1) / (k - 1))) for k, m in zip(n, MIN_SAMPLES))
+
+
 #: fine points per table cell of the (ln a/b, nu) grid on which C11, C22, C23 are read
 C_REFINE = (32, 8)
 
@@ -244,8 +268,9 @@ class EvalGrid:
 
     The node values are interpolated along q by Akima's local cubic for fx, fy (Akima 1970, J.
     ACM 17, 589-602: slopes from the neighbouring secants weighted by the jumps of the secant; no
-    ringing next to the ridges of the spin axis) and a not-a-knot spline for mz, then by
-    not-a-knot cubic splines along s and theta (linear in nu), and sampled on a grid ``REFINE``
+    ringing next to the ridges of the spin axis) and a not-a-knot spline for mz, then along s by
+    PCHIP for fx, fy (no overshoot at the knee of full slip) and a spline for mz, by not-a-knot
+    cubic splines along theta (linear in nu), and sampled on a grid :func:`refine`
     times finer along s, theta, q; along ln(a/b) the nodes are kept with the slopes of the
     not-a-knot spline through them (cubic Hermite in :func:`interpolate`).  ``rows`` packs, per
     cell along nu and q, the values and ln(a/b) slopes at its four corners (nu0 q0, nu0 q1, nu1
@@ -273,10 +298,12 @@ def _refined_axis(x: np.ndarray, factor: int) -> np.ndarray:
     return np.linspace(x[0], x[-1], (x.size - 1) * factor + 1)
 
 
-def _resample(values: np.ndarray, x: np.ndarray, xf: np.ndarray, axis: int, akima: bool = False) -> np.ndarray:
+def _resample(values: np.ndarray, x: np.ndarray, xf: np.ndarray, axis: int, akima: bool = False,
+              pchip: bool = False) -> np.ndarray:
     """``values`` sampled at ``xf`` along ``axis``: not-a-knot cubic spline through the nodes ``x``,
-    or Akima's local cubic (``akima``, with >= 5 nodes); an axis of one node is repeated twice."""
-    from scipy.interpolate import Akima1DInterpolator, CubicSpline
+    or Akima's local cubic (``akima``, with >= 5 nodes), or the monotone piecewise cubic of Fritsch
+    and Carlson (``pchip``, with >= 3 nodes); an axis of one node is repeated twice."""
+    from scipy.interpolate import Akima1DInterpolator, CubicSpline, PchipInterpolator
 
     if x.size == 1:
         return np.repeat(values, 2, axis=axis)
@@ -284,15 +311,22 @@ def _resample(values: np.ndarray, x: np.ndarray, xf: np.ndarray, axis: int, akim
         return values
     if akima and x.size >= 5:
         return Akima1DInterpolator(x, values, axis=axis)(xf)
+    if pchip and x.size >= 3:
+        return PchipInterpolator(x, values, axis=axis)(xf)
     return CubicSpline(x, values, axis=axis)(xf)
+
+
+def _force_resample(values: np.ndarray, x: np.ndarray, xf: np.ndarray, axis: int, **how) -> np.ndarray:
+    """fx, fy (the first two outputs) resampled with ``how`` (akima or pchip), mz with the spline."""
+    if x.size == 1:
+        return _resample(values, x, xf, axis)
+    return np.concatenate([_resample(values[..., :2], x, xf, axis, **how), _resample(values[..., 2:], x, xf, axis)],
+                          axis=-1)
 
 
 def _q_resample(values: np.ndarray, q: np.ndarray, qf: np.ndarray) -> np.ndarray:
     """Along q (axis 4): Akima for fx, fy, not-a-knot spline for mz (Eq. T5)."""
-    if q.size == 1:
-        return _resample(values, q, qf, 4)
-    return np.concatenate([_resample(values[..., :2], q, qf, 4, akima=True), _resample(values[..., 2:], q, qf, 4)],
-                          axis=-1)
+    return _force_resample(values, q, qf, 4, akima=True)
 
 
 def _linear_resample(values: np.ndarray, x: np.ndarray, xf: np.ndarray, axis: int) -> np.ndarray:
@@ -343,7 +377,7 @@ def eval_grid(table: CreepTable) -> EvalGrid:
     from scipy.interpolate import CubicSpline
 
     axes = table.spec.axes()
-    fine = tuple(_refined_axis(x, f) for x, f in zip(axes, REFINE))
+    fine = tuple(_refined_axis(x, f) for x, f in zip(axes, refine(table.spec)))
     v = _q_resample(table.values, axes[4], fine[4])          # q first: Akima (F), spline (MZ)
     for p in table.patches:                                 # boxes with extra q nodes
         t0, t1, s0, s1, h0, h1 = p.box
@@ -351,8 +385,9 @@ def eval_grid(table: CreepTable) -> EvalGrid:
         order = np.argsort(q)
         merged = np.concatenate([table.values[t0:t1, :, s0:s1, h0:h1], p.values], axis=4)[:, :, :, :, order]
         v[t0:t1, :, s0:s1, h0:h1] = _q_resample(merged, q[order], fine[4])
-    for k in (1, 2, 3):
-        v = _resample(v, axes[k], fine[k], k)
+    v = _resample(v, axes[1], fine[1], 1)
+    v = _force_resample(v, axes[2], fine[2], 2, pchip=True)  # s: monotone, no overshoot at full slip
+    v = _resample(v, axes[3], fine[3], 3)
     t = axes[0]
     if t.size == 1:
         vt = np.repeat(v, 2, axis=0)
