@@ -250,9 +250,25 @@ def cmd_cache(args) -> int:
     return 0
 
 
+def _join_negative_ranges(argv: list[str]) -> list[str]:
+    """``--q -0.5:-0.1`` as ``--q=-0.5:-0.1``: argparse takes a value that starts with '-' and is
+    not a plain number for an option.
+
+    >>> _join_negative_ranges(["table", "refine", "t.npz", "--q", "-0.5:-0.1"])[-1]
+    '--q=-0.5:-0.1'
+    """
+    out: list[str] = []
+    for arg in argv:
+        if out and out[-1] == "--q" and arg.startswith("-") and ":" in arg:
+            out[-1] = f"--q={arg}"
+        else:
+            out.append(arg)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_join_negative_ranges(list(sys.argv[1:] if argv is None else argv)))
     try:
         return int(args.func(args) or 0)
     except ConformalError as exc:

@@ -102,7 +102,7 @@ def main(argv=None) -> int:
     log(f"sensitivity: {res['sensitivity']}")
 
     # ------------------------------------------------------------------ 65 m/s, each creep model
-    models = ("fastsim",) if args.quick else ("linear", "empirical", "fastsim")
+    models = ("fastsim",) if args.quick else ("linear", "empirical", "fastsim", "table")
     res["response"], res["speed"] = {}, {}
     runs = {}
     for name in models:
