@@ -44,7 +44,7 @@ import json
 import math
 import os
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -106,6 +106,8 @@ class CreepTable:
         # node values in float32 (7 digits; the solves' tolerance is 1e-6): half the file size, and
         # the same content hash in memory and on disk
         object.__setattr__(self, "values", np.asarray(self.values, dtype=np.float32))
+        object.__setattr__(self, "patches", tuple(replace(p, values=np.asarray(p.values, dtype=np.float32))
+                                                  for p in self.patches))
         shape = self.spec.shape
         if self.values.shape != shape + (N_OUT,):
             raise InputError(f"creep table: values have shape {self.values.shape}, the spec needs "
@@ -165,7 +167,7 @@ def _patch_arrays(patches: tuple) -> dict:
     for k, p in enumerate(patches):
         out[f"patch{k}_box"] = np.asarray(p.box, dtype=np.int64)
         out[f"patch{k}_q"] = np.asarray(p.q, dtype=np.float64)
-        out[f"patch{k}_values"] = np.asarray(p.values, dtype=np.float64)
+        out[f"patch{k}_values"] = np.asarray(p.values, dtype=np.float32)
     return out
 
 
