@@ -60,15 +60,7 @@ class ContactProblem:
 def read_table(path: Path, grid: PlanarGrid) -> np.ndarray:
     """Undeformed distance table: ``.npy`` or text (comma or white space separated) with mx rows
     (x) and my columns (y), values in mm, '#' comments allowed."""
-    try:
-        if path.suffix == ".npy":
-            h = np.load(path, allow_pickle=False)
-        else:
-            text = path.read_text(encoding="utf-8").replace(",", " ")
-            rows = [ln.split("#")[0].split() for ln in text.splitlines()]
-            h = np.array([[float(v) for v in r] for r in rows if r], dtype=float)
-    except (OSError, ValueError) as exc:
-        raise InputError(f"[geometry] file: cannot read {path}: {exc}") from None
+    h = _load_numbers(path, "[geometry] file")
     if h.shape != grid.shape:
         raise InputError(f"[geometry] file: {path.name} holds a {h.shape} table; the grid is "
                          f"mx x my = {grid.mx} x {grid.my} (one row per x, one column per y)")
@@ -120,18 +112,22 @@ def _problems(scene: Scene, common: dict) -> list[ContactProblem]:
     return [ContactProblem(hertz=hz, grid=grid, h=hz.A * X**2 + hz.B * Y**2, **common)]
 
 
-def _read_numbers(path: Path, key: str) -> np.ndarray:
-    """A 2-D table of numbers from ``.npy`` or text (comma or white space separated, '#' comments)."""
+def _load_numbers(path: Path, key: str) -> np.ndarray:
+    """The numbers of ``.npy`` or text (comma or white space separated, '#' comments; one row per
+    line); InputError naming ``key`` if the file cannot be read."""
     try:
         if path.suffix == ".npy":
-            a = np.load(path, allow_pickle=False)
-        else:
-            text = path.read_text(encoding="utf-8").replace(",", " ")
-            rows = [ln.split("#")[0].split() for ln in text.splitlines()]
-            a = np.array([[float(v) for v in r] for r in rows if r], dtype=float)
+            return np.asarray(np.load(path, allow_pickle=False), dtype=float)
+        text = path.read_text(encoding="utf-8").replace(",", " ")
+        rows = [ln.split("#")[0].split() for ln in text.splitlines()]
+        return np.array([[float(v) for v in r] for r in rows if r], dtype=float)
     except (OSError, ValueError) as exc:
         raise InputError(f"{key}: cannot read {path}: {exc}") from None
-    a = np.asarray(a, dtype=float)
+
+
+def _read_numbers(path: Path, key: str) -> np.ndarray:
+    """A table of numbers (:func:`_load_numbers`), not empty and finite."""
+    a = _load_numbers(path, key)
     if a.size == 0 or not np.all(np.isfinite(a)):
         raise InputError(f"{key}: {path.name} is empty or contains NaN or infinite values")
     return a

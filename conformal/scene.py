@@ -650,6 +650,9 @@ def validate(scene: "Scene") -> "Scene":
         if kin.direction == -1 or kin.rigid_slip is not None or fr.mu_table is not None \
                 or "influence_file" in scene.model.options:
             raise InputError("[[history]]: not combined with direction = -1, rigid_slip, mu_table or influence_file")
+    if scene.load.load_angle != 0.0 and scene.model.theory != "conformal":
+        raise InputError(f"[load] load_angle: a load direction other than vertical needs [model] theory = "
+                         f"\"conformal\" (the {scene.model.theory!r} model balances the vertical load)")
     if isinstance(geo, WheelRailGeometry):
         if abs(geo.yaw) > MAX_YAW:
             raise InputError(f"[geometry] yaw: the wheelset yaw must lie within +-{MAX_YAW:g} rad, got {geo.yaw:g}")

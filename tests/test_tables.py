@@ -207,15 +207,20 @@ def test_outside_the_range_is_never_silent(tiny):
             evaluate(tiny, **kw)
 
 
-def test_file_integrity(tiny, tmp_path):
-    p = save_table(tiny, tmp_path / "t.npz")
-    assert load_table(p).content_hash == tiny.content_hash
-    with np.load(p) as z:
+def _assert_edit_detected(path, key: str, tmp_path) -> None:
+    """A copy of the table file with ``key`` scaled by 1.001 is refused (content hash)."""
+    with np.load(path) as z:
         data = {k: z[k] for k in z.files}
-    data["values"] = data["values"] * 1.001
+    data[key] = data[key] * 1.001
     np.savez(tmp_path / "edited.npz", **data)
     with pytest.raises(InputError, match="content hash"):
         load_table(tmp_path / "edited.npz")
+
+
+def test_file_integrity(tiny, tmp_path):
+    p = save_table(tiny, tmp_path / "t.npz")
+    assert load_table(p).content_hash == tiny.content_hash
+    _assert_edit_detected(p, "values", tmp_path)
     (tmp_path / "junk.npz").write_bytes(b"not a table")
     with pytest.raises(InputError, match="cannot read"):
         load_table(tmp_path / "junk.npz")
@@ -326,12 +331,7 @@ def test_refine_adds_exact_nodes_in_a_box(tiny, tmp_path, capsys):
     x = [np.zeros(5), np.full(5, NU), np.zeros(5), np.zeros(5), np.linspace(-0.5, 0.5, 5)]
     assert np.allclose(interpolate(r, *x), interpolate(tiny, *x), atol=1e-6)
     assert r.content_hash != tiny.content_hash
-    with np.load(out) as z:
-        data = {k: z[k] for k in z.files}
-    data["patch0_values"] = data["patch0_values"] * 1.001
-    np.savez(tmp_path / "edited.npz", **data)
-    with pytest.raises(InputError, match="content hash"):
-        load_table(tmp_path / "edited.npz")
+    _assert_edit_detected(out, "patch0_values", tmp_path)
     assert main(["table", "refine", tiny.path, "--out", str(out), "--box", "0:1,1:9,0:2", "--q", "0.2:0.3"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "box" in err[0]

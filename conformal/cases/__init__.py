@@ -7,7 +7,6 @@ the geometry, influence and solver layers below.  :mod:`conformal.cases.precompu
 influence numbers a sweep of wheel-rail positions will need.
 """
 from conformal.cases.conformal import solve_wheel_rail_conformal
-from conformal.errors import InputError
 from conformal.cases.wheelrail import problems_from_wheel_rail
 from conformal.cases.wheelrail import solve_wheel_rail as solve_wheel_rail_planar
 
@@ -40,9 +39,6 @@ def solve_wheel_rail(scene):
     >>> round(r.extra["FZ_track"]), r.theory           # the 10 kN wheel load, balanced vertically
     (10000, 'hertz')
     """
-    if scene.load.load_angle != 0.0 and scene.model.theory != "conformal":
-        raise InputError(f"[load] load_angle: a load direction other than vertical needs [model] theory = "
-                         f"\"conformal\" (the {scene.model.theory!r} model balances the vertical load)")
     if scene.model.theory == "fe_contact":   # direct FE contact of the meshed wheel and rail
         from conformal.cases.fe_contact import solve_wheel_rail_fe_contact
         return solve_wheel_rail_fe_contact(scene)

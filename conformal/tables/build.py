@@ -44,7 +44,7 @@ import numpy as np
 
 from conformal.errors import ConformalError, InputError
 from conformal.tables.spec import N_OUT, TableSpec, creepages_of_node, saturation_scales
-from conformal.tables.table import CreepTable, save_table
+from conformal.tables.table import CreepTable, save_npz_atomic, save_table
 
 #: code version of the node values (bump when the node solve changes)
 TABLE_VERSION = "1"
@@ -196,18 +196,9 @@ def _chunk_path(folder: Path, index: int) -> Path:
 
 def write_chunk(folder: Path, chunk: Chunk, result: dict) -> Path:
     """Atomic write of one finished chunk."""
-    folder.mkdir(parents=True, exist_ok=True)
-    path = _chunk_path(folder, chunk.index)
-    tmp = folder / f".{path.name}.{os.getpid()}.tmp"
-    try:
-        with open(tmp, "wb") as f:
-            np.savez(f, values=result["values"], converged=result["converged"], wall_s=result["wall_s"],
-                     start=chunk.start, stop=chunk.stop, digest=np.array(chunk.spec.digest()))
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return path
+    return save_npz_atomic(_chunk_path(folder, chunk.index), values=result["values"], converged=result["converged"],
+                           wall_s=result["wall_s"], start=chunk.start, stop=chunk.stop,
+                           digest=np.array(chunk.spec.digest()))
 
 
 def read_chunk(folder: Path, chunk: Chunk) -> dict | None:
@@ -431,17 +422,8 @@ def add_patch(table_path: str | Path | None, box: tuple, q, out: str | Path, *, 
     solved: dict[int, dict] = {}
 
     def keep(task: PatchSlice, result: dict) -> None:
-        folder.mkdir(parents=True, exist_ok=True)
-        path = _chunk_path(folder, task.index)
-        tmp = folder / f".{path.name}.{os.getpid()}.tmp"
-        try:
-            with open(tmp, "wb") as f:
-                np.savez(f, values=result["values"], converged=result["converged"], wall_s=result["wall_s"],
-                         digest=np.array(key))
-            os.replace(tmp, path)
-        finally:
-            if tmp.exists():
-                tmp.unlink()
+        save_npz_atomic(_chunk_path(folder, task.index), values=result["values"], converged=result["converged"],
+                        wall_s=result["wall_s"], digest=np.array(key))
         solved[task.index] = result
 
     rep = run_tasks(solve_patch_slice, todo, [f"a/b node {t.it}, nu node {t.iv}" for t in todo], workers=workers,

@@ -171,23 +171,29 @@ def _patch_arrays(patches: tuple) -> dict:
     return out
 
 
-def save_table(table: CreepTable, path: str | Path) -> Path:
-    """Write ``table`` to ``path`` atomically (temporary file in the same folder, then rename)."""
+def save_npz_atomic(path: str | Path, *, compressed: bool = False, **arrays) -> Path:
+    """Write ``arrays`` to the NPZ ``path`` atomically: a temporary file in the same folder, then
+    a rename (tables, their build chunks and patch slices)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    meta_text = _meta_text(table.meta)
-    digest = content_hash(table.values, table.c11, table.c22, table.c23, meta_text, table.patches)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         with open(tmp, "wb") as f:
-            np.savez_compressed(f, values=table.values, c11=table.c11, c22=table.c22, c23=table.c23,
-                                meta=np.array(meta_text), content_hash=np.array(digest),
-                                format=np.array(FORMAT), **_patch_arrays(table.patches))
+            (np.savez_compressed if compressed else np.savez)(f, **arrays)
         os.replace(tmp, path)
     finally:
         if tmp.exists():
             tmp.unlink()
     return path
+
+
+def save_table(table: CreepTable, path: str | Path) -> Path:
+    """Write ``table`` to ``path`` atomically (:func:`save_npz_atomic`)."""
+    meta_text = _meta_text(table.meta)
+    digest = content_hash(table.values, table.c11, table.c22, table.c23, meta_text, table.patches)
+    return save_npz_atomic(path, compressed=True, values=table.values, c11=table.c11, c22=table.c22,
+                           c23=table.c23, meta=np.array(meta_text), content_hash=np.array(digest),
+                           format=np.array(FORMAT), **_patch_arrays(table.patches))
 
 
 def load_table(path: str | Path | None = None) -> CreepTable:
@@ -300,35 +306,32 @@ def _refined_axis(x: np.ndarray, factor: int) -> np.ndarray:
     return np.linspace(x[0], x[-1], (x.size - 1) * factor + 1)
 
 
-def _resample(values: np.ndarray, x: np.ndarray, xf: np.ndarray, axis: int, akima: bool = False,
-              pchip: bool = False) -> np.ndarray:
-    """``values`` sampled at ``xf`` along ``axis``: not-a-knot cubic spline through the nodes ``x``,
-    or Akima's local cubic (``akima``, with >= 5 nodes), or the monotone piecewise cubic of Fritsch
-    and Carlson (``pchip``, with >= 3 nodes); an axis of one node is repeated twice."""
+def _resample(values: np.ndarray, x: np.ndarray, xf: np.ndarray, axis: int, method: str = "spline") -> np.ndarray:
+    """``values`` sampled at ``xf`` along ``axis``: not-a-knot cubic spline through the nodes ``x``
+    (``"spline"``), Akima's local cubic (``"akima"``, with >= 5 nodes) or the monotone piecewise
+    cubic of Fritsch and Carlson (``"pchip"``, with >= 3 nodes); an axis of one node is repeated."""
     from scipy.interpolate import Akima1DInterpolator, CubicSpline, PchipInterpolator
 
     if x.size == 1:
         return np.repeat(values, 2, axis=axis)
     if xf.size == x.size and np.array_equal(xf, x):
         return values
-    if akima and x.size >= 5:
+    if method == "akima" and x.size >= 5:
         return Akima1DInterpolator(x, values, axis=axis)(xf)
-    if pchip and x.size >= 3:
+    if method == "pchip" and x.size >= 3:
         return PchipInterpolator(x, values, axis=axis)(xf)
     return CubicSpline(x, values, axis=axis)(xf)
 
 
-def _force_resample(values: np.ndarray, x: np.ndarray, xf: np.ndarray, axis: int, **how) -> np.ndarray:
-    """fx, fy (the first two outputs) resampled with ``how`` (akima or pchip), mz with the spline."""
-    if x.size == 1:
-        return _resample(values, x, xf, axis)
-    return np.concatenate([_resample(values[..., :2], x, xf, axis, **how), _resample(values[..., 2:], x, xf, axis)],
+def _force_resample(values: np.ndarray, x: np.ndarray, xf: np.ndarray, axis: int, method: str) -> np.ndarray:
+    """fx, fy (the first two outputs) resampled by ``method``, mz by the not-a-knot spline."""
+    return np.concatenate([_resample(values[..., :2], x, xf, axis, method), _resample(values[..., 2:], x, xf, axis)],
                           axis=-1)
 
 
 def _q_resample(values: np.ndarray, q: np.ndarray, qf: np.ndarray) -> np.ndarray:
     """Along q (axis 4): Akima for fx, fy, not-a-knot spline for mz (Eq. T5)."""
-    return _force_resample(values, q, qf, 4, akima=True)
+    return _force_resample(values, q, qf, 4, "akima")
 
 
 def _linear_resample(values: np.ndarray, x: np.ndarray, xf: np.ndarray, axis: int) -> np.ndarray:
@@ -388,7 +391,7 @@ def eval_grid(table: CreepTable) -> EvalGrid:
         merged = np.concatenate([table.values[t0:t1, :, s0:s1, h0:h1], p.values], axis=4)[:, :, :, :, order]
         v[t0:t1, :, s0:s1, h0:h1] = _q_resample(merged, q[order], fine[4])
     v = _resample(v, axes[1], fine[1], 1)
-    v = _force_resample(v, axes[2], fine[2], 2, pchip=True)  # s: monotone, no overshoot at full slip
+    v = _force_resample(v, axes[2], fine[2], 2, "pchip")     # s: monotone, no overshoot at full slip
     v = _resample(v, axes[3], fine[3], 3)
     t = axes[0]
     if t.size == 1:
