@@ -6,7 +6,9 @@
     conformal cache list|clear [--cache DIR]
     conformal sweep SCENE.toml [--shift START:STOP:STEP] [--out DIR]
 
-Bad input ends with exit code 2 and one line on stderr naming the key and the problem.
+Bad input ends with exit code 2 and one line on stderr naming the key and the problem; a solve that
+did not converge writes its JSON with "converged": false and ends with exit code 3 (unless
+--allow-unconverged).
 """
 from __future__ import annotations
 
@@ -56,11 +58,17 @@ def _write_json(summary: dict, path: str | None) -> None:
         Path(path).write_text(text + "\n", encoding="utf-8")
 
 
+#: exit status of a solve that did not converge (its JSON and plots are written; --allow-unconverged: 0)
+EXIT_UNCONVERGED = 3
+
+
 def _solve_and_report(scene, json_path: str | None, plot_path: str | None, vtu_path: str | None = None,
-                      render=None) -> int:
+                      render=None, allow_unconverged: bool = False) -> int:
     """Solve, write the JSON (always, once the solve succeeded), then the optional VTU and plot:
     a failing plot is reported (exit 1) but does not lose the JSON.  ``render``: a
-    conformal.plots.Render3D started before the solve (the demo) for the plot's 3-D view."""
+    conformal.plots.Render3D started before the solve (the demo) for the plot's 3-D view.  A
+    result that did not converge is reported on stderr and ends with EXIT_UNCONVERGED unless
+    ``allow_unconverged``."""
     from conformal.solve import solve_scene
 
     check_output_path(json_path, "--json")
@@ -102,6 +110,12 @@ def _solve_and_report(scene, json_path: str | None, plot_path: str | None, vtu_p
             print(f"conformal: error: --plot: {type(exc).__name__}: {exc} (the JSON summary was written)",
                   file=sys.stderr)
             code = 1
+    if not result.converged and code == 0:
+        how = "accepted (--allow-unconverged)" if allow_unconverged else "exit status 3; --allow-unconverged accepts it"
+        print(f"conformal: {'warning' if allow_unconverged else 'error'}: the solve did not converge ([model] maxit = "
+              f"{scene.model.maxit}, tol = {scene.model.tol:g}; \"converged\": false in the JSON): {how}",
+              file=sys.stderr)
+        code = 0 if allow_unconverged else EXIT_UNCONVERGED
     return code
 
 
@@ -115,7 +129,7 @@ def cmd_solve(args) -> int:
         if args.theory not in THEORIES:
             raise InputError(f"--theory: must be one of {', '.join(THEORIES)}, got {args.theory!r}")
         scene = scene.with_model(theory=args.theory)
-    return _solve_and_report(scene, args.json, args.plot, args.vtu)
+    return _solve_and_report(scene, args.json, args.plot, args.vtu, allow_unconverged=args.allow_unconverged)
 
 
 def demo_scene_path() -> Path:
@@ -175,6 +189,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--vtu", metavar="OUT.vtu", help="write the tractions on the curved surfaces for ParaView "
                    "(theory \"conformal\"; also OUT_rail.vtu, OUT_wheel.vtu) or the contact pressure on "
                    "the meshed rail (theory \"fe_contact\"; also OUT_body2.vtu)")
+    s.add_argument("--allow-unconverged", action="store_true",
+                   help="exit 0 also when the solver did not converge (default: exit status 3)")
     s.set_defaults(func=cmd_solve)
 
     w = sub.add_parser("sweep", help="wheel-rail geometry versus lateral shift: CSV and PNG")

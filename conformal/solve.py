@@ -23,7 +23,7 @@ from typing import Any
 from conformal.problem import ContactProblem, problems_from_scene  # noqa: F401
 from conformal.result import Result
 from conformal._threads import single_threaded_blas
-from conformal.scene import Scene, as_scene, scene_warnings
+from conformal.scene import MIN_CONTACT_ELEMENTS, Scene, as_scene, scene_warnings
 
 # the models by name live in conformal.models (below the wheel-rail cases); kept here for callers
 from conformal.models import MODELS, combine, solve_problem  # noqa: E402,F401
@@ -66,10 +66,35 @@ def solve_scene(scene: Scene) -> Result:
             problems = problems_from_scene(scene)
             results = [solve_problem(p) for p in problems]
             out = results[0] if len(results) == 1 else combine(results, scene.model.theory)
-    warnings = scene_warnings(scene) + out.warnings
+    warnings = scene_warnings(scene) + out.warnings + result_warnings(scene, out)
     if warnings:
         out = replace(out, extra=dict(out.extra, warnings=list(dict.fromkeys(warnings))))
     return replace(out, wall_s=time.perf_counter() - t0)
+
+
+def result_warnings(scene: Scene, result: Result) -> list[str]:
+    """Warnings about a result that the models do not give themselves: a contact area of fewer
+    than MIN_CONTACT_ELEMENTS grid elements (too coarse to resolve the tractions; names the grid
+    key that sets the element size), and a result that did not converge without saying why."""
+    out = []
+    parts = [p for p in (result.patches or (result,)) if p.field is not None]
+    for k, p in enumerate(parts):
+        n = p.field.n_contact
+        if 0 < n < MIN_CONTACT_ELEMENTS:
+            g = scene.grid
+            if scene.geometry.kind == "wheel_rail" and getattr(scene.geometry, "element_size", None):
+                key = "[geometry] element_size"
+            elif g.explicit:
+                key = "[grid] dx, dy"
+            else:
+                key = f"[grid] scale (= {g.scale:g}) or n (= {g.n})"
+            where = f"patch {k + 1}: " if len(parts) > 1 else ""
+            out.append(f"{where}the contact area covers only {n} grid element{'s' if n != 1 else ''}, too few "
+                       f"to resolve the tractions (at least {MIN_CONTACT_ELEMENTS}); refine the grid: {key}")
+    if not result.converged and not any("converge" in w for w in result.warnings):
+        out.append(f"not converged within [model] maxit = {scene.model.maxit} iterations, tol = "
+                   f"{scene.model.tol:g}: the numbers are not a solution")
+    return out
 
 
 def _solve_history(scene: Scene) -> Result:

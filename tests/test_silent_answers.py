@@ -64,3 +64,84 @@ def test_history_with_dissimilar_materials_does_not_freeze_the_contact_area():
     single["load"]["normal_force"] = 0.47
     one = conformal.solve(single)
     assert one.pmax == pytest.approx(r.pmax, rel=0.2)
+
+
+# ----------------------------------------------------------------------------- item 4
+CIRC = "meshes/scenes/circ.toml"
+
+
+def _circ(**over):
+    from conformal.scene import load_scene
+    from tests.conftest import SCENES
+
+    return load_scene(SCENES / "circ.toml").with_(**over) if over else load_scene(SCENES / "circ.toml")
+
+
+def test_a_grid_much_wider_than_the_patch_is_refused_naming_scale():
+    """scale = 1000 put the whole Hertz patch (a = 6.9 mm) inside one element of a 13.8 m grid:
+    pmax 0.12 instead of 1000 N/mm², without a word."""
+    from conformal.errors import InputError
+
+    with pytest.raises(InputError, match=r"^\[grid\] scale: .*0\.05 elements across"):
+        _circ(grid__scale=1000)
+    # a coarse but admissible grid solves and warns that the contact covers too few elements
+    r = conformal.solve(_circ(grid__scale=20, model__theory="exact"))
+    assert 0 < r.n_contact < 10
+    assert any("[grid] scale" in w and "too few" in w for w in r.warnings)
+    assert not any("too few" in w for w in conformal.solve(_circ(model__theory="exact")).warnings)
+
+
+def test_tol_beyond_its_bound_is_refused():
+    from conformal.errors import InputError
+
+    for tol in (10.0, 0.5, 0.011):
+        with pytest.raises(InputError, match=r"^\[model\] tol: .*<= 0\.01"):
+            _circ(model__tol=tol)
+    assert _circ(model__tol=1e-2).model.tol == 1e-2
+
+
+def test_an_unconverged_solve_exits_3_unless_allowed(tmp_path, capsys):
+    """maxit = 1 used to exit 0; now the JSON says "converged": false, stderr says so, exit 3."""
+    import json
+
+    from conformal.cli import main
+    from tests.conftest import SCENES
+
+    scene = tmp_path / "m1.toml"
+    text = (SCENES / "circ.toml").read_text(encoding="utf-8")
+    scene.write_text(text.replace('theory = "fastsim"', 'theory = "exact"\nmaxit = 1'), encoding="utf-8")
+    out = tmp_path / "m1.json"
+    assert main(["solve", str(scene), "--json", str(out)]) == 3
+    err = capsys.readouterr().err
+    assert "did not converge" in err and "--allow-unconverged" in err
+    d = json.loads(out.read_text(encoding="utf-8"))
+    assert d["converged"] is False and any("not converged" in w for w in d["warnings"])
+    assert main(["solve", str(scene), "--allow-unconverged"]) == 0
+    assert main(["solve", str(SCENES / "circ.toml")]) == 0
+
+
+# ----------------------------------------------------------------------------- item 8
+def test_the_api_takes_the_toml_names():
+    """friction.mu and material.nu as in the file: mu sets static = kinetic, nu both bodies where
+    the scene has no [material.body2]; the field names G1 .. nu2 set one body."""
+    r = conformal.solve(CIRC, friction__mu=0.4, model__theory="exact", grid__n=20)
+    s = _circ()
+    assert (r.FX, s.with_(friction__mu=0.4).friction.mu_static) == (pytest.approx(
+        conformal.solve(s.with_(friction__mu_static=0.4, friction__mu_kinetic=0.4, model__theory="exact",
+                                grid__n=20)).FX, rel=1e-12), 0.4)
+    m = s.with_("material.nu", 0.3).material
+    assert (m.nu1, m.nu2, m.K) == (0.3, 0.3, 0.0)
+    m = s.with_("material.E", 210000.0).material
+    assert m.G1 == m.G2 == pytest.approx(210000.0 / 2.56)
+    d = s.with_("material.body2.G", 23000.0)
+    assert (d.material.G1, d.material.G2) == (82000.0, 23000.0)
+    assert d.with_("material.nu", 0.25).material.nu2 == 0.28          # body 2 given: kept
+    assert s.with_("material.nu1", 0.3).material.nu2 == 0.28          # the field name: one body
+    f = s.with_(friction__mu_kinetic=0.2).friction
+    assert (f.mu_static, f.mu_kinetic) == (0.3, 0.2)
+    from conformal.errors import InputError
+
+    with pytest.raises(InputError, match=r"^\[material\] poisson: unknown key"):
+        s.with_("material.poisson", 0.3)
+    with pytest.raises(InputError, match=r"^\[friction\] mu: must be > 0"):
+        s.with_(friction__mu=-1.0)
