@@ -117,10 +117,15 @@ def _load_numbers(path: Path, key: str) -> np.ndarray:
     line); InputError naming ``key`` if the file cannot be read."""
     try:
         if path.suffix == ".npy":
+            with open(path, "rb") as fh:
+                if fh.read(6) != b"\x93NUMPY":    # numpy would try it as a pickle
+                    raise InputError(f"{key}: not a .npy file: {path} (or give the numbers as text)")
             return np.asarray(np.load(path, allow_pickle=False), dtype=float)
         text = path.read_text(encoding="utf-8").replace(",", " ")
         rows = [ln.split("#")[0].split() for ln in text.splitlines()]
         return np.array([[float(v) for v in r] for r in rows if r], dtype=float)
+    except InputError:
+        raise
     except (OSError, ValueError) as exc:
         raise InputError(f"{key}: cannot read {path}: {exc}") from None
 

@@ -27,6 +27,8 @@ from conformal.materials import Material
 from conformal.specs import Friction, HistoryStep, Kinematics, ModelSpec  # noqa: F401  (part of the scene API)
 
 THEORIES = ("hertz", "linear", "empirical", "johnson_vermeulen", "fastsim", "exact", "conformal", "table", "fe_contact")
+#: theories that solve the normal problem only (no tangential tractions)
+NORMAL_ONLY_THEORIES = ("hertz", "fe_contact")
 GEOMETRY_KINDS = ("quadratic", "hertz", "table", "wheel_rail")
 
 #: model-specific ``[model]`` keys (besides theory, bound, influence, tol, maxit, layer_flexibility),
@@ -60,6 +62,9 @@ MAX_TOL = 1e-2
 MIN_ELEMENTS_ACROSS = 2.0
 #: a computed contact area of fewer elements than this gets a resolution warning
 MIN_CONTACT_ELEMENTS = 10
+#: gauge - flange_back (mm) of a wheelset: twice the flange thickness (20-35 mm) plus play; 75 mm standard,
+#: 81.2 mm the seed's wheelset, 87.7 mm a worn one
+FLANGEWAY = (20.0, 140.0)
 #: a wheelset yaw beyond this (rad, about 11 degrees) is outside the contact search's validity
 MAX_YAW = 0.2
 #: rail inclinations (cant, rad) beyond MAX_CANT are refused; beyond CANT_WARN (1:15) they warn
@@ -510,6 +515,14 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
     if abs(cant) > MAX_CANT:
         raise sec.error("rail_cant", f"the rail inclination must lie within +-{MAX_CANT:g} rad "
                                      f"(1:40 = 0.025, 1:20 = 0.05), got {cant:g} rad")
+    gauge = sec.number("gauge", d.gauge, positive=True)
+    flange_back = sec.number("flange_back", d.flange_back, positive=True)
+    play = gauge - flange_back
+    if placement == "wheelset" and not FLANGEWAY[0] <= play <= FLANGEWAY[1]:
+        key = "gauge" if sec.has("gauge") and (gauge != d.gauge or not sec.has("flange_back")) else "flange_back"
+        raise sec.error(key, f"gauge - flange_back = {gauge:g} - {flange_back:g} = {play:g} mm must lie within "
+                        f"{FLANGEWAY[0]:g} to {FLANGEWAY[1]:g} mm (twice a flange's thickness and play; standard "
+                        f"1435 - 1360 = 75 mm): otherwise the wheels do not lie over their rails")
     if roll is not None and abs(roll) > MAX_YAW:
         raise sec.error("roll", f"the wheelset roll must lie within +-{MAX_YAW:g} rad, got {roll:g} rad")
     return WheelRailGeometry(
@@ -519,9 +532,9 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
         lateral_shift=sec.number("lateral_shift", d.lateral_shift),
         yaw=yaw, roll=roll,
         rail_cant=cant,
-        gauge=sec.number("gauge", d.gauge, positive=True),
+        gauge=gauge,
         gauge_height=sec.number("gauge_height", d.gauge_height, nonnegative=True),
-        flange_back=sec.number("flange_back", d.flange_back, positive=True),
+        flange_back=flange_back,
         wheel_radius=sec.number("wheel_radius", d.wheel_radius, positive=True),
         flange_back_pos=sec.number("flange_back_pos"),
         smoothing=sec.number("smoothing", d.smoothing, nonnegative=True),
@@ -638,6 +651,7 @@ def _model(data: Any, base_dir: Path = Path(".")) -> ModelSpec:
     _Section("model", raw, core | set(MODEL_OPTIONS))      # unknown keys (with the closest known one)
     sec = _Section("model", {k: v for k, v in raw.items() if k in core})
     options = {k: v for k, v in raw.items() if k not in core}
+    _check_model_options(sec, options)
     if options.get("table") not in (None, "default"):   # a creep-force table: relative to the scene's folder
         options["table"] = str(_input_file(_Section("model", options), "table", base_dir).resolve())
     tol = sec.number("tol", 1e-6, positive=True)
@@ -651,6 +665,49 @@ def _model(data: Any, base_dir: Path = Path(".")) -> ModelSpec:
                      maxit=sec.integer("maxit", 1000),
                      layer_flexibility=sec.number("layer_flexibility", 0.0, nonnegative=True),
                      options=options)
+
+
+def _whole(minimum: int):
+    def check(v):
+        if isinstance(v, bool) or not isinstance(v, int):
+            return f"must be a whole number >= {minimum}, got {v!r}"
+        return None if v >= minimum else f"must be >= {minimum}, got {v}"
+    return check
+
+
+def _one_of(*choices):
+    def check(v):
+        return None if v in choices else f"must be one of {', '.join(repr(c) for c in choices)}, got {v!r}"
+    return check
+
+
+def _flexibilities(v):
+    ok = (isinstance(v, (list, tuple)) and len(v) == 3 and all(
+        isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and x > 0 for x in v))
+    return None if ok else f"must be three numbers > 0 (L1, L2, L3 in mm³/N), got {v!r}"
+
+
+def _boolean(v):
+    return None if isinstance(v, bool) else f"must be true or false, got {v!r}"
+
+
+#: checks of the [model] options' values (None: fine, else the problem), read when the scene is read
+#: so that a bad value is refused whatever the theory (it was ignored where the theory did not read it)
+_OPTION_CHECKS = {
+    "maxout": _whole(1), "max_mx": _whole(4), "max_ms": _whole(4), "n": _whole(4),
+    "creepage": _one_of("surface", "reference"), "creep_coefficients": _one_of("kalker", "elliptic"),
+    "discretisation": _one_of("midpoint", "contact"), "flexibilities": _flexibilities,
+    "require_c33": _boolean,
+}
+
+
+def _check_model_options(sec: "_Section", options: Mapping[str, Any]) -> None:
+    """Refuse a bad value of a [model] option (InputError naming the key)."""
+    for key, v in options.items():
+        check = _OPTION_CHECKS.get(key)
+        problem = check(v) if check is not None else None
+        if problem:
+            raise sec.error(key, f"{problem} ({MODEL_OPTIONS[key]})")
 
 
 SECTIONS = ("name", "material", "friction", "geometry", "load", "kinematics", "grid", "model")
@@ -744,6 +801,14 @@ def scene_warnings(scene: "Scene") -> list[str]:
     theory beyond the friction bound, come from the models.)"""
     out = []
     geo = scene.geometry
+    kin = scene.kinematics
+    if scene.model.theory in NORMAL_ONLY_THEORIES:
+        given = [k for k in ("xi", "eta", "phi") if getattr(kin, k) != 0.0]
+        given += [k for k in ("fx_rel", "fy_rel", "speed") if getattr(kin, k) is not None]
+        if given:
+            out.append(f"[kinematics] {', '.join(given)}: theory {scene.model.theory!r} solves the normal problem "
+                       "only; the creepages are not used (FX = FY = MZ = 0); a tangential theory (fastsim, "
+                       "exact, conformal, ...) uses them")
     if isinstance(geo, WheelRailGeometry) and abs(geo.rail_cant) > CANT_WARN:
         out.append(f"[geometry] rail_cant = {geo.rail_cant:g} rad is steeper than 1:15 ({CANT_WARN:.4f} rad); "
                    "rails are inclined 1:20 (0.05) or 1:40 (0.025): is this the cant in rad?")

@@ -39,6 +39,7 @@ from conformal.models import solve_problem
 from conformal.problem import ContactProblem
 from conformal.result import Result
 from conformal.scene import Scene, WheelRailGeometry
+from conformal.solvers.conformal import DELTA_SPREAD_WARN
 from conformal.solvers.normal import solve_normal
 from conformal.theories.hertz import hertz_from_curvatures
 
@@ -342,7 +343,30 @@ def patch_info(pair: WheelRailPair, st: PairState, pg: PatchGeometry, index: int
         "hertz_angle": m * pg.hertz_angle,
         "z_ws": st.z,
         "roll": st.roll,
+        "s_rail": float(p.s_ref),
     }
+
+
+def contact_angle_spread(pair: WheelRailPair, s_ref: float, half_width: float, samples: int = 41) -> float:
+    """How much the rail's contact angle varies over a contact of lateral semi-axis ``half_width``
+    (mm) about the rail arc length ``s_ref`` (degrees): the largest minus the smallest angle of the
+    rail normal over [s_ref - half_width, s_ref + half_width] (the tangent-plane width taken as arc
+    length along the profile)."""
+    lo, hi = 0.0, pair.rail.curve.length
+    s = np.clip(np.linspace(s_ref - half_width, s_ref + half_width, samples), lo, hi)
+    n = pair.rail.normal(s)
+    delta = np.arctan2(-n[:, 0], n[:, 1])
+    return float(np.degrees(delta.max() - delta.min()))
+
+
+def planar_theory_warning(theory: str, spread: float) -> str | None:
+    """The warning of a planar (half-space, tangent-plane) theory on a patch whose contact angle
+    varies by more than DELTA_SPREAD_WARN degrees: a conformal contact, for theory "conformal"."""
+    if theory in ("conformal", "fe_contact") or not spread > DELTA_SPREAD_WARN:
+        return None
+    return (f"the contact angle varies by {spread:.1f} degrees over a contact patch: the half-space "
+            f"(planar) theory {theory!r} is questionable here; this is a conformal contact "
+            "([model] theory = \"conformal\")")
 
 
 def _problem(scene: Scene, pair: WheelRailPair, st: PairState, pg: PatchGeometry, index: int, *,
@@ -414,21 +438,28 @@ def track_forces(result: Result, delta: float) -> np.ndarray:
     return np.array([result.FX, -result.FN * s + result.FY * c, result.FN * c + result.FY * s])
 
 
-def _with_patch_extra(r: Result, problem: ContactProblem) -> Result:
+def _with_patch_extra(r: Result, problem: ContactProblem, pair: WheelRailPair | None = None) -> Result:
     F = track_forces(r, problem.info["contact_angle"])
     extra = dict(r.extra)
     extra.update(problem.info)
+    if pair is not None and math.isfinite(r.b) and r.b > 0 and "s_rail" in problem.info:
+        spread = contact_angle_spread(pair, problem.info["s_rail"], r.b)
+        extra["contact_angle_spread_deg"] = spread
+        planar = planar_theory_warning(r.theory, spread)
+        if planar:
+            extra["warnings"] = list(r.extra.get("warnings", ())) + [planar]
     extra.update(FX_track=float(F[0]), FY_track=float(F[1]), FZ_track=float(F[2]),
                  xi_patch=problem.kinematics.xi, eta_patch=problem.kinematics.eta,
                  phi_patch=problem.kinematics.phi)
     return replace(r, extra=extra)
 
 
-def combine_patches(results: list[Result], problems: list[ContactProblem], theory: str, extra: dict) -> Result:
+def combine_patches(results: list[Result], problems: list[ContactProblem], theory: str, extra: dict,
+                    pair: WheelRailPair | None = None) -> Result:
     """One Result for a wheel: FN, FX, FY, MZ the sums of the patch values (contact frames), the
     track-frame forces on the rail FX_track, FY_track, FZ_track in ``extra``; ``patches`` lists every
     patch with its contact_angle and y_rail."""
-    patches = [_with_patch_extra(r, p) for r, p in zip(results, problems)]
+    patches = [_with_patch_extra(r, p, pair) for r, p in zip(results, problems)]
     main = max(patches, key=lambda r: r.FN)
     F = sum(track_forces(r, p.info["contact_angle"]) for r, p in zip(results, problems))
     ext = dict(extra)
@@ -466,7 +497,7 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8) -> Result:
         ext = {"z_ws": st.z, **geo_extra}
         if st.placement_warnings:
             ext["warnings"] = list(st.placement_warnings)
-        out = combine_patches(results, problems, theory, ext)
+        out = combine_patches(results, problems, theory, ext, pl.pair)
         return replace(out, approach=pl.approach(st.z))
     W = scene.load.wheel_load
     ratios = None
@@ -489,7 +520,7 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8) -> Result:
     extra = {"z_ws": z, **geo_extra, "wheel_load": W, "balance_iterations": len(history)}
     if st.warnings or st.placement_warnings:
         extra["warnings"] = list(st.warnings) + list(st.placement_warnings)
-    out = combine_patches(results, problems, theory, extra)
+    out = combine_patches(results, problems, theory, extra, pl.pair)
     return replace(out, approach=pl.approach(z), converged=out.converged and not st.warnings)
 
 

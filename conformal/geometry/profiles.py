@@ -94,21 +94,28 @@ def builtin_dir() -> Path:
 
 # ----------------------------------------------------------------------------- reading
 def _read_csv(path: Path) -> np.ndarray:
-    rows = []
-    for lineno, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
+    """Rows 'y, z' (comma, semicolon or white space; '#' comments; one header line tolerated).  A
+    file that does not start as a profile is refused as "not a profile" without quoting it (a
+    mistyped path may name any file); lines after the first numbers are quoted (60 characters)."""
+    raw = path.read_bytes()
+    if b"\0" in raw[:4096]:
+        raise InputError(f"not a profile: {path} is a binary file (expected rows 'y, z' in mm)")
+    rows, header = [], False
+    for lineno, line in enumerate(raw.decode("utf-8", errors="replace").splitlines(), 1):
         text = line.split("#")[0].strip()
         if not text:
             continue
         parts = [p for p in re.split(r"[,;\s]+", text) if p]
-        if len(parts) < 2:
-            raise InputError(f"profile {path.name}: line {lineno}: need two numbers 'y, z', got {text!r}")
         try:
             y, z = float(parts[0]), float(parts[1])
-        except ValueError:
-            # a header line such as "y_mm,z_mm" before any number is tolerated
-            if not rows:
+        except (ValueError, IndexError):
+            if not rows and not header and len(parts) >= 2:   # a header such as "y_mm,z_mm"
+                header = True
                 continue
-            raise InputError(f"profile {path.name}: line {lineno}: not a number: {text!r}") from None
+            if not rows:
+                raise InputError(f"not a profile: {path} (line {lineno} is not two numbers 'y, z' in mm)") from None
+            raise InputError(f"profile {path.name}: line {lineno}: need two numbers 'y, z', got "
+                             f"{text[:60]!r}") from None
         rows.append((y, z, lineno))
     return _as_array(rows, path)
 

@@ -23,6 +23,12 @@ from conformal.geometry.spline import ProfileCurve, fit_curve
 from conformal.scene import WheelRailGeometry
 
 
+#: the largest distance (mm) of a profile's points from its smoothing spline: 0.1 mm is twice a
+#: typical elastic approach of a wheel on a rail; measured profiles need 0.01-0.05 mm (smoothing 1-20
+#: mm on S1002/UIC60), smoothing = 100 mm moves them by 0.5-1.3 mm and 1000 mm by 11-24 mm
+MAX_SMOOTHING_ERROR = 0.1
+
+
 # ----------------------------------------------------------------------------- set-up
 @lru_cache(maxsize=32)
 def _curve(spec: str, kind: str, base_dir: str, smoothing: float, z_up: bool = False) -> ProfileCurve:
@@ -42,6 +48,17 @@ def profile_curves(geo: WheelRailGeometry, base_dir: str | Path = ".") -> tuple[
                    getattr(geo, "rail_z", "down") == "up")
     except InputError as exc:
         raise InputError(f"[geometry] rail_profile: {exc}") from None
+    for c, what in ((w, "wheel"), (r, "rail")):
+        if c.smoothing_error > MAX_SMOOTHING_ERROR:
+            raise InputError(f"[geometry] smoothing: a wavelength of {geo.smoothing:g} mm moves the {what} profile "
+                             f"{c.name} up to {c.smoothing_error:.3g} mm from its points (at most "
+                             f"{MAX_SMOOTHING_ERROR:g} mm): it is no longer that profile; the default is 1 mm")
+    # the radius at each wheel-profile point, wheel_radius + z (z down), must be positive
+    rho_min = float(geo.wheel_radius) + float(w.points[:, 1].min())
+    if rho_min <= 0.0:
+        raise InputError(f"[geometry] wheel_radius: {geo.wheel_radius:g} mm leaves the wheel profile {w.name} a "
+                         f"radius of {rho_min:.3g} mm at its highest point (z = {w.points[:, 1].min():.3g} mm); "
+                         "the nominal rolling radius must exceed the profile's height")
     return w, r
 
 

@@ -78,8 +78,9 @@ from conformal.solvers.normal import solve_normal
 #: at most this many elements along x and along s of a strip ([model] max_mx, max_ms override):
 #: a strip over patches far apart (tread and flange) gets coarser elements instead
 MAX_ELEMENTS = 200
-#: contact-angle spread over the contact area from which a result warns that the planar
-#: (half-space) simplification is questionable (degrees)
+#: contact-angle spread over the contact area from which a planar (half-space) theory's result
+#: warns that its simplification is questionable (degrees; conformal.cases.wheelrail; this theory
+#: is the one that treats such patches and reports the spread as contact_angle_spread_deg)
 DELTA_SPREAD_WARN = 10.0
 
 
@@ -447,9 +448,6 @@ def _result(problem: CurvedProblem, op, op_info: dict, stages: Stages) -> Result
     if edge:
         warnings.append(edge)
     warnings += convergence_warnings(stages, tr, problem.model.tol, "curved frames, " + op_info.get("influence", ""))
-    if spread > DELTA_SPREAD_WARN:
-        warnings.append(f"the contact angle varies by {spread:.1f} degrees over a contact patch: the "
-                        "half-space (planar) theories are questionable here; this is a conformal contact")
     if warnings:
         extra["warnings"] = warnings
     tang = stages.tang

@@ -196,6 +196,18 @@ def save_table(table: CreepTable, path: str | Path) -> Path:
                            format=np.array(FORMAT), **_patch_arrays(table.patches))
 
 
+def _require_npz(path: Path) -> None:
+    """InputError "not a creep table" unless the file starts as a zip archive (an .npz): numpy would
+    try any other file as a pickle and advise allow_pickle."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(4)
+    except OSError as exc:
+        raise InputError(f"creep table: cannot read {path}: {exc.strerror or exc}") from None
+    if head != b"PK\x03\x04":
+        raise InputError(f"not a creep table: {path} is not an .npz file (build one with `conformal table build`)")
+
+
 def load_table(path: str | Path | None = None) -> CreepTable:
     """Load and verify a table; ``None`` (or ``"default"``) loads the table shipped with the package.
 
@@ -211,6 +223,7 @@ def load_table(path: str | Path | None = None) -> CreepTable:
         raise InputError(f"creep table: file not found: {path}") from None
     if cached is not None and cached[0] == stamp:
         return cached[1]
+    _require_npz(path)
     try:
         with np.load(path, allow_pickle=False) as z:
             data = {k: z[k] for k in z.files}
