@@ -205,7 +205,8 @@ def _require_npz(path: Path) -> None:
     except OSError as exc:
         raise InputError(f"creep table: cannot read {path}: {exc.strerror or exc}") from None
     if head != b"PK\x03\x04":
-        raise InputError(f"not a creep table: {path} is not an .npz file (build one with `conformal table build`)")
+        raise InputError(f"creep table: cannot read {path}: not a creep table (not an .npz file; "
+                         "`conformal table build` writes one)")
 
 
 def load_table(path: str | Path | None = None) -> CreepTable:
