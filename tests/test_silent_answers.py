@@ -145,3 +145,23 @@ def test_the_api_takes_the_toml_names():
         s.with_("material.poisson", 0.3)
     with pytest.raises(InputError, match=r"^\[friction\] mu: must be > 0"):
         s.with_(friction__mu=-1.0)
+
+
+# ----------------------------------------------------------------------------- item 11
+def test_prescribed_force_near_frictionless_dissimilar_rollers():
+    """Bentall & Johnson's rollers (aluminium G 23000, nu 0.31 on steel, R 50/50 mm, 16.2 N/mm, line
+    contact) at mu = 1e-4 with FX = 0: every creepage outside a narrow band gives full slip, the
+    bordered Newton system stalls and the fallback root search on xi went the wrong way (xi = 0,
+    converged false).  Now xi = -5.272e-4 (CONTACT: 5.260e-4 with body 1 steel, the sign following
+    the body order): checked independently by two prescribed-xi solves 0.2 % either side, whose
+    forces have opposite signs."""
+    mu = 1e-4
+    d = {"material": {"G": 23000.0, "nu": 0.31, "body2": {"G": 82000.0, "nu": 0.28}}, "friction": {"mu": mu},
+         "geometry": {"kind": "quadratic", "A": 0.02, "B": 0.0}, "load": {"normal_force": 16.2},
+         "kinematics": {"fx_rel": 0.0}, "grid": {"n": 100}, "model": {"theory": "exact"}}
+    r = conformal.solve(d)
+    assert r.converged and not r.warnings
+    assert abs(r.FX) < 1e-6 * mu * r.FN
+    assert r.xi == pytest.approx(-5.260e-4, rel=0.005)
+    lo, hi = (conformal.solve({**d, "kinematics": {"xi": r.xi * f}}).FX for f in (0.998, 1.002))
+    assert lo > 0 > hi

@@ -706,7 +706,14 @@ def _bracketed_force(op, grid, pn, w, area, steady, mu_s, mu_k, k, target, creep
     h = max(abs(c0), scale, 1e-300)
     c1 = c0 + h
     g1, e1, r1 = evaluate(c1)
-    if abs(g1) > abs(g0) and np.sign(g1) == np.sign(g0):  # wrong way
+    same = np.sign(g1) == np.sign(g0)
+    flat = same and abs(g1 - g0) <= 1e-9 * max(abs(g0), 1e-300)
+    # wrong way: |g| grew; or no slope at all (full slip on both sides: the force is mu_k FN in
+    # magnitude and does not change), where the force, which decreases with the creepage (a positive
+    # creepage gives a negative force), says which way: g < 0 (force too small) to smaller creepage.
+    # (Near frictionless dissimilar rollers every creepage but a narrow band saturates: the search
+    # went the wrong way for ever, issue 22.)
+    if same and (abs(g1) > abs(g0) or (flat and np.sign(h) != np.sign(g0))):
         h, c1 = -h, c0 - h
         g1, e1, r1 = evaluate(c1)
     n = 0
