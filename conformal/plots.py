@@ -428,9 +428,10 @@ def plot3d(result, plotter=None, *, scalar: str = "pn", bodies: bool = True):
     if plotter is None:
         plotter = _offscreen_plotter((1000, 800))
     label = {"pn": "p_n [N/mm²]", "pt": "|p_t| [N/mm²]", "px": "p_x [N/mm²]", "ps": "p_s [N/mm²]"}.get(scalar, scalar)
-    bar = {"title": label, "color": "black", "n_labels": 3, "fmt": "%.4g", "vertical": True,
-           "position_x": 0.86, "position_y": 0.15, "width": 0.06, "height": 0.7,
-           "title_font_size": 18, "label_font_size": 16}
+    # horizontal, below the view: beside it the bar covered the wheel
+    bar = {"title": label, "color": "black", "n_labels": 3, "fmt": "%.4g", "vertical": False,
+           "position_x": 0.25, "position_y": 0.03, "width": 0.5, "height": 0.07,
+           "title_font_size": 22, "label_font_size": 20}
     if _curved_field(result) is None:
         f = result.field if result.field is not None else None
         if f is None and result.patches:
@@ -450,7 +451,8 @@ def plot3d(result, plotter=None, *, scalar: str = "pn", bodies: bool = True):
     L = max(g.mx * g.dx, float(g.s_edges[-1] - g.s_edges[0]), 10.0)
     if bodies:
         plotter.add_mesh(m["rail"], color="#b0b0b0", smooth_shading=True)
-        cut = strip_mesh(wheel_surface_points(g, x_range=(g.xl - 1.5 * L, g.xl)))
+        # up to 0.8 L behind the grid: 1.5 L ran out of the picture (the wheel was cut off)
+        cut = strip_mesh(wheel_surface_points(g, x_range=(g.xl - 0.8 * L, g.xl)))
         plotter.add_mesh(cut, color="#d9b38c", opacity=0.55, smooth_shading=True)
     contact = strip.threshold(0.5, scalars="status")
     plotter.add_mesh(strip, color="#e8e8e8", show_edges=True, edge_color="#909090", line_width=0.5)
@@ -462,10 +464,17 @@ def plot3d(result, plotter=None, *, scalar: str = "pn", bodies: bool = True):
         T = np.asarray(contact.cell_data["traction"])
         tmax = float(np.abs(T).max())
         if tmax > 0:
+            # readable arrows: at most about ARROWS_3D of them (every k-th contact element), each up
+            # to 3 (thinned) elements long; lifted above the strip so that they are not hidden in it
             cen = contact.cell_centers()
-            cen["traction"] = T
-            size = 1.5 * max(g.dx, float(g.ds.mean()))
-            plotter.add_mesh(cen.glyph(orient="traction", scale="traction", factor=size / tmax), color="black")
+            k = max(1, int(np.ceil(np.sqrt(contact.n_cells / ARROWS_3D))))
+            keep = np.arange(contact.n_cells)[::k * k] if k > 1 else np.arange(contact.n_cells)
+            pts = pv.PolyData(np.asarray(cen.points)[keep])
+            pts["traction"] = T[keep]
+            size = 1.1 * k * max(g.dx, float(g.ds.mean()))
+            plotter.add_mesh(pts.glyph(orient="traction", scale="traction", factor=size / tmax,
+                                       geom=pv.Arrow(tip_length=0.4, tip_radius=0.2, shaft_radius=0.07)),
+                             color="black")
     for key, colour in (("slip_boundary", "red"), ("contact_boundary", "white")):
         if m[key] is not None:
             plotter.add_mesh(m[key], color=colour, line_width=4)
@@ -475,10 +484,29 @@ def plot3d(result, plotter=None, *, scalar: str = "pn", bodies: bool = True):
     n = np.r_[0.0, g.normal[k]]
     t = np.r_[0.0, g.normal[k, 1], -g.normal[k, 0]]
     view = -1.0 * n + 0.9 * np.array([1.0, 0.0, 0.0]) + 0.35 * t
+    # orientation and scale (before the camera: adding actors may reset it): the frame's axes
+    # (lower left) and a ruler across the strip's leading edge (x = xl, along s; the view looks
+    # nearly along x, which would foreshorten a ruler along x)
+    plotter.add_axes(xlabel="x (rolling)", ylabel="y", zlabel="z (down)", color="black", line_width=4,
+                     viewport=(0.0, 0.1, 0.22, 0.36))
+    ruler = _ruler_length(L)
+    a = np.asarray(m["points"][0, 0], dtype=float) - 0.02 * L * np.r_[0.0, g.normal[0]]
+    b = a + ruler * _tangents(g)[0][0]
+    plotter.add_mesh(pv.Line(a, b), color="black", line_width=6)
+    plotter.add_point_labels(np.array([0.5 * (a + b)]), [f"{ruler:g} mm"], font_size=22, text_color="black",
+                             shape_opacity=0.6, shape_color="white", always_visible=True, show_points=False)
     plotter.camera.focal_point = c
-    plotter.camera.position = c + 2.2 * L * view / np.linalg.norm(view)
+    # far enough that the wheel above the strip is not cut off by the picture's edge (2.2 L did)
+    plotter.camera.position = c + 3.4 * L * view / np.linalg.norm(view)
     plotter.camera.up = (0.0, 0.0, -1.0)        # z is down in the rail-profile frame
     return plotter
+
+
+def _ruler_length(span: float) -> float:
+    """A round length (1, 2 or 5 times a power of ten) of about a third of ``span`` (mm)."""
+    target = max(span / 3.0, 1e-9)
+    e = 10.0 ** np.floor(np.log10(target))
+    return float(max((f * e for f in (1.0, 2.0, 5.0) if f * e <= target), default=e))
 
 
 def _render_into(pl, result, scalar: str, title: str) -> np.ndarray:
@@ -595,6 +623,8 @@ class Render3D:
 
 
 WINDOW_3D = (1100, 850)   # pixels of the 3-D view in plot_conformal_result
+#: about this many tangential-traction arrows in the 3-D view (more are unreadable)
+ARROWS_3D = 150
 
 
 def plot_conformal_result(result, path: str | Path, title: str | None = None, *,
