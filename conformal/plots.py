@@ -54,16 +54,49 @@ def _aspect(ax, width: float, height: float) -> None:
     from matplotlib.ticker import MaxNLocator
 
     ratio = max(width, height) / max(min(width, height), 1e-12)
+    wide = width >= height
     if ratio <= MAX_MAP_RATIO:
         ax.set_aspect("equal", adjustable="box")
     else:
         stretch = ratio / MAX_MAP_RATIO
-        wide = width >= height
         ax.set_aspect(stretch if wide else 1.0 / stretch, adjustable="box")
         axis = ax.yaxis if wide else ax.xaxis
         axis.set_label_text(f"{axis.get_label_text()} (stretched {stretch:.1f}x)")
-    ax.xaxis.set_major_locator(MaxNLocator(5))
-    ax.yaxis.set_major_locator(MaxNLocator(5))
+    # the short side is drawn 1/min(ratio, MAX_MAP_RATIO) as long: fewer ticks there, so that its
+    # labels do not run into each other on a narrow map
+    short = max(3, int(round(5.0 / min(ratio, MAX_MAP_RATIO))))
+    ax.xaxis.set_major_locator(MaxNLocator(5 if wide else short))
+    ax.yaxis.set_major_locator(MaxNLocator(short if wide else 5))
+
+
+def force_text(value: float, scale: float, digits: int = 4) -> str:
+    """A force (or moment) for a title: ``digits`` significant digits, and 0 where it is round-off,
+    below ROUND_OFF times ``scale`` (the largest force of the result, e.g. FN).
+
+    >>> force_text(3.752e-06, 1e4), force_text(-3426.4, 1.16e4), force_text(-142.71, 1.16e4)
+    ('0', '-3426', '-142.7')
+    """
+    if not abs(value) > ROUND_OFF * abs(scale):
+        return "0"
+    whole = int(np.floor(np.log10(abs(value)))) + 1       # no exponent for whole newtons (-14230)
+    return f"{value:.{max(digits, whole)}g}"
+
+
+#: a force below this fraction of the result's largest force is round-off of the solver (its
+#: tolerance is 1e-6 and below) and is printed as 0
+ROUND_OFF = 1e-7
+
+
+def _force_unit(result) -> str:
+    """N, or N/mm for line contact (forces per mm of line length)."""
+    return "N/mm" if result.extra.get("line_contact") else "N"
+
+
+def _forces_title(result, names=(("FX", "FX"), ("FS", "FY"))) -> str:
+    """'FX -3426 N, FS 0 N' with the round-off shown as 0 and line contact in N/mm."""
+    scale = max(abs(result.FN), abs(result.FX), abs(result.FY))
+    unit = _force_unit(result)
+    return ", ".join(f"{label} {force_text(getattr(result, attr), scale)} {unit}" for label, attr in names)
 
 
 def _colorbar(fig, mappable, ax, label: str) -> None:
@@ -95,7 +128,7 @@ def _draw_map(fig, ax, result, quantity: str = "pn", label: str = "") -> None:
         mask = pt[sel] > 0
         if mask.any():
             ax.quiver(X[sel][mask], Y[sel][mask], f.px[sel][mask], f.py[sel][mask], color="white", pivot="mid")
-        ax.set_title(f"{label}traction, FX {result.FX:.4g} N, FS {result.FY:.4g} N".strip(), fontsize=9)
+        ax.set_title(f"{label}traction, {_forces_title(result)}".strip(), fontsize=9)
     elif quantity == "status":
         from matplotlib.colors import ListedColormap
 
@@ -126,7 +159,7 @@ def _draw_ellipse(fig, ax, result, label: str) -> None:
     m = ax.pcolormesh(x, y, p.T, cmap="viridis", shading="auto", vmin=0.0)
     _colorbar(fig, m, ax, "p_n [N/mm²]")
     ax.set_title(f"{label} ({result.theory}): Hertz pressure, pmax {result.pmax:.4g} N/mm²\n"
-                 f"FX {result.FX:.4g} N, FS {result.FY:.4g} N", fontsize=9)
+                 f"{_forces_title(result)}", fontsize=9)
     ax.set_xlabel("x (rolling) [mm]")
     ax.set_ylabel("y [mm]")
     _aspect(ax, 2.4 * a, 2.4 * b)
@@ -645,8 +678,10 @@ def plot_conformal_result(result, path: str | Path, title: str | None = None, *,
                           bottom=0.06, top=0.955, wspace=0.42, hspace=0.42)
     ax3 = fig.add_subplot(gs[:, 0])
     ax3.axis("off")
-    ax3.set_title(f"{title or result.extra.get('label', '')}\nFN {result.FN:.5g} N, FX {result.FX:.4g} N, "
-                  f"FS {result.FY:.4g} N (contact plane)\nFY_track {result.extra.get('FY_track', float('nan')):.4g} N "
+    fy_track = result.extra.get("FY_track", float("nan"))
+    scale = max(abs(result.FN), abs(result.FX), abs(result.FY))
+    ax3.set_title(f"{title or result.extra.get('label', '')}\nFN {result.FN:.5g} N, {_forces_title(result)} "
+                  f"(contact plane)\nFY_track {force_text(fy_track, scale) if fy_track == fy_track else 'nan'} N "
                   f"(track lateral), pmax {result.pmax:.4g} N/mm²", fontsize=10)
     maps = [fig.add_subplot(gs[0, 1]), fig.add_subplot(gs[1, 1]), fig.add_subplot(gs[2, 1])]
     _draw_field(fig, maps, result, "developed")

@@ -32,7 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _provenance import output_dir, write_sidecar                                         # noqa: E402
 from conformal.dynamics.contact import interpolation_error                    # noqa: E402
 from conformal.dynamics.model import build_model                              # noqa: E402
-from conformal.dynamics.plots import plot_damping, plot_history               # noqa: E402
+from conformal.dynamics.plots import SEED_CRITICAL_SPEED, plot_damping, plot_history  # noqa: E402
 from conformal.dynamics.scene import load_vehicle_scene                       # noqa: E402
 from conformal.dynamics.simulate import simulate                              # noqa: E402
 from conformal.dynamics.stability import (damping_curve, linear_critical_speed, linear_inputs,  # noqa: E402
@@ -145,7 +145,7 @@ def main(argv=None) -> int:
                                                       for a, b, c in tried]}
     res["nonlinear_critical_speed"] = nl
     sp, zeta, freq = damping_curve(lin, np.linspace(1.0, 120.0, 240))
-    plot_damping(sp, zeta, freq, out / "stability.png", critical=vc,
+    plot_damping(sp, zeta, freq, out / "stability.png", critical=vc, reference=SEED_CRITICAL_SPEED,
                  nonlinear=nl.get("fastsim", {}).get("critical_speed"), title="seed wheelset:")
     (out / "seed_wheelset.json").write_text(json.dumps(res, indent=2) + "\n", encoding="utf-8")
     (out / "seed_wheelset.md").write_text(_markdown(res), encoding="utf-8")
