@@ -72,3 +72,27 @@ def test_tick_labels_of_a_narrow_map_do_not_overlap():
             boxes = [t.get_window_extent(renderer) for t in axis.get_ticklabels() if t.get_text()]
             for b0, b1 in zip(boxes, boxes[1:]):
                 assert not b0.overlaps(b1), (ax.get_title(), [t.get_text() for t in axis.get_ticklabels()])
+
+
+@pytest.mark.slow
+def test_3d_view_has_orientation_scale_and_a_readable_number_of_arrows():
+    """The 3-D view of a conformal result (the flange patch, 30 elements per axis: 13 s): the axes
+    triad, a horizontal colour bar, the ruler's label and 0.25-1.5 x ARROWS_3D arrows."""
+    pv = pytest.importorskip("pyvista")
+    from conformal.plots import ARROWS_3D, _offscreen_plotter, plot3d
+    from conformal.scene import load_scene
+
+    sc = load_scene(SCENES / "flange_s1002_uic60.toml")
+    r = conformal.solve(replace(sc, grid=replace(sc.grid, n=30)))
+    pl = _offscreen_plotter((400, 300))
+    plot3d(r, pl)
+    assert pl.renderer.axes_widget is not None                       # the x, y, z triad
+    bars = list(pl.scalar_bars.values())
+    assert bars and bars[0].GetOrientation() == 0                    # horizontal, below the view
+    assert any(name.endswith("-labels") for name in pl.renderer.actors)   # the ruler's "N mm" label
+    n_contact = r.n_contact
+    arrows = [m for m in pl.meshes if getattr(m, "n_points", 0) and m.n_cells and "GlyphScale" in m.point_data]
+    assert n_contact > ARROWS_3D and arrows
+    n_arrows = arrows[0].n_cells / pv.Arrow(tip_length=0.4, tip_radius=0.2, shaft_radius=0.07).n_cells
+    assert 0.25 * ARROWS_3D <= n_arrows <= 1.5 * ARROWS_3D
+    pl.close()

@@ -166,3 +166,17 @@ def test_prescribed_force_near_frictionless_dissimilar_rollers():
     # the force decreases with the creepage: positive below the root, negative above it
     below, above = (conformal.solve({**d, "kinematics": {"xi": r.xi + dxi}}).FX for dxi in (-1e-6, 1e-6))
     assert below > 0 > above
+
+
+# ----------------------------------------------------------------------------- item 10
+def test_planar_theories_warn_on_a_conformal_patch_and_the_conformal_theory_does_not():
+    """The 16-degree flange patch: hertz (a half-space theory) says it is questionable there; the
+    warning used to come from the conformal theory, the one made for such patches (that it no
+    longer warns: tests/test_conformal.py::test_wheel_rail_scene_runs_the_conformal_theory)."""
+    from tests.conftest import SCENES
+
+    r = conformal.solve(SCENES / "flange_s1002_uic60.toml", model__theory="hertz")
+    assert r.patches[0].extra["contact_angle_spread_deg"] > 10.0
+    assert any("theory 'hertz' is questionable" in w for w in r.warnings)
+    flat = conformal.solve(SCENES / "mbench_right_y5.toml", model__theory="hertz")   # a tread contact
+    assert not any("questionable" in w for w in flat.warnings)
