@@ -1,0 +1,101 @@
+"""A whole CONTACT input deck: its modules and cases, solved in order.
+
+A deck is a series of module calls (user guide, "Specification of the input file"): ``3 {REID,
+CPID}`` starts a module-3 case, ``1 {REID}`` a module-1 (wheel-rail) case, ``0`` ends the run.
+Later cases inherit the data of earlier ones (one :class:`~conformal.contact_inp.module3.Module3State`
+per result element and contact problem).  Cases in a sequence (user guide "Multiple cases,
+sequences": P = 0 or 3 with a shift or transient rolling, T = 1, 2) continue from the tractions of
+the previous case: they are solved together as one load history (conformal.solvers.history);
+every other case stands alone.  A case with R = 2 or 3 is read (its data are kept) but not solved,
+as in CONTACT.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from conformal.contact_inp.module3 import Module3Case, Module3State, read_case, unsupported
+from conformal.contact_inp.tokens import Deck
+from conformal.errors import InputError
+
+
+@dataclass(frozen=True, eq=False)
+class ParsedDeck:
+    path: Path
+    cases: tuple            # Module3Case, in the order of the deck
+
+
+def read_deck(path) -> ParsedDeck:
+    """Read every case of a deck (InputError / Unsupported naming the line and digit)."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"inp: no such file: {path}")
+    text = path.read_text(encoding="latin-1")
+    deck = Deck(path.name, text)
+    states: dict = {}
+    cases: list = []
+    number = 0
+    while not deck.at_end:
+        line = deck.line_number
+        head = deck.ints(1, "MODULE", optional=2)
+        module = head[0]
+        if module == 0:
+            break
+        if module == 1:
+            raise unsupported(deck.name, line, "module 1 (wheel-rail contact) cases: this reader solves module 3 only")
+        if module != 3:
+            raise unsupported(deck.name, line, f"module {module}")
+        ids = (head[1] if len(head) > 1 else 1, head[2] if len(head) > 2 else 1)
+        state = states.setdefault(ids, Module3State())
+        number += 1
+        cases.append(read_case(deck, state, number, line, ids))
+    return ParsedDeck(path=path, cases=tuple(cases))
+
+
+def _chains(cases) -> list[list[Module3Case]]:
+    """Cases that are solved (R = 0, 1) grouped into independent cases and sequences."""
+    chains: list[list[Module3Case]] = []
+    prev_T = None
+    for c in cases:
+        T, P = c.digits["T"], c.digits["P"]
+        solved = c.digits["R"] in (0, 1)
+        continues = T in (1, 2) and P in (0, 3) and chains and prev_T is not None
+        if continues and prev_T == 0:
+            raise unsupported(c.deck, c.line, "a shift or transient case continuing from a frictionless case")
+        if continues and chains[-1] and chains[-1][-1].ids == c.ids:
+            if solved:
+                chains[-1].append(c)
+        elif solved:
+            chains.append([c])
+        prev_T = T if solved else prev_T
+    return chains
+
+
+def solve_deck(parsed: ParsedDeck):
+    """Yield one JSON-ready dict per solved case, in the order of the deck."""
+    from dataclasses import replace
+
+    from conformal.contact_inp.solve3 import history_step, problem_of, same_geometry, summary
+    from conformal.models import solve_problem
+    from conformal.solvers.history import solve_history
+
+    base = parsed.path.parent
+    for chain in _chains(parsed.cases):
+        first = chain[0]
+        if len(chain) == 1 and first.digits["P"] == 2 or len(chain) == 1 and first.digits["T"] in (0, 3):
+            yield summary(first, solve_problem(problem_of(first, base)))
+            continue
+        problems = [problem_of(c, base) for c in chain]
+        p0 = problems[0]
+        for c, p in zip(chain[1:], problems[1:]):
+            if not same_geometry(p0, p):
+                raise unsupported(c.deck, c.line, "a sequence (P = 0) whose grid, undeformed distance, material or "
+                                                  "friction changes, or with C = 9, E = 9 or CHI = 180 degrees")
+        if p0.info or p0.kinematics.direction != 1:
+            raise unsupported(first.deck, first.line, "a sequence with C = 9, E = 9 or CHI = 180 degrees")
+        steps = [history_step(c, k == 0) for k, c in enumerate(chain)]
+        if first.digits["T"] == 3:
+            steps[0] = replace(steps[0], rolling="steady")
+        hist = solve_history(p0, steps)
+        for c, r in zip(chain, hist.steps):
+            yield summary(c, r)

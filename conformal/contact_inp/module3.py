@@ -1,0 +1,269 @@
+"""One case of CONTACT's module 3 (basic Hertzian and non-Hertzian contact), read from a deck.
+
+The input of a case follows the user guide, "Specification of the input file <experim>.inp",
+subsection "Module 3": control words PBTNFS, LDCMZE {M2}, XHGIAOWR, then the blocks that the
+digits ask for.  Later cases inherit what earlier cases set (digits 0/1 "maintain"): the reader
+keeps one :class:`Module3State` per deck and returns a frozen copy for every case.
+
+What the reader supports is what the project's solvers can reproduce; any other digit value
+raises :class:`Unsupported` naming the digit (the CLI prints it as one line, exit 2).
+
+>>> from conformal.contact_inp.tokens import Deck
+>>> text = '''  200100  PBTNFS
+...   022020  LDCMZE
+...  0000011  HGIAOWR
+...   100 100 30 1 1e-6
+...   100. 0 0 0   FN, CKSI, CETA, CPHI
+...   0.3 0.3
+...   0.28 0.28 82000 82000
+...   -1
+...   20 20 0.001 0.001 1.1
+... '''
+>>> st = Module3State()
+>>> case = read_case(Deck("x.inp", text), st, 1, 1)
+>>> case.digits["T"], case.fn, case.grid_spec
+(0, 100.0, ('hertz', -1, 20, 20, (0.001, 0.001, 1.1)))
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from conformal.errors import InputError
+from conformal.contact_inp.tokens import Deck
+
+
+class Unsupported(InputError):
+    """A CONTACT digit or feature this reader does not support."""
+
+
+def unsupported(deck_name: str, line: int, what: str) -> Unsupported:
+    return Unsupported(f"{deck_name}, line {line}: not supported: {what}")
+
+
+# meanings of the digit values that are refused, for the error line
+_MEANING = {
+    ("B", 1): "elastic layer", ("B", 2): "elliptical traction bound", ("B", 3): "parabolic traction bound",
+    ("B", 4): "SDEC", ("B", 5): "KPEC", ("B", 6): "modified ANALYN",
+    ("S", 1): "subsurface stresses", ("S", 2): "subsurface stresses", ("S", 3): "subsurface stresses",
+    ("L", 2): "velocity-dependent friction", ("L", 3): "velocity-dependent friction",
+    ("L", 4): "velocity-dependent friction", ("L", 5): "velocity-dependent friction (Polach)",
+    ("L", 6): "temperature-dependent friction",
+    ("C", 3): "bilinear half-space influence coefficients", ("C", 4): "Blanco angle correction",
+    ("C", 5): "layered half-space",
+    ("M", 1): "viscoelastic materials", ("M", 2): "FASTSIM with one flexibility",
+    ("M", 3): "FASTSIM (modified)", ("M", 4): "interfacial layer / plasticity", ("M", 5): "FaStrip",
+    ("M", 6): "FaStrip (original)", ("M", 7): "FaStrip (full sliding)",
+    ("H", 1): "surface temperatures", ("H", 3): "surface temperatures",
+    ("M2", 1): "damping", ("M2", 2): "damping",
+    ("E", 2): "extra rigid-slip term -(x-xo) phi", ("E", 3): "extra rigid-slip term (y-yo) phi",
+    ("V", 1): "friction varying across the rail", ("V", 2): "friction varying along the track",
+    ("V", 3): "friction varying per grid row",
+    ("P", 1): "new time step for the normal part only",
+}
+
+
+@dataclass
+class Module3State:
+    """What a module-3 case leaves for the next ones (None: not yet set)."""
+
+    friction: tuple | None = None          # (fstat, fkin)
+    rolling: tuple | None = None           # (chi, dq, veloc)
+    material: tuple | None = None          # (nu1, nu2, g1, g2)
+    inflcf: int | None = None              # C digit in force: 2 or 9
+    cfname: str | None = None
+    grid_spec: tuple | None = None         # ('hertz', ipotcn, mx, my, params) | ('grid', ipotcn, mx, my, params)
+    geometry: tuple | None = None          # (ibase, params or h array)
+    exrhs: np.ndarray | None = None        # (npot, 2) extra rigid slip
+    case_count: int = 0
+
+
+@dataclass(frozen=True, eq=False)
+class Module3Case:
+    """The resolved input of one module-3 case (everything inherited filled in)."""
+
+    number: int
+    line: int
+    deck: str
+    digits: dict
+    pen: float | None
+    fn: float | None
+    cksi: float | None
+    ceta: float | None
+    fxrel: float | None
+    fyrel: float | None
+    cphi: float
+    spin_centre: tuple
+    friction: tuple
+    rolling: tuple | None
+    material: tuple
+    inflcf: int
+    cfname: str | None
+    grid_spec: tuple
+    geometry: tuple | None
+    exrhs: np.ndarray | None
+    eps: float | None
+    maxout: int | None
+    ids: tuple = field(default=(1, 1))
+
+
+def _refuse(deck: Deck, line: int, digits: dict, allowed: dict) -> None:
+    for letter, ok in allowed.items():
+        v = digits.get(letter, 0)
+        if v not in ok:
+            what = _MEANING.get((letter, v), "this value")
+            raise unsupported(deck.name, line, f"control digit {letter} = {v} ({what})")
+
+
+def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tuple = (1, 1)) -> Module3Case:
+    """Read the case that follows a ``3`` module line; update ``state``; return the resolved case."""
+    d1 = deck.digits("PBTNFS")
+    w2 = deck.lines[deck.pos].tokens[0] if not deck.at_end else ""
+    d2 = deck.digits("VLDCMZE" if len(w2) == 7 else "LDCMZE", optional="")
+    # the optional M2 digit {M} after the word
+    ln2 = deck.lines[deck.pos - 1]
+    if len(ln2.tokens) > 1 and ln2.tokens[1].isdigit() and len(ln2.tokens[1]) == 1:
+        d2["M2"] = int(ln2.tokens[1])
+    d3 = deck.digits("XHGIAOWR")
+    digits = {**d1, **d2, **d3}
+    digits.setdefault("V", 0)
+    digits.setdefault("M2", 0)
+    _refuse(deck, line, digits, {
+        "P": (0, 2, 3), "B": (0,), "T": (0, 1, 2, 3), "N": (0, 1), "F": (0, 1, 2), "S": (0,),
+        "V": (0,), "L": (0, 1), "D": (0, 1, 2), "C": (0, 1, 2, 9), "M": (0,), "Z": (0, 1, 2),
+        "E": (0, 1, 9), "H": (0,), "M2": (0, 1), "G": (0, 1, 2, 3, 4, 5),
+    })
+    if digits["M2"] == 1 and state.case_count == 0:
+        raise unsupported(deck.name, line, "control digit M2 = 1 (damping kept from a previous case)")
+    if digits["X"] == 1:
+        deck.ints(1, "PSFLCIN debug digits", optional=1)
+    eps = maxout = None
+    if digits["G"] != 1:
+        g = deck.reals(5, "MAXGS MAXIN MAXNR MAXOUT EPS")
+        maxout, eps = int(g[3]), g[4]
+        if digits["G"] in (2, 3):
+            deck.reals(4, "OMEGAH OMEGAS INISLP OMGSLP")
+        elif digits["G"] == 4:
+            deck.reals(2, "INISLP OMGSLP")
+        elif digits["G"] == 5:
+            deck.reals(8, "FDECAY BETATH KDOWFB D_IFC D_LIN D_CNS D_SLP POW_S")
+    kin = deck.reals(4, "PEN/FN CKSI/FXREL CETA/FYREL CPHI", optional=2)
+    spin = (kin[4], kin[5]) if len(kin) >= 6 else (0.0, 0.0)
+    if digits["L"] == 0:
+        state.friction = tuple(deck.reals(2, "FSTAT FKIN"))
+    elif state.friction is None:
+        raise InputError(f"{deck.name}, line {line}: L = 1 keeps the friction of a previous case; there is none")
+    if digits["C"] >= 2:
+        if digits["T"] > 1:
+            r = deck.reals(3, "CHI DQ VELOC", angle=True)
+            state.rolling = (r[0], r[1], r[2])
+        if digits["C"] == 9:
+            state.cfname = deck.string("CFNAME")
+        state.material = tuple(deck.reals(4, "POISS 1, 2  GG 1, 2"))
+        state.inflcf = digits["C"]
+    elif state.material is None:
+        raise InputError(f"{deck.name}, line {line}: C = {digits['C']} keeps the material of a previous case; "
+                         "there is none")
+    if digits["T"] > 1 and state.rolling is None:
+        raise InputError(f"{deck.name}, line {line}: rolling (T = {digits['T']}) needs CHI, DQ, VELOC (C >= 2)")
+    if digits["D"] == 2:
+        ip = deck.ints(1, "IPOTCN")[0]
+        if ip in (-1, -2, -3):
+            v = deck.reals(5, "MX MY A1/AA B1/AOB/BB SCALE")
+            state.grid_spec = ("hertz", ip, int(v[0]), int(v[1]), tuple(v[2:]))
+        elif ip in (1, 2, 3, 4):
+            v = deck.reals(6, "MX MY grid parameters")
+            state.grid_spec = ("grid", ip, int(v[0]), int(v[1]), tuple(v[2:]))
+        else:
+            what = {-4: "2D Hertzian rectangle (A1, BB)", -5: "2D Hertzian rectangle (AA, BB)",
+                    -6: "SDEC"}.get(ip, "unknown option")
+            raise unsupported(deck.name, deck.line_number, f"IPOTCN = {ip} ({what})")
+    elif state.grid_spec is None:
+        raise InputError(f"{deck.name}, line {line}: D = {digits['D']} keeps the grid of a previous case; there is none")
+    mx, my = state.grid_spec[2], state.grid_spec[3]
+    if digits["Z"] == 2 and state.grid_spec[0] == "grid":
+        ibase, iplan = deck.ints(2, "IBASE IPLAN")
+        if ibase == 1:
+            state.geometry = (1, tuple(deck.reals(6, "B1 .. B6")))
+        elif ibase == 9:
+            state.geometry = (9, np.array(deck.reals(mx * my, "H(I), I = 1 .. NPOT")))
+        else:
+            what = {2: "body of revolution with a profile", 3: "quadratic plus sines"}.get(ibase, "unknown")
+            raise unsupported(deck.name, deck.line_number, f"IBASE = {ibase} ({what})")
+        if iplan != 1:
+            raise unsupported(deck.name, deck.line_number, f"IPLAN = {iplan} (restricted planform)")
+    if state.grid_spec[0] == "grid" and state.geometry is None:
+        raise InputError(f"{deck.name}, line {line}: a non-Hertzian grid needs an undeformed distance (Z = 2)")
+    if digits["E"] == 9:
+        state.exrhs = np.array(deck.reals(2 * mx * my, "EXRHS(I, 2:3), I = 1 .. NPOT")).reshape(mx * my, 2)
+    elif digits["E"] == 0:
+        state.exrhs = None
+    elif state.exrhs is None:
+        raise InputError(f"{deck.name}, line {line}: E = 1 keeps the extra rigid slip of a previous case; there is none")
+    state.case_count += 1
+    N, F = digits["N"], digits["F"]
+    return Module3Case(
+        number=number, line=line, deck=deck.name, digits=digits,
+        pen=kin[0] if N == 0 else None, fn=kin[0] if N == 1 else None,
+        cksi=kin[1] if F == 0 else None, fxrel=kin[1] if F >= 1 else None,
+        ceta=kin[2] if F <= 1 else None, fyrel=kin[2] if F == 2 else None,
+        cphi=kin[3], spin_centre=spin, friction=state.friction, rolling=state.rolling,
+        material=state.material, inflcf=state.inflcf, cfname=state.cfname, grid_spec=state.grid_spec,
+        geometry=state.geometry, exrhs=state.exrhs, eps=eps, maxout=maxout, ids=ids)
+
+
+def with_digits(case: Module3Case, **kw) -> Module3Case:
+    return replace(case, digits={**case.digits, **kw})
+
+
+def grid_of(case: Module3Case):
+    """(PlanarGrid, h) of a direct grid specification (IPOTCN > 0, user guide "Direct specification
+    of the potential contact area", eq. x_i), h from IBASE (eq. quadr_ud, or the table in CONTACT's
+    element order I = ix + (iy-1) mx)."""
+    from conformal.grid import PlanarGrid
+
+    kind, ip, mx, my, v = case.grid_spec
+    if ip == 1:
+        xl, yl, dx, dy = v
+    elif ip == 2:
+        xl, yl, xh, yh = v
+        dx, dy = (xh - xl) / mx, (yh - yl) / my
+    elif ip == 3:
+        xc1, yc1, dx, dy = v
+        xl, yl = xc1 - dx / 2, yc1 - dy / 2
+    else:
+        xc1, yc1, xcm, ycm = v
+        if mx < 2 or my < 2:
+            raise InputError(f"{case.deck}: IPOTCN = 4 needs MX, MY >= 2")
+        dx, dy = (xcm - xc1) / (mx - 1), (ycm - yc1) / (my - 1)
+        xl, yl = xc1 - dx / 2, yc1 - dy / 2
+    grid = PlanarGrid(mx, my, dx, dy, xl, yl)
+    ibase, g = case.geometry
+    if ibase == 1:
+        b1, b2, b3, b4, b5, b6 = g
+        X, Y = grid.mesh()
+        h = b1 * X**2 + b2 * X * Y + b3 * Y**2 + b4 * X + b5 * Y + b6
+    else:
+        h = np.asarray(g, dtype=float).reshape(my, mx).T.copy()
+    return grid, h
+
+
+def exrhs_grid(case: Module3Case) -> np.ndarray | None:
+    """The extra rigid slip (2, mx, my) in CONTACT's element order, or None."""
+    if case.exrhs is None:
+        return None
+    mx, my = case.grid_spec[2], case.grid_spec[3]
+    e = case.exrhs.reshape(my, mx, 2)
+    return np.stack([e[:, :, 0].T, e[:, :, 1].T])
+
+
+def chi_direction(case: Module3Case) -> int:
+    """+1 for rolling along +x (CHI = 0), -1 along -x (CHI = 180 degrees); others refused."""
+    chi = case.rolling[0] if case.rolling else 0.0
+    if abs(math.remainder(chi, 2 * math.pi)) < 1e-9:
+        return 1
+    if abs(abs(math.remainder(chi, 2 * math.pi)) - math.pi) < 1e-9:
+        return -1
+    raise unsupported(case.deck, case.line, f"rolling direction CHI = {chi:g} rad (only 0 and 180 degrees)")
