@@ -25,8 +25,9 @@ class ParsedDeck:
     cases: tuple            # Module3Case, in the order of the deck
 
 
-def read_deck(path) -> ParsedDeck:
-    """Read every case of a deck (InputError / Unsupported naming the line and digit)."""
+def read_deck(path, *, ignore_subsurface: bool = False) -> ParsedDeck:
+    """Read every case of a deck (InputError / Unsupported naming the line and digit);
+    ``ignore_subsurface``: accept S = 1..3 and skip the subsurface stresses (with a warning)."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"inp: no such file: {path}")
@@ -48,7 +49,7 @@ def read_deck(path) -> ParsedDeck:
         ids = (head[1] if len(head) > 1 else 1, head[2] if len(head) > 2 else 1)
         state = states.setdefault(ids, Module3State())
         number += 1
-        cases.append(read_case(deck, state, number, line, ids))
+        cases.append(read_case(deck, state, number, line, ids, ignore_subsurface=ignore_subsurface))
     return ParsedDeck(path=path, cases=tuple(cases))
 
 
@@ -71,8 +72,9 @@ def _chains(cases) -> list[list[Module3Case]]:
     return chains
 
 
-def solve_deck(parsed: ParsedDeck):
-    """Yield one JSON-ready dict per solved case, in the order of the deck."""
+def solve_deck(parsed: ParsedDeck, cases=None):
+    """Yield one JSON-ready dict per solved case, in the order of the deck; ``cases``: only these
+    case numbers (the cases of a sequence are solved from its start, the others not output)."""
     from dataclasses import replace
 
     from conformal.contact_inp.solve3 import history_step, problem_of, same_geometry, summary
@@ -80,11 +82,16 @@ def solve_deck(parsed: ParsedDeck):
     from conformal.solvers.history import solve_history
 
     base = parsed.path.parent
+    want = None if cases is None else set(int(c) for c in cases)
     for chain in _chains(parsed.cases):
+        if want is not None and not any(c.number in want for c in chain):
+            continue
         first = chain[0]
         if len(chain) == 1 and first.digits["P"] == 2 or len(chain) == 1 and first.digits["T"] in (0, 3):
             yield summary(first, solve_problem(problem_of(first, base)))
             continue
+        if want is not None:
+            chain = chain[:max(k for k, c in enumerate(chain) if c.number in want) + 1]
         problems = [problem_of(c, base) for c in chain]
         p0 = problems[0]
         for c, p in zip(chain[1:], problems[1:]):
@@ -98,4 +105,5 @@ def solve_deck(parsed: ParsedDeck):
             steps[0] = replace(steps[0], rolling="steady")
         hist = solve_history(p0, steps)
         for c, r in zip(chain, hist.steps):
-            yield summary(c, r)
+            if want is None or c.number in want:
+                yield summary(c, r)

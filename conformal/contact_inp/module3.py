@@ -107,6 +107,7 @@ class Module3Case:
     eps: float | None
     maxout: int | None
     ids: tuple = field(default=(1, 1))
+    skipped: tuple = ()                    # what the deck asks for that was not computed (warnings)
 
 
 def _refuse(deck: Deck, line: int, digits: dict, allowed: dict) -> None:
@@ -117,8 +118,11 @@ def _refuse(deck: Deck, line: int, digits: dict, allowed: dict) -> None:
             raise unsupported(deck.name, line, f"control digit {letter} = {v} ({what})")
 
 
-def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tuple = (1, 1)) -> Module3Case:
-    """Read the case that follows a ``3`` module line; update ``state``; return the resolved case."""
+def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tuple = (1, 1), *,
+              ignore_subsurface: bool = False) -> Module3Case:
+    """Read the case that follows a ``3`` module line; update ``state``; return the resolved case.
+    ``ignore_subsurface``: read the subsurface-point blocks (S = 1..3) and skip the stresses (the
+    case's ``skipped`` names them) instead of refusing the case."""
     d1 = deck.digits("PBTNFS")
     w2 = deck.lines[deck.pos].tokens[0] if not deck.at_end else ""
     d2 = deck.digits("VLDCMZE" if len(w2) == 7 else "LDCMZE", optional="")
@@ -131,7 +135,8 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
     digits.setdefault("V", 0)
     digits.setdefault("M2", 0)
     _refuse(deck, line, digits, {
-        "P": (0, 2, 3), "B": (0,), "T": (0, 1, 2, 3), "N": (0, 1), "F": (0, 1, 2), "S": (0,),
+        "P": (0, 2, 3), "B": (0,), "T": (0, 1, 2, 3), "N": (0, 1), "F": (0, 1, 2),
+        "S": (0, 1, 2, 3) if ignore_subsurface else (0,),
         "V": (0,), "L": (0, 1), "D": (0, 1, 2), "C": (0, 1, 2, 9), "M": (0,), "Z": (0, 1, 2),
         "E": (0, 1, 9), "H": (0,), "M2": (0, 1), "G": (0, 1, 2, 3, 4, 5),
     })
@@ -202,6 +207,11 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
         state.exrhs = None
     elif state.exrhs is None:
         raise InputError(f"{deck.name}, line {line}: E = 1 keeps the extra rigid slip of a previous case; there is none")
+    skipped = ()
+    if digits["S"] >= 1:
+        if digits["S"] >= 2:
+            _skip_subsurface(deck, digits["S"])
+        skipped = (f"subsurface stresses (S = {digits['S']}) not computed",)
     state.case_count += 1
     N, F = digits["N"], digits["F"]
     return Module3Case(
@@ -211,7 +221,37 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
         ceta=kin[2] if F <= 1 else None, fyrel=kin[2] if F == 2 else None,
         cphi=kin[3], spin_centre=spin, friction=state.friction, rolling=state.rolling,
         material=state.material, inflcf=state.inflcf, cfname=state.cfname, grid_spec=state.grid_spec,
-        geometry=state.geometry, exrhs=state.exrhs, eps=eps, maxout=maxout, ids=ids)
+        geometry=state.geometry, exrhs=state.exrhs, eps=eps, maxout=maxout, ids=ids, skipped=skipped)
+
+
+def _skip_subsurface(deck: Deck, S: int) -> None:
+    """Read past the subsurface input (user guide, "Subsurface-stress input in the file")."""
+    deck.ints(2, "subsurface MATFIL OUTPUT")
+    if S != 3:
+        return
+    for _ in range(10000):
+        isubs = deck.ints(1, "ISUBS")[0]
+        if isubs == 0:
+            return
+        if isubs in (2, 6):
+            deck.ints(6, "IXL IXINC IXH IYL IYINC IYH")
+        elif isubs in (3, 7):
+            nx, ny = deck.ints(2, "NX NY")
+            deck.ints(nx, "IX(i)")
+            deck.ints(ny, "IY(j)")
+        if isubs in (1, 2, 3):
+            deck.reals(3, "NZ ZL DZ")
+        elif isubs in (5, 6, 7):
+            nz = deck.ints(1, "NZ")[0]
+            deck.reals(nz, "Z(iz)")
+        elif isubs == 9:
+            nx, ny, nz = deck.ints(3, "NX NY NZ")
+            deck.reals(nx, "X(i)")
+            deck.reals(ny, "Y(j)")
+            deck.reals(nz, "Z(k)")
+        elif isubs not in (1, 2, 3, 5, 6, 7):
+            raise deck.error("ISUBS", f"unknown block type {isubs}")
+    raise deck.error("ISUBS", "more than 10000 blocks")
 
 
 def with_digits(case: Module3Case, **kw) -> Module3Case:

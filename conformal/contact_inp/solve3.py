@@ -122,7 +122,7 @@ def summary(case: Module3Case, r) -> dict:
         out["xi"] = r.xi
     if T and F == 2:
         out["eta"] = r.eta
-    warnings = list(r.extra.get("warnings", []))
+    warnings = list(case.skipped) + list(r.extra.get("warnings", []))
     if not r.converged:
         warnings.append("not converged")
     out["warnings"] = warnings

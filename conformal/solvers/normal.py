@@ -410,6 +410,13 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None):
         r = A(t)
         rt = float(_dot(r * a, t)) - float(_dot(r, wa)) / ww * weighted.load(t)
         if not rt > 0.0:   # t = 0: the gap is already uniform on the contact set
+            overlap = (~act) & (g < 0.0)
+            if overlap.any():   # ... but elements outside it interpenetrate (e.g. a one-element start)
+                p = p.copy()
+                p[overlap] = -g[overlap] / (a_self if np.isscalar(a_self) else a_self[overlap])
+                p *= load / weighted.load(p)
+                u, restart = A(p), True
+                continue
             eps = 0.0 if G == 0.0 else eps
             break
         tau = float(_dot(ga * a, t)) / rt
