@@ -11,7 +11,7 @@ as in CONTACT.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from conformal.contact_inp.module3 import Module3Case, Module3State, read_case, unsupported
@@ -60,10 +60,11 @@ def _chains(cases) -> list[list[Module3Case]]:
     for c in cases:
         T, P = c.digits["T"], c.digits["P"]
         solved = c.digits["R"] in (0, 1)
-        continues = T in (1, 2) and P in (0, 3) and chains and prev_T is not None
+        continues = T in (1, 2) and P in (0, 3) and bool(chains) and prev_T is not None
         if continues and prev_T == 0:
-            raise unsupported(c.deck, c.line, "a shift or transient case continuing from a frictionless case")
-        if continues and chains[-1] and chains[-1][-1].ids == c.ids:
+            c = replace(c, unsupported=c.unsupported + ("a shift or transient case continuing from a frictionless "
+                                                        "case",))
+        if continues and chains[-1][-1].ids == c.ids:
             if solved:
                 chains[-1].append(c)
         elif solved:
@@ -72,38 +73,85 @@ def _chains(cases) -> list[list[Module3Case]]:
     return chains
 
 
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """What will be solved: chains of cases with their problems; ``unsupported`` the (case, reason)
+    of every case that cannot be solved (a case continuing an unsupported one included)."""
+
+    chains: tuple
+    unsupported: tuple
+
+
+def plan(parsed: ParsedDeck) -> Plan:
+    """Map every case onto the project's problems; collect the reasons for the others."""
+    from conformal.contact_inp.solve3 import problem_of, same_geometry
+    from conformal.contact_inp.module3 import Unsupported
+
+    base = parsed.path.parent
+    chains, bad = [], []
+    for chain in _chains(parsed.cases):
+        items = []
+        broken = None                     # the first unsupported case of this chain
+        for k, c in enumerate(chain):
+            if broken is not None:
+                bad.append((c, f"continues unsupported case {broken}"))
+                continue
+            reason = c.unsupported[0] if c.unsupported else None
+            prob = None
+            if reason is None:
+                try:
+                    prob = problem_of(c, base)
+                except Unsupported as exc:
+                    reason = str(exc).split("not supported: ", 1)[-1]
+            if reason is None and k > 0:
+                p0 = items[0][1]
+                if p0.info or prob.info or p0.kinematics.direction != 1 or not same_geometry(p0, prob):
+                    reason = ("a sequence (P = 0) whose grid, undeformed distance, material or friction changes, "
+                              "or with C = 9, E = 9 or CHI = 180 degrees")
+            if reason is not None:
+                bad.append((c, reason))
+                broken = c.number
+                continue
+            items.append((c, prob))
+        if items:
+            chains.append(tuple(items))
+    return Plan(chains=tuple(chains), unsupported=tuple(bad))
+
+
 def solve_deck(parsed: ParsedDeck, cases=None):
     """Yield one JSON-ready dict per solved case, in the order of the deck; ``cases``: only these
-    case numbers (the cases of a sequence are solved from its start, the others not output)."""
-    from dataclasses import replace
-
-    from conformal.contact_inp.solve3 import history_step, problem_of, same_geometry, summary
+    case numbers (a case of a sequence is solved with the cases before it).  Unsupported cases
+    among those asked for raise :class:`~conformal.contact_inp.module3.Unsupported` before anything
+    is solved."""
+    from conformal.contact_inp.module3 import Unsupported
+    from conformal.contact_inp.solve3 import history_step, summary
     from conformal.models import solve_problem
     from conformal.solvers.history import solve_history
 
-    base = parsed.path.parent
+    pl = plan(parsed)
     want = None if cases is None else set(int(c) for c in cases)
-    for chain in _chains(parsed.cases):
-        if want is not None and not any(c.number in want for c in chain):
-            continue
-        first = chain[0]
-        if len(chain) == 1 and first.digits["P"] == 2 or len(chain) == 1 and first.digits["T"] in (0, 3):
-            yield summary(first, solve_problem(problem_of(first, base)))
-            continue
+    if want is not None:
+        known = {c.number for c in parsed.cases}
+        missing = sorted(want - known)
+        if missing:
+            raise InputError(f"--cases: the deck has cases 1 .. {len(known)}, not {missing}")
+    for c, reason in pl.unsupported:
+        if want is None or c.number in want:
+            raise Unsupported(f"{c.deck}, line {c.line} (case {c.number}): not supported: {reason}")
+    for chain in pl.chains:
         if want is not None:
-            chain = chain[:max(k for k, c in enumerate(chain) if c.number in want) + 1]
-        problems = [problem_of(c, base) for c in chain]
-        p0 = problems[0]
-        for c, p in zip(chain[1:], problems[1:]):
-            if not same_geometry(p0, p):
-                raise unsupported(c.deck, c.line, "a sequence (P = 0) whose grid, undeformed distance, material or "
-                                                  "friction changes, or with C = 9, E = 9 or CHI = 180 degrees")
-        if p0.info or p0.kinematics.direction != 1:
-            raise unsupported(first.deck, first.line, "a sequence with C = 9, E = 9 or CHI = 180 degrees")
-        steps = [history_step(c, k == 0) for k, c in enumerate(chain)]
+            keep = [k for k, (c, _) in enumerate(chain) if c.number in want]
+            if not keep:
+                continue
+            chain = chain[:keep[-1] + 1]
+        first, p0 = chain[0]
+        if len(chain) == 1 and (first.digits["P"] == 2 or first.digits["T"] in (0, 3)):
+            yield summary(first, solve_problem(p0))
+            continue
+        steps = [history_step(c, k == 0) for k, (c, _) in enumerate(chain)]
         if first.digits["T"] == 3:
             steps[0] = replace(steps[0], rolling="steady")
         hist = solve_history(p0, steps)
-        for c, r in zip(chain, hist.steps):
+        for (c, _), r in zip(chain, hist.steps):
             if want is None or c.number in want:
                 yield summary(c, r)

@@ -78,6 +78,7 @@ class Module3State:
     geometry: tuple | None = None          # (ibase, params or h array)
     exrhs: np.ndarray | None = None        # (npot, 2) extra rigid slip
     case_count: int = 0
+    reasons: dict = field(default_factory=dict)   # unsupported data kept for later cases, by kind
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,110 +109,167 @@ class Module3Case:
     maxout: int | None
     ids: tuple = field(default=(1, 1))
     skipped: tuple = ()                    # what the deck asks for that was not computed (warnings)
+    unsupported: tuple = ()                # why the project cannot solve this case (empty: it can)
 
 
-def _refuse(deck: Deck, line: int, digits: dict, allowed: dict) -> None:
+def _soft(digits: dict, allowed: dict) -> list[str]:
+    """Reasons for the digit values outside ``allowed`` (input still readable)."""
+    out = []
     for letter, ok in allowed.items():
         v = digits.get(letter, 0)
         if v not in ok:
-            what = _MEANING.get((letter, v), "this value")
-            raise unsupported(deck.name, line, f"control digit {letter} = {v} ({what})")
+            out.append(f"control digit {letter} = {v} ({_MEANING.get((letter, v), 'this value')})")
+    return out
 
 
 def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tuple = (1, 1), *,
               ignore_subsurface: bool = False) -> Module3Case:
     """Read the case that follows a ``3`` module line; update ``state``; return the resolved case.
-    ``ignore_subsurface``: read the subsurface-point blocks (S = 1..3) and skip the stresses (the
-    case's ``skipped`` names them) instead of refusing the case."""
+
+    A digit value whose input this reader knows but whose physics the project does not have is
+    recorded in the case's ``unsupported`` (and inherited by later cases that keep those data); an
+    input it cannot read raises :class:`Unsupported`.  ``ignore_subsurface``: accept S = 1..3 and
+    skip the subsurface stresses (the case's ``skipped`` says so)."""
     d1 = deck.digits("PBTNFS")
     w2 = deck.lines[deck.pos].tokens[0] if not deck.at_end else ""
-    d2 = deck.digits("VLDCMZE" if len(w2) == 7 else "LDCMZE", optional="")
-    # the optional M2 digit {M} after the word
+    d2 = deck.digits("VLDCMZE" if len(w2) == 7 else "LDCMZE")
     ln2 = deck.lines[deck.pos - 1]
     if len(ln2.tokens) > 1 and ln2.tokens[1].isdigit() and len(ln2.tokens[1]) == 1:
-        d2["M2"] = int(ln2.tokens[1])
+        d2["M2"] = int(ln2.tokens[1])       # the optional {M} digit after the word
     d3 = deck.digits("XHGIAOWR")
     digits = {**d1, **d2, **d3}
     digits.setdefault("V", 0)
     digits.setdefault("M2", 0)
-    _refuse(deck, line, digits, {
-        "P": (0, 2, 3), "B": (0,), "T": (0, 1, 2, 3), "N": (0, 1), "F": (0, 1, 2),
-        "S": (0, 1, 2, 3) if ignore_subsurface else (0,),
-        "V": (0,), "L": (0, 1), "D": (0, 1, 2), "C": (0, 1, 2, 9), "M": (0,), "Z": (0, 1, 2),
-        "E": (0, 1, 9), "H": (0,), "M2": (0, 1), "G": (0, 1, 2, 3, 4, 5),
-    })
-    if digits["M2"] == 1 and state.case_count == 0:
-        raise unsupported(deck.name, line, "control digit M2 = 1 (damping kept from a previous case)")
+    hard = {"V": (0,), "L": (0, 1, 2, 3, 4, 6), "C": (0, 1, 2, 3, 4, 9), "M": (0, 1, 2, 3, 4, 5),
+            "H": (0, 1, 3), "M2": (0, 1, 2), "E": (0, 1, 2, 3, 9), "G": (0, 1, 2, 3, 4, 5), "S": (0, 1, 2, 3),
+            "T": (0, 1, 2, 3), "N": (0, 1), "F": (0, 1, 2), "D": (0, 1, 2), "Z": (0, 1, 2)}
+    for reason in _soft(digits, hard):
+        raise unsupported(deck.name, line, reason)
+    own = _soft(digits, {"P": (0, 2, 3), "B": (0,), "H": (0,), "M2": (0,), "E": (0, 1, 9)})
+    if digits["S"] and not ignore_subsurface:
+        own.append(f"control digit S = {digits['S']} (subsurface stresses; --ignore-subsurface skips them)")
+    inh = state.reasons
+    T, C, M, L = digits["T"], digits["C"], digits["M"], digits["L"]
     if digits["X"] == 1:
         deck.ints(1, "PSFLCIN debug digits", optional=1)
     eps = maxout = None
-    if digits["G"] != 1:
+    if digits["G"] in (0, 2, 3, 4):
         g = deck.reals(5, "MAXGS MAXIN MAXNR MAXOUT EPS")
         maxout, eps = int(g[3]), g[4]
-        if digits["G"] in (2, 3):
-            deck.reals(4, "OMEGAH OMEGAS INISLP OMGSLP")
-        elif digits["G"] == 4:
-            deck.reals(2, "INISLP OMGSLP")
-        elif digits["G"] == 5:
-            deck.reals(8, "FDECAY BETATH KDOWFB D_IFC D_LIN D_CNS D_SLP POW_S")
+    if digits["G"] in (2, 3):
+        deck.reals(4, "OMEGAH OMEGAS INISLP OMGSLP")
+    elif digits["G"] == 4:
+        deck.reals(2, "INISLP OMGSLP")
+    elif digits["G"] == 5:
+        deck.reals(8, "FDECAY BETATH KDOWFB D_IFC D_LIN D_CNS D_SLP POW_S")
     kin = deck.reals(4, "PEN/FN CKSI/FXREL CETA/FYREL CPHI", optional=2)
     spin = (kin[4], kin[5]) if len(kin) >= 6 else (0.0, 0.0)
-    if digits["L"] == 0:
+    if L == 0:
         state.friction = tuple(deck.reals(2, "FSTAT FKIN"))
-    elif state.friction is None:
+        inh.pop("friction", None)
+    elif L in (2, 3, 4, 6):
+        deck.reals(4 if L == 6 else 5, "friction law parameters")
+        deck.reals(2, "MEMDST MEM_S0")
+        inh["friction"] = f"control digit L = {L} ({_MEANING[('L', L)]})"
+    elif state.friction is None and "friction" not in inh:
         raise InputError(f"{deck.name}, line {line}: L = 1 keeps the friction of a previous case; there is none")
-    if digits["C"] >= 2:
-        if digits["T"] > 1:
+    if C >= 2:
+        if T <= 1 and M == 5:
+            deck.reals(1, "DT")
+        if T > 1:
             r = deck.reals(3, "CHI DQ VELOC", angle=True)
             state.rolling = (r[0], r[1], r[2])
-        if digits["C"] == 9:
+        if C == 4:
+            ifm = deck.ints(3, "IF_METH VARIANT NN")
+            deck.reals(2 * ifm[2], "Y(I), ALPHA(I)")
+        if C == 9:
             state.cfname = deck.string("CFNAME")
         state.material = tuple(deck.reals(4, "POISS 1, 2  GG 1, 2"))
-        state.inflcf = digits["C"]
+        if digits["B"] == 1:
+            deck.reals(1, "FLXZ")
+        nmat = {1: 4, 2: 4, 3: 3, 4: 4, 5: 3}.get(M, 0)
+        if nmat:
+            deck.reals(nmat, "material model parameters")
+        state.inflcf = C
+        for key, reason in (("inflcf", f"control digit C = {C} ({_MEANING.get(('C', C), '')})" if C in (3, 4) else None),
+                            ("material", f"control digit M = {M} ({_MEANING.get(('M', M), '')})" if M else None)):
+            if reason:
+                inh[key] = reason
+            else:
+                inh.pop(key, None)
     elif state.material is None:
-        raise InputError(f"{deck.name}, line {line}: C = {digits['C']} keeps the material of a previous case; "
-                         "there is none")
-    if digits["T"] > 1 and state.rolling is None:
-        raise InputError(f"{deck.name}, line {line}: rolling (T = {digits['T']}) needs CHI, DQ, VELOC (C >= 2)")
+        raise InputError(f"{deck.name}, line {line}: C = {C} keeps the material of a previous case; there is none")
+    if digits["M2"] == 2:
+        deck.reals(4, "CDAMPN CDAMPT DFNMAX DFTMAX")
+    if digits["H"] == 3:
+        deck.reals(8, "BKTEMP HEATCP LAMBDA DENS (bodies 1, 2)")
+        if M == 4:
+            deck.reals(1, "BETAPL")
+    if T > 1 and state.rolling is None:
+        raise InputError(f"{deck.name}, line {line}: rolling (T = {T}) needs CHI, DQ, VELOC (C >= 2)")
     if digits["D"] == 2:
         ip = deck.ints(1, "IPOTCN")[0]
-        if ip in (-1, -2, -3):
+        if ip in (-1, -2, -3, -4, -5):
             v = deck.reals(5, "MX MY A1/AA B1/AOB/BB SCALE")
+            state.grid_spec = ("hertz", ip, int(v[0]), int(v[1]), tuple(v[2:]))
+        elif ip == -6:
+            v = deck.reals(6, "MX MY AA BNEG BPOS SCALE")
             state.grid_spec = ("hertz", ip, int(v[0]), int(v[1]), tuple(v[2:]))
         elif ip in (1, 2, 3, 4):
             v = deck.reals(6, "MX MY grid parameters")
             state.grid_spec = ("grid", ip, int(v[0]), int(v[1]), tuple(v[2:]))
         else:
-            what = {-4: "2D Hertzian rectangle (A1, BB)", -5: "2D Hertzian rectangle (AA, BB)",
-                    -6: "SDEC"}.get(ip, "unknown option")
-            raise unsupported(deck.name, deck.line_number, f"IPOTCN = {ip} ({what})")
+            raise unsupported(deck.name, deck.line_number, f"IPOTCN = {ip} (unknown option)")
+        if ip in (-4, -5, -6):
+            inh["grid"] = f"IPOTCN = {ip} ({ {-4: '2D Hertzian rectangle', -5: '2D Hertzian rectangle', -6: 'SDEC'}[ip] })"
+        else:
+            inh.pop("grid", None)
     elif state.grid_spec is None:
         raise InputError(f"{deck.name}, line {line}: D = {digits['D']} keeps the grid of a previous case; there is none")
     mx, my = state.grid_spec[2], state.grid_spec[3]
-    if digits["Z"] == 2 and state.grid_spec[0] == "grid":
+    if digits["Z"] == 2 and state.grid_spec[1] > 0:
         ibase, iplan = deck.ints(2, "IBASE IPLAN")
+        inh.pop("geometry", None)
         if ibase == 1:
             state.geometry = (1, tuple(deck.reals(6, "B1 .. B6")))
         elif ibase == 9:
             state.geometry = (9, np.array(deck.reals(mx * my, "H(I), I = 1 .. NPOT")))
+        elif ibase == 2:
+            nn = int(deck.reals(5, "NN XM RM Y1 DY1")[0])
+            deck.reals(nn, "B(k), k = 1 .. NN")
+            inh["geometry"] = "IBASE = 2 (body of revolution with a profile)"
+        elif ibase == 3:
+            deck.reals(8, "B1 .. B8")
+            inh["geometry"] = "IBASE = 3 (quadratic plus sines)"
         else:
-            what = {2: "body of revolution with a profile", 3: "quadratic plus sines"}.get(ibase, "unknown")
-            raise unsupported(deck.name, deck.line_number, f"IBASE = {ibase} ({what})")
+            raise unsupported(deck.name, deck.line_number, f"IBASE = {ibase} (unknown option)")
+        if iplan == 2:
+            deck.reals(6, "PL1 .. PL6")
+        elif iplan == 3:
+            deck.reals(8, "XL1 XH1 YL1 YH1 XL2 XH2 YL2 YH2")
+        elif iplan == 4:
+            npatch = deck.ints(1, "NPATCH")[0]
+            deck.reals(4 * npatch, "XL XH YL YH per patch")
+            if npatch > 1:
+                deck.reals(npatch * (npatch - 1) // 2, "FAC(I, J)")
+        elif iplan != 1:
+            raise unsupported(deck.name, deck.line_number, f"IPLAN = {iplan} (unknown option)")
         if iplan != 1:
-            raise unsupported(deck.name, deck.line_number, f"IPLAN = {iplan} (restricted planform)")
-    if state.grid_spec[0] == "grid" and state.geometry is None:
+            inh["geometry"] = f"IPLAN = {iplan} (restricted planform)"
+    if state.grid_spec[0] == "grid" and state.geometry is None and "geometry" not in inh:
         raise InputError(f"{deck.name}, line {line}: a non-Hertzian grid needs an undeformed distance (Z = 2)")
     if digits["E"] == 9:
         state.exrhs = np.array(deck.reals(2 * mx * my, "EXRHS(I, 2:3), I = 1 .. NPOT")).reshape(mx * my, 2)
     elif digits["E"] == 0:
         state.exrhs = None
-    elif state.exrhs is None:
+    elif digits["E"] == 1 and state.exrhs is None:
         raise InputError(f"{deck.name}, line {line}: E = 1 keeps the extra rigid slip of a previous case; there is none")
     skipped = ()
     if digits["S"] >= 1:
         if digits["S"] >= 2:
             _skip_subsurface(deck, digits["S"])
-        skipped = (f"subsurface stresses (S = {digits['S']}) not computed",)
+        if ignore_subsurface:
+            skipped = (f"subsurface stresses (S = {digits['S']}) not computed",)
     state.case_count += 1
     N, F = digits["N"], digits["F"]
     return Module3Case(
@@ -221,7 +279,8 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
         ceta=kin[2] if F <= 1 else None, fyrel=kin[2] if F == 2 else None,
         cphi=kin[3], spin_centre=spin, friction=state.friction, rolling=state.rolling,
         material=state.material, inflcf=state.inflcf, cfname=state.cfname, grid_spec=state.grid_spec,
-        geometry=state.geometry, exrhs=state.exrhs, eps=eps, maxout=maxout, ids=ids, skipped=skipped)
+        geometry=state.geometry, exrhs=state.exrhs, eps=eps, maxout=maxout, ids=ids, skipped=skipped,
+        unsupported=tuple(own) + tuple(inh.values()))
 
 
 def _skip_subsurface(deck: Deck, S: int) -> None:

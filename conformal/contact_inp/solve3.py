@@ -83,7 +83,7 @@ def problem_of(case: Module3Case, base_dir: Path) -> ContactProblem:
         path = Path(case.cfname)
         path = path if path.is_absolute() else base_dir / path
         if not path.is_file():
-            raise InputError(f"{case.deck}, case {case.number}: influence file (C = 9) not found: {path}")
+            raise unsupported(case.deck, case.line, f"the influence file (C = 9) {path.name} is missing")
         info["influence_file"] = path
     if T >= 2:
         dq = case.rolling[1]
@@ -118,10 +118,11 @@ def summary(case: Module3Case, r) -> dict:
            "pmax": r.pmax, "approach": r.approach,
            "n_contact": f.n_contact, "n_adhesion": f.n_adhesion, "n_slip": f.n_slip}
     T, F = case.digits["T"], case.digits["F"]
+    scale = case.rolling[1] if T == 2 else 1.0    # a transient step's shift / dq: the creepage
     if T and F >= 1:
-        out["xi"] = r.xi
+        out["xi"] = r.xi / scale
     if T and F == 2:
-        out["eta"] = r.eta
+        out["eta"] = r.eta / scale
     warnings = list(case.skipped) + list(r.extra.get("warnings", []))
     if not r.converged:
         warnings.append("not converged")

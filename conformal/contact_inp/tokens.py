@@ -13,8 +13,8 @@ for the six digits LDCMZE gives L = 0).
 ([3], {'P': 2, 'B': 0, 'T': 3, 'N': 0, 'F': 0, 'S': 0})
 >>> d.reals(4, "numbers"), d.reals(1, "angle", angle=True)
 ([0.1, 0.002, 4.0, 5.0], [1.5707963267948966])
->>> d.string("file")
-'a b.prr'
+>>> d.string("file"), parse_real(".1-07"), parse_real("1.5D+2")
+('a b.prr', 1e-08, 150.0)
 """
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 from conformal.errors import InputError
 
-_NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eEdD][+-]?\d+)?([dDrR])?$")
+_NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eEdD][+-]?\d+|[+-]\d+)?([dDrR])?$")
 
 
 @dataclass(frozen=True)
@@ -66,6 +66,8 @@ def parse_real(tok: str, *, angle: bool = False) -> float | None:
         return None
     if post and not angle and post in "rR":
         return None
+    if expo and expo[0] in "+-":      # Fortran's exponent without a letter: .1-07
+        expo = "e" + expo
     v = float(mant + (("e" + expo[1:]) if expo else ""))
     if tok.startswith("-"):
         v = -v
