@@ -106,8 +106,8 @@ def plan(parsed: ParsedDeck) -> Plan:
             if reason is None and k > 0:
                 p0 = items[0][1]
                 if p0.info or prob.info or p0.kinematics.direction != 1 or not same_geometry(p0, prob):
-                    reason = ("a sequence (P = 0) whose grid, undeformed distance, material or friction changes, "
-                              "or with C = 9, E = 9 or CHI = 180 degrees")
+                    reason = ("a sequence (P = 0) whose grid, material or friction changes, or with C = 9, E = 9 "
+                              "or CHI = 180 degrees")
             if reason is not None:
                 bad.append((c, reason))
                 broken = c.number
@@ -151,7 +151,8 @@ def solve_deck(parsed: ParsedDeck, cases=None):
         steps = [history_step(c, k == 0) for k, (c, _) in enumerate(chain)]
         if first.digits["T"] == 3:
             steps[0] = replace(steps[0], rolling="steady")
-        hist = solve_history(p0, steps)
+        hs = [p.h for _, p in chain]
+        hist = solve_history(p0, steps, undeformed=None if all(h is hs[0] for h in hs) else hs)
         for (c, _), r in zip(chain, hist.steps):
             if want is None or c.number in want:
                 yield summary(c, r)

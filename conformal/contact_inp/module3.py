@@ -79,6 +79,7 @@ class Module3State:
     exrhs: np.ndarray | None = None        # (npot, 2) extra rigid slip
     case_count: int = 0
     reasons: dict = field(default_factory=dict)   # unsupported data kept for later cases, by kind
+    hertz_load: tuple | None = None        # (FN, PEN) of the case that set a Hertzian grid (D = 2)
 
 
 @dataclass(frozen=True, eq=False)
@@ -110,6 +111,7 @@ class Module3Case:
     ids: tuple = field(default=(1, 1))
     skipped: tuple = ()                    # what the deck asks for that was not computed (warnings)
     unsupported: tuple = ()                # why the project cannot solve this case (empty: it can)
+    hertz_load: tuple | None = None        # (FN, PEN) that fixed a Hertzian grid and geometry (kept with D = 0)
 
 
 def _soft(digits: dict, allowed: dict) -> list[str]:
@@ -209,6 +211,7 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
         raise InputError(f"{deck.name}, line {line}: rolling (T = {T}) needs CHI, DQ, VELOC (C >= 2)")
     if digits["D"] == 2:
         ip = deck.ints(1, "IPOTCN")[0]
+        state.hertz_load = (kin[0] if digits["N"] == 1 else None, kin[0] if digits["N"] == 0 else None)
         if ip in (-1, -2, -3, -4, -5):
             v = deck.reals(5, "MX MY A1/AA B1/AOB/BB SCALE")
             state.grid_spec = ("hertz", ip, int(v[0]), int(v[1]), tuple(v[2:]))
@@ -280,7 +283,7 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
         cphi=kin[3], spin_centre=spin, friction=state.friction, rolling=state.rolling,
         material=state.material, inflcf=state.inflcf, cfname=state.cfname, grid_spec=state.grid_spec,
         geometry=state.geometry, exrhs=state.exrhs, eps=eps, maxout=maxout, ids=ids, skipped=skipped,
-        unsupported=tuple(own) + tuple(inh.values()))
+        unsupported=tuple(own) + tuple(inh.values()), hertz_load=state.hertz_load)
 
 
 def _skip_subsurface(deck: Deck, S: int) -> None:
