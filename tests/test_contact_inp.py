@@ -1,0 +1,184 @@
+"""``conformal inp``: CONTACT's public input decks against their reference outputs.
+
+The decks and their reference totals are in tests/reference/contact_decks (CONTACT, Apache-2.0;
+README there).  Every case the reader supports is solved and compared with CONTACT's printed
+totals: FN, FX, FY, MZ, pmax, approach and the solved creepage or shift within one unit of the
+last printed digit (4 significant digits), the numbers of elements in contact, adhesion and slip
+exactly.  manifest.json counts the supported cases of every public deck; the test checks that the
+reader still supports exactly those.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conformal.cli import main
+from conformal.contact_inp.deck import plan, read_deck, solve_deck
+from conformal.contact_inp.module3 import Unsupported
+from conformal.contact_inp.refout import compare, read_ref_out
+from conformal.errors import InputError
+
+DECKS = Path(__file__).resolve().parent / "reference" / "contact_decks"
+MANIFEST = json.loads((DECKS / "manifest.json").read_text(encoding="utf-8"))
+SUPPORTED = {Path(e["deck"]).name: e for e in MANIFEST["decks"] if e["supported"]}
+
+#: decks that take longer than a few seconds (slow lane)
+SLOW = {"spence35.inp", "catt_to_cart.inp", "tractcurv.inp", "tractcurve_plast.inp", "bentall.inp"}
+
+#: cases where the project's solver differs from CONTACT, with the reason; the test checks that
+#: each one still differs and says why (a fix shows up as a failure here: remove the entry)
+KNOWN = {("bentall.inp", 2): "tangential problem: not converged"}   # mu = 1e-4, dissimilar, FX prescribed
+
+
+def _params():
+    for name in sorted(SUPPORTED):
+        marks = [pytest.mark.slow] if name in SLOW else []
+        yield pytest.param(name, marks=marks, id=name)
+
+
+@pytest.mark.parametrize("name", list(_params()))
+def test_public_deck_against_contact(name):
+    entry = SUPPORTED[name]
+    parsed = read_deck(DECKS / name, ignore_subsurface=True)
+    pl = plan(parsed)
+    ok = [c.number for chain in pl.chains for c, _ in chain]
+    assert len(ok) == entry["supported"]
+    ref = read_ref_out((DECKS / name).with_suffix(".ref_out").read_text(encoding="utf-8"))
+    solved = 0
+    for d in solve_deck(parsed, cases=ok):
+        solved += 1
+        bad = compare(d, ref[d["case"]])
+        why = KNOWN.get((name, d["case"]))
+        if why is None:
+            assert not bad, f"{name} case {d['case']}: (ours, CONTACT) {bad}"
+        else:
+            assert bad and any(why in w for w in d["warnings"]), f"{name} case {d['case']}: now agrees? {bad}"
+    assert solved == len(ok)
+
+
+def test_supported_fraction_in_the_manifest():
+    """The manifest's totals are the sums of its decks; every supported deck is here."""
+    decks = MANIFEST["decks"]
+    assert MANIFEST["cases"] == sum(e["cases"] for e in decks)
+    assert MANIFEST["supported"] == sum(e["supported"] for e in decks)
+    for e in decks:
+        assert e["supported"] <= e["cases"]
+        if e["supported"] < e["cases"]:
+            assert e["reasons"], e["deck"]           # every unsupported case has a reason
+    assert {p.name for p in DECKS.glob("*.inp")} == set(SUPPORTED)
+
+
+def test_conformal_example_reproduces_contacts_digits():
+    """examples/conformal cases 1, 2, 4 (45-degree conformal contact, R 10 in R 10.2, the deck gives
+    the undeformed distance and case 4 the rigid slip per element): the exact solver with planar
+    half-space numbers on the developed grid prints CONTACT's digits (its .ref_out)."""
+    parsed = read_deck(DECKS / "conformal.inp")
+    got = {d["case"]: d for d in solve_deck(parsed, cases=[1, 2, 4])}
+    assert f"{got[2]['FN']:.3e}" == "9.184e+04" and round(got[2]["pmax"]) == 1012 and got[2]["n_contact"] == 871
+    assert f"{got[1]['FN']:.3e}" == "1.000e+05" and f"{got[1]['pmax']:.1f}" == "912.8" and got[1]["n_contact"] == 1027
+    assert f"{got[4]['FX']:.3e}" == "1.050e+04" and f"{got[4]['FY']:.3e}" == "2.251e+04"
+    assert f"{got[4]['MZ']:.3e}" == "3.227e+04" and got[4]["n_slip"] == 871
+    with pytest.raises(Unsupported, match="case 3.*inflcf_r10_mx51.txt is missing"):
+        list(solve_deck(parsed))
+
+
+DECK = """% two cases: the second keeps grid, geometry, material and friction (D = C = Z = 0, L = 1)
+ 3  MODULE
+  203100   PBTNFS
+  022020   LDCMZE
+ 0001341   HGIAOWR
+   100 100 30 1 1e-8      MAXGS MAXIN MAXNR MAXOUT EPS
+   1000.  0.0  -0.002  0.0   FN CKSI CETA CPHI
+   0.3 0.3                   FSTAT FKIN
+   0.0  0.5  30000.          CHI DQ VELOC
+   0.28 0.28 82000 82000     POISS GG
+    1                        IPOTCN
+   20 20 -5.0 -5.0 0.5 0.5   MX MY XL YL DX DY
+    1 1                      IBASE IPLAN
+   0.002 0 0.002 0 0 0       B1 .. B6
+ 3  MODULE
+  203100   PBTNFS
+  100000   LDCMZE
+ 0001341   HGIAOWR
+   100 100 30 1 1e-8
+   1500.  0.0  -0.002  0.0   FN CKSI CETA CPHI
+ 0  MODULE
+"""
+
+
+def test_later_cases_inherit_earlier_data(tmp_path):
+    """Case 2 keeps everything but the load: the same as a deck that repeats all inputs."""
+    (tmp_path / "two.inp").write_text(DECK)
+    full = DECK.replace("  100000   LDCMZE\n 0001341   HGIAOWR\n   100 100 30 1 1e-8\n   1500.  0.0  -0.002  0.0   FN CKSI CETA CPHI\n",
+                        "  022020   LDCMZE\n 0001341   HGIAOWR\n   100 100 30 1 1e-8\n   1500.  0.0  -0.002  0.0\n"
+                        "   0.3 0.3\n   0.0  0.5  30000.\n   0.28 0.28 82000 82000\n    1\n"
+                        "   20 20 -5.0 -5.0 0.5 0.5\n    1 1\n   0.002 0 0.002 0 0 0\n")
+    (tmp_path / "full.inp").write_text(full)
+    a = list(solve_deck(read_deck(tmp_path / "two.inp")))
+    b = list(solve_deck(read_deck(tmp_path / "full.inp")))
+    assert [d["case"] for d in a] == [1, 2]
+    assert a[1]["FN"] == pytest.approx(1500.0) and a[1]["FY"] == pytest.approx(b[1]["FY"], rel=1e-12)
+    assert a[1]["n_contact"] == b[1]["n_contact"] > a[0]["n_contact"]
+
+
+def test_cli_writes_json_lines_and_refuses_unsupported_digits(tmp_path, capsys):
+    (tmp_path / "two.inp").write_text(DECK)
+    assert main(["inp", str(tmp_path / "two.inp"), "--out", str(tmp_path / "out")]) == 0
+    out = capsys.readouterr().out.splitlines()
+    rows = [json.loads(x) for x in out]
+    assert [r["case"] for r in rows] == [1, 2]
+    for key in ("FN", "FX", "FY", "MZ", "pmax", "approach", "n_contact", "n_adhesion", "n_slip"):
+        assert key in rows[0]
+    assert (tmp_path / "out" / "two.jsonl").read_text().splitlines() == out
+    # velocity-dependent friction: one line naming the digit, exit 2, nothing printed
+    (tmp_path / "veldep.inp").write_text(DECK.replace("  022020   LDCMZE", "  422020   LDCMZE", 1)
+                                         .replace("   0.3 0.3                   FSTAT FKIN",
+                                                  "   0.3 0.1 0.1 0.0 0.0\n   0.0 0.0", 1))
+    assert main(["inp", str(tmp_path / "veldep.inp")]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == "" and cap.err.count("\n") == 1 and "L = 4 (velocity-dependent friction)" in cap.err
+    # a module-1 (wheel-rail) deck
+    (tmp_path / "m1.inp").write_text(" 1  MODULE\n  0000000\n")
+    assert main(["inp", str(tmp_path / "m1.inp")]) == 2
+    assert "module 1" in capsys.readouterr().err
+    assert main(["inp", str(tmp_path / "two.inp"), "--cases", "3"]) == 2
+    assert "--cases" in capsys.readouterr().err
+
+
+def test_tokens_of_contacts_free_format():
+    from conformal.contact_inp.tokens import Deck, parse_real
+
+    assert parse_real("180d", angle=True) == pytest.approx(np.pi)
+    assert parse_real(".1-07") == pytest.approx(1e-8) and parse_real("3.5E-1") == 0.35
+    assert parse_real("180d") is None and parse_real("MX,MY") is None
+    d = Deck("t.inp", " 1, 2\n 3 % comment\n  4 5 6 trailing words 7\n 'f.prr' rest\n")
+    assert d.ints(3, "three") == [1, 2, 3]             # a group over several lines
+    assert d.reals(2, "two", optional=1) == [4.0, 5.0, 6.0]   # the optional value on the same line
+    assert d.string("name") == "f.prr"
+    with pytest.raises(InputError, match="unexpected end of file"):
+        d.ints(1, "more")
+    with pytest.raises(InputError, match="control word"):
+        Deck("t.inp", " 12345678\n").digits("PBTNFS")
+
+
+def test_one_element_start_of_the_normal_problem_grows_the_contact():
+    """A starting pressure on one element (the previous step of a growing load) must not stop the
+    contact area from growing (Polonsky-Keer with a uniform gap on the contact set)."""
+    from conformal.grid import PlanarGrid
+    from conformal.materials import Material
+    from conformal.solvers.normal import solve_normal
+
+    g = PlanarGrid.centred(15, 15, 0.2, 0.2)
+    X, Y = g.mesh()
+    h = 0.004 * (X**2 + Y**2)
+    start = np.zeros(g.shape)
+    start[7, 7] = 1.0
+    mat = Material.identical(1000.0, 0.3)
+    fresh = solve_normal(None, g, h, normal_force=0.5, material=mat, tol=1e-9)
+    warm = solve_normal(None, g, h, normal_force=0.5, material=mat, tol=1e-9, p_start=start)
+    assert fresh.contact.sum() > 1
+    assert np.array_equal(warm.contact, fresh.contact)
+    assert warm.pmax == pytest.approx(fresh.pmax, rel=1e-6)
