@@ -47,16 +47,19 @@ def test_public_deck_against_contact(name):
     ok = [c.number for chain in pl.chains for c, _ in chain]
     assert len(ok) == entry["supported"]
     ref = read_ref_out((DECKS / name).with_suffix(".ref_out").read_text(encoding="utf-8"))
-    solved = 0
+    solved = compared = 0
     for d in solve_deck(parsed, cases=ok):
         solved += 1
+        if d["case"] not in ref:           # CONTACT printed no totals (output digit O = 1)
+            continue
+        compared += 1
         bad = compare(d, ref[d["case"]])
         why = KNOWN.get((name, d["case"]))
         if why is None:
             assert not bad, f"{name} case {d['case']}: (ours, CONTACT) {bad}"
         else:
             assert bad and any(why in w for w in d["warnings"]), f"{name} case {d['case']}: now agrees? {bad}"
-    assert solved == len(ok)
+    assert solved == len(ok) and compared >= solved - 1
 
 
 def test_supported_fraction_in_the_manifest():
