@@ -80,6 +80,7 @@ class Module3State:
     case_count: int = 0
     reasons: dict = field(default_factory=dict)   # unsupported data kept for later cases, by kind
     hertz_load: tuple | None = None        # (FN, PEN) of the case that set a Hertzian grid (D = 2)
+    mater_params: tuple = ()               # FLX K0_MF ALFAMF BETAMF (M = 2) or K0_MF ALFAMF BETAMF (M = 3)
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,6 +113,7 @@ class Module3Case:
     skipped: tuple = ()                    # what the deck asks for that was not computed (warnings)
     unsupported: tuple = ()                # why the project cannot solve this case (empty: it can)
     hertz_load: tuple | None = None        # (FN, PEN) that fixed a Hertzian grid and geometry (kept with D = 0)
+    mater_params: tuple = ()               # the simplified theory's parameters (M = 2, 3)
 
 
 def _soft(digits: dict, allowed: dict) -> list[str]:
@@ -147,7 +149,7 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
             "T": (0, 1, 2, 3), "N": (0, 1), "F": (0, 1, 2), "D": (0, 1, 2), "Z": (0, 1, 2)}
     for reason in _soft(digits, hard):
         raise unsupported(deck.name, line, reason)
-    own = _soft(digits, {"P": (0, 2, 3), "B": (0,), "H": (0,), "M2": (0,), "E": (0, 1, 9)})
+    own = _soft(digits, {"P": (0, 2, 3), "B": (0, 2, 3), "H": (0,), "M2": (0,), "E": (0, 1, 9)})
     if digits["S"] and not ignore_subsurface:
         own.append(f"control digit S = {digits['S']} (subsurface stresses; --ignore-subsurface skips them)")
     inh = state.reasons
@@ -190,11 +192,11 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
         if digits["B"] == 1:
             deck.reals(1, "FLXZ")
         nmat = {1: 4, 2: 4, 3: 3, 4: 4, 5: 3}.get(M, 0)
-        if nmat:
-            deck.reals(nmat, "material model parameters")
+        state.mater_params = tuple(deck.reals(nmat, "material model parameters")) if nmat else ()
         state.inflcf = C
         for key, reason in (("inflcf", f"control digit C = {C} ({_MEANING.get(('C', C), '')})" if C in (3, 4) else None),
-                            ("material", f"control digit M = {M} ({_MEANING.get(('M', M), '')})" if M else None)):
+                            ("material", f"control digit M = {M} ({_MEANING.get(('M', M), '')})"
+                             if M not in (0, 2, 3) else None)):
             if reason:
                 inh[key] = reason
             else:
@@ -283,7 +285,8 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
         cphi=kin[3], spin_centre=spin, friction=state.friction, rolling=state.rolling,
         material=state.material, inflcf=state.inflcf, cfname=state.cfname, grid_spec=state.grid_spec,
         geometry=state.geometry, exrhs=state.exrhs, eps=eps, maxout=maxout, ids=ids, skipped=skipped,
-        unsupported=tuple(own) + tuple(inh.values()), hertz_load=state.hertz_load)
+        unsupported=tuple(own) + tuple(inh.values()), hertz_load=state.hertz_load,
+        mater_params=state.mater_params)
 
 
 def _skip_subsurface(deck: Deck, S: int) -> None:

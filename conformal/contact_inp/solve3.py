@@ -86,6 +86,9 @@ def problem_of(case: Module3Case, base_dir: Path) -> ContactProblem:
         if not path.is_file():
             raise unsupported(case.deck, case.line, f"the influence file (C = 9) {path.name} is missing")
         info["influence_file"] = path
+    M, B = case.digits["M"], case.digits["B"]
+    if M in (2, 3) or B in (2, 3):
+        return _fastsim_problem(case, mat, kin, hz, grid, h, info)
     if T >= 2:
         dq = case.rolling[1]
         if T == 3 and case.cphi != 0.0 and abs(dq - grid.dx) > 1e-6 * grid.dx:
@@ -94,6 +97,42 @@ def problem_of(case: Module3Case, base_dir: Path) -> ContactProblem:
     return ContactProblem(material=mat, friction=Friction(fstat, fkin), kinematics=kin, model=model,
                           normal_force=case.fn, approach=case.pen, hertz=hz, grid=grid, h=h,
                           label=f"case {case.number}", info=info)
+
+
+def _fastsim_problem(case: Module3Case, mat: Material, kin: Kinematics, hz, grid, h, info) -> ContactProblem:
+    """CONTACT's simplified theory (M = 2, 3) with a Hertzian traction bound (B = 2, 3): the project's
+    FASTSIM on the same grid with CONTACT's flexibilities (conformal.contact_inp.fastsim3)."""
+    from conformal.contact_inp.fastsim3 import contact_flexibilities
+
+    d = case.digits
+    M, B, T, F = d["M"], d["B"], d["T"], d["F"]
+    if M not in (2, 3) or B not in (2, 3):
+        raise unsupported(case.deck, case.line, f"control digits M = {M}, B = {B} (FASTSIM needs M = 2, 3 with "
+                                                "an elliptic or parabolic traction bound B = 2, 3)")
+    if hz is None or case.grid_spec[1] not in (-1, -2, -3):
+        raise unsupported(case.deck, case.line, "FASTSIM on a non-Hertzian geometry")
+    if T != 3 or F != 0 or case.spin_centre != (0.0, 0.0) or info or kin.direction != 1:
+        raise unsupported(case.deck, case.line, "FASTSIM other than steady rolling (T = 3) in +x with creepages "
+                                                "(F = 0)")
+    if case.fn is None:
+        raise unsupported(case.deck, case.line, "FASTSIM with a prescribed approach (N = 0)")
+    par = case.mater_params
+    k0, alpha = (par[1], par[2]) if M == 2 else (par[0], par[1])
+    if alpha != 1.0 or not k0 > 0:
+        raise unsupported(case.deck, case.line, f"modified FASTSIM with ALFAMF = {alpha:g} (only 1) or K0_MF = {k0:g}")
+    if M == 2:
+        L = (par[0],) * 3
+    else:
+        L = contact_flexibilities(hz.a, hz.b, mat.G, mat.nu, FN=case.fn, mu=case.friction[0],
+                                  xi=kin.xi, eta=kin.eta, phi=kin.phi)
+    L = [v / k0 for v in L]
+    model = ModelSpec(theory="fastsim", bound="elliptic" if B == 2 else "parabolic",
+                      options={"discretisation": "contact", "flexibilities": L})
+    fstat, fkin = case.friction
+    if fstat != fkin:
+        raise unsupported(case.deck, case.line, "FASTSIM with FSTAT != FKIN")
+    return ContactProblem(material=mat, friction=Friction(fstat, fkin), kinematics=kin, model=model,
+                          normal_force=case.fn, hertz=hz, grid=grid, h=h, label=f"case {case.number}")
 
 
 def history_step(case: Module3Case, first: bool) -> HistoryStep:
