@@ -26,7 +26,8 @@ MANIFEST = json.loads((DECKS / "manifest.json").read_text(encoding="utf-8"))
 SUPPORTED = {Path(e["deck"]).name: e for e in MANIFEST["decks"] if e["supported"]}
 
 #: decks that take longer than a few seconds (slow lane)
-SLOW = {"spence35.inp", "catt_to_cart.inp", "tractcurv.inp", "tractcurve_plast.inp", "bentall.inp"}
+SLOW = {"spence35.inp", "catt_to_cart.inp", "tractcurv.inp", "tractcurve_plast.inp", "bentall.inp", "euro_tractcurv.inp",
+        "ertz_temperature.inp"}
 
 #: cases where the project's solver differs from CONTACT, with the reason; the test checks that
 #: each one still differs and says why (a fix shows up as a failure here: remove the entry)
@@ -42,7 +43,7 @@ def _params():
 @pytest.mark.parametrize("name", list(_params()))
 def test_public_deck_against_contact(name):
     entry = SUPPORTED[name]
-    parsed = read_deck(DECKS / name, ignore_subsurface=True)
+    parsed = read_deck(DECKS / name, ignore_subsurface=True, ignore_temperature=True)
     pl = plan(parsed)
     ok = [c.number for chain in pl.chains for c, _ in chain]
     assert len(ok) == entry["supported"]

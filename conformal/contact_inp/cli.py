@@ -20,6 +20,8 @@ def add_parsers(sub) -> None:
     p.add_argument("--cases", metavar="N,M,...", help="solve only these case numbers (sequences from their start)")
     p.add_argument("--ignore-subsurface", action="store_true",
                    help="accept S = 1..3 and skip the subsurface stresses (each case warns)")
+    p.add_argument("--ignore-temperature", action="store_true",
+                   help="accept H = 1, 3 and skip the surface temperatures (each case warns)")
     p.set_defaults(func=cmd_inp)
 
 
@@ -48,7 +50,8 @@ def cmd_inp(args) -> int:
         if folder.exists() and not folder.is_dir():
             raise InputError(f"--out: {folder} is a file, not a folder")
         out_path = folder / (Path(args.deck).stem + ".jsonl")
-    parsed = read_deck(args.deck, ignore_subsurface=args.ignore_subsurface)
+    parsed = read_deck(args.deck, ignore_subsurface=args.ignore_subsurface,
+                       ignore_temperature=args.ignore_temperature)
     lines = []
     for d in solve_deck(parsed, cases=cases):
         text = json.dumps(d)

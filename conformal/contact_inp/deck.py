@@ -25,9 +25,10 @@ class ParsedDeck:
     cases: tuple            # Module3Case, in the order of the deck
 
 
-def read_deck(path, *, ignore_subsurface: bool = False) -> ParsedDeck:
+def read_deck(path, *, ignore_subsurface: bool = False, ignore_temperature: bool = False) -> ParsedDeck:
     """Read every case of a deck (InputError / Unsupported naming the line and digit);
-    ``ignore_subsurface``: accept S = 1..3 and skip the subsurface stresses (with a warning)."""
+    ``ignore_subsurface`` / ``ignore_temperature``: accept S = 1..3 / H = 1, 3 and skip those
+    outputs (each case's warnings say so)."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"inp: no such file: {path}")
@@ -49,7 +50,8 @@ def read_deck(path, *, ignore_subsurface: bool = False) -> ParsedDeck:
         ids = (head[1] if len(head) > 1 else 1, head[2] if len(head) > 2 else 1)
         state = states.setdefault(ids, Module3State())
         number += 1
-        cases.append(read_case(deck, state, number, line, ids, ignore_subsurface=ignore_subsurface))
+        cases.append(read_case(deck, state, number, line, ids, ignore_subsurface=ignore_subsurface,
+                               ignore_temperature=ignore_temperature))
     return ParsedDeck(path=path, cases=tuple(cases))
 
 

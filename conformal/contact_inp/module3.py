@@ -56,7 +56,8 @@ _MEANING = {
     ("M", 1): "viscoelastic materials", ("M", 2): "FASTSIM with one flexibility",
     ("M", 3): "FASTSIM (modified)", ("M", 4): "interfacial layer / plasticity", ("M", 5): "FaStrip",
     ("M", 6): "FaStrip (original)", ("M", 7): "FaStrip (full sliding)",
-    ("H", 1): "surface temperatures", ("H", 3): "surface temperatures",
+    ("H", 1): "surface temperatures; --ignore-temperature skips them",
+    ("H", 3): "surface temperatures; --ignore-temperature skips them",
     ("M2", 1): "damping", ("M2", 2): "damping",
     ("E", 2): "extra rigid-slip term -(x-xo) phi", ("E", 3): "extra rigid-slip term (y-yo) phi",
     ("V", 1): "friction varying across the rail", ("V", 2): "friction varying along the track",
@@ -127,13 +128,14 @@ def _soft(digits: dict, allowed: dict) -> list[str]:
 
 
 def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tuple = (1, 1), *,
-              ignore_subsurface: bool = False) -> Module3Case:
+              ignore_subsurface: bool = False, ignore_temperature: bool = False) -> Module3Case:
     """Read the case that follows a ``3`` module line; update ``state``; return the resolved case.
 
     A digit value whose input this reader knows but whose physics the project does not have is
     recorded in the case's ``unsupported`` (and inherited by later cases that keep those data); an
     input it cannot read raises :class:`Unsupported`.  ``ignore_subsurface``: accept S = 1..3 and
-    skip the subsurface stresses (the case's ``skipped`` says so)."""
+    skip the subsurface stresses; ``ignore_temperature``: accept H = 1, 3 and skip the surface
+    temperatures (outputs only; the case's ``skipped`` says so)."""
     d1 = deck.digits("PBTNFS")
     w2 = deck.lines[deck.pos].tokens[0] if not deck.at_end else ""
     d2 = deck.digits("VLDCMZE" if len(w2) == 7 else "LDCMZE")
@@ -149,7 +151,8 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
             "T": (0, 1, 2, 3), "N": (0, 1), "F": (0, 1, 2), "D": (0, 1, 2), "Z": (0, 1, 2)}
     for reason in _soft(digits, hard):
         raise unsupported(deck.name, line, reason)
-    own = _soft(digits, {"P": (0, 2, 3), "B": (0, 2, 3), "H": (0,), "M2": (0,), "E": (0, 1, 9)})
+    own = _soft(digits, {"P": (0, 2, 3), "B": (0, 2, 3), "H": (0, 1, 3) if ignore_temperature else (0,),
+                         "M2": (0,), "E": (0, 1, 9)})
     if digits["S"] and not ignore_subsurface:
         own.append(f"control digit S = {digits['S']} (subsurface stresses; --ignore-subsurface skips them)")
     inh = state.reasons
@@ -275,6 +278,8 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
             _skip_subsurface(deck, digits["S"])
         if ignore_subsurface:
             skipped = (f"subsurface stresses (S = {digits['S']}) not computed",)
+    if digits["H"] and ignore_temperature:
+        skipped = skipped + (f"surface temperatures (H = {digits['H']}) not computed",)
     state.case_count += 1
     N, F = digits["N"], digits["F"]
     return Module3Case(

@@ -111,8 +111,8 @@ def _fastsim_problem(case: Module3Case, mat: Material, kin: Kinematics, hz, grid
                                                 "an elliptic or parabolic traction bound B = 2, 3)")
     if hz is None or case.grid_spec[1] not in (-1, -2, -3):
         raise unsupported(case.deck, case.line, "FASTSIM on a non-Hertzian geometry")
-    if T != 3 or F != 0 or case.spin_centre != (0.0, 0.0) or info or kin.direction != 1:
-        raise unsupported(case.deck, case.line, "FASTSIM other than steady rolling (T = 3) in +x with creepages "
+    if T != 3 or F != 0 or case.spin_centre != (0.0, 0.0) or info:
+        raise unsupported(case.deck, case.line, "FASTSIM other than steady rolling (T = 3) with creepages "
                                                 "(F = 0)")
     if case.fn is None:
         raise unsupported(case.deck, case.line, "FASTSIM with a prescribed approach (N = 0)")
