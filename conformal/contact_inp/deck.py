@@ -1,7 +1,8 @@
 """A whole CONTACT input deck: its modules and cases, solved in order.
 
 A deck is a series of module calls (user guide, "Specification of the input file"): ``3 {REID,
-CPID}`` starts a module-3 case, ``1 {REID}`` a module-1 (wheel-rail) case, ``0`` ends the run.
+CPID}`` starts a module-3 case, ``1 {REID}`` a module-1 (wheel-rail) case (conformal.contact_inp.
+module1, solved as a wheel-rail scene by conformal.contact_inp.solve1), ``0`` ends the run.
 Later cases inherit the data of earlier ones (one :class:`~conformal.contact_inp.module3.Module3State`
 per result element and contact problem).  Cases in a sequence (user guide "Multiple cases,
 sequences": P = 0 or 3 with a shift or transient rolling, T = 1, 2) continue from the tractions of
@@ -44,7 +45,13 @@ def read_deck(path, *, ignore_subsurface: bool = False, ignore_temperature: bool
         if module == 0:
             break
         if module == 1:
-            raise unsupported(deck.name, line, "module 1 (wheel-rail contact) cases: this reader solves module 3 only")
+            from conformal.contact_inp.module1 import Module1State, read_case as read_case1
+
+            state1 = states.setdefault(("module 1", head[1] if len(head) > 1 else 1), Module1State())
+            number += 1
+            cases.append(read_case1(deck, state1, number, line, ignore_subsurface=ignore_subsurface,
+                                    ignore_temperature=ignore_temperature))
+            continue
         if module != 3:
             raise unsupported(deck.name, line, f"module {module}")
         ids = (head[1] if len(head) > 1 else 1, head[2] if len(head) > 2 else 1)
@@ -60,6 +67,11 @@ def _chains(cases) -> list[list[Module3Case]]:
     chains: list[list[Module3Case]] = []
     prev_T = None
     for c in cases:
+        if getattr(c, "module", 3) == 1:        # wheel-rail cases stand alone (steady rolling only)
+            if c.digits["R"] in (0, 1):
+                chains.append([c])
+            prev_T = None
+            continue
         T, P = c.digits["T"], c.digits["P"]
         solved = c.digits["R"] in (0, 1)
         continues = T in (1, 2) and P in (0, 3) and bool(chains) and prev_T is not None
@@ -86,6 +98,7 @@ class Plan:
 
 def plan(parsed: ParsedDeck) -> Plan:
     """Map every case onto the project's problems; collect the reasons for the others."""
+    from conformal.contact_inp.solve1 import scene_of
     from conformal.contact_inp.solve3 import problem_of, same_geometry
     from conformal.contact_inp.module3 import Unsupported
 
@@ -102,7 +115,7 @@ def plan(parsed: ParsedDeck) -> Plan:
             prob = None
             if reason is None:
                 try:
-                    prob = problem_of(c, base)
+                    prob = scene_of(c, base) if getattr(c, "module", 3) == 1 else problem_of(c, base)
                 except Unsupported as exc:
                     reason = str(exc).split("not supported: ", 1)[-1]
             if reason is None and k > 0:
@@ -147,6 +160,12 @@ def solve_deck(parsed: ParsedDeck, cases=None):
                 continue
             chain = chain[:keep[-1] + 1]
         first, p0 = chain[0]
+        if getattr(first, "module", 3) == 1:
+            from conformal.api import solve as solve_scene
+            from conformal.contact_inp.solve1 import summary as summary1
+
+            yield summary1(first, solve_scene(p0))
+            continue
         if len(chain) == 1 and (first.digits["P"] == 2 or first.digits["T"] in (0, 3)):
             yield summary(first, solve_problem(p0))
             continue
