@@ -30,6 +30,7 @@ in the case's ``unsupported`` (the case is then refused by name, as in module 3)
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from conformal.contact_inp.module3 import _skip_subsurface, unsupported
 from conformal.contact_inp.tokens import Deck
@@ -142,7 +143,7 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
         else:
             nvf = deck.ints(1, "NVF")[0]
             for _ in range(nvf):
-                deck.reals(nval + 1, "ALPHA/SVF and friction parameters")
+                deck.reals(nval + 1, "ALPHA/SVF and friction parameters", angle=True)
             state.friction = ("varying",)
         if L in (2, 3, 4, 6):
             deck.reals(2, "MEMDST MEM_S0")
@@ -215,7 +216,7 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
     if E >= 2:
         state.velocity = tuple(deck.reals(6, "wheelset velocities or shifts"))
     if E >= 4:
-        deck.reals(12, "flexible wheelset deviations")
+        deck.reals(12, "flexible wheelset deviations", angle=True)
     if state.position is None:
         raise InputError(f"{deck.name}, line {line}: the first case needs the wheelset position (E >= 1)")
     skipped = ()
@@ -231,9 +232,14 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
     if gaught <= 0 or gaugsq != 0 or (len(state.track) > 4 and state.track[4] != 0):
         geo.append("module 1, a track given by rail position (GAUGHT <= 0), GAUGSQ != 0 or a curved track")
     for name, prof in (("rail", state.rail), ("wheel", state.wheel)):
-        if prof[1] != 0 or prof[2] != 1.0 or prof[3] != 0.0 or (len(prof) > 4 and prof[4] != 0):
+        mirz = prof[4] if len(prof) > 4 else 0
+        if Path(prof[0]).suffix.lower() in (".slcs", ".slcw"):
+            geo.append(f"module 1, a variable {name} profile (slices file {Path(prof[0]).name})")
+        elif Path(prof[0]).suffix.lower() not in (".prr", ".prw"):
+            geo.append(f"module 1, {name} profile {Path(prof[0]).name} (Miniprof and other formats not read)")
+        if prof[1] != 0 or prof[2] != 1.0 or prof[3] != 0.0 or mirz != 0:
             geo.append(f"module 1, {name} profile options MIRRORY = {prof[1]}, SCALEYZ = {prof[2]:g}, "
-                       f"SMOOTH = {prof[3]:g} (only 0, 1, 0)")
+                       f"SMOOTH = {prof[3]:g}, MIRRORZ = {mirz} (only 0, 1, 0, 0)")
     if any(v != 0.0 for v in state.rail_dev):
         geo.append("module 1, rail deviations DYRAIL .. VROLLR")
     if len(state.wheelset) > 3 and state.wheelset[3] != 0:

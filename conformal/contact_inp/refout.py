@@ -83,3 +83,62 @@ def compare(ours: dict, ref: dict[str, str], *, units: float = 1.0, zero_force: 
         if abs(float(ours[key]) - float(printed)) > tol:
             bad[key] = (ours[key], printed)
     return bad
+
+
+def read_ref_out_wheelrail(text: str) -> dict[int, dict]:
+    """{case: {"track": {FX(TR): ...}, "patches": [{FN, FX, FS, MN, PMAX, NCON, DELTCP(TR), YCP(R), ...}]}}
+    of the module-1 blocks of a reference output (values as printed)."""
+    out: dict[int, dict] = {}
+    blocks = re.split(r"^ Case +(\d+)\s*$", text, flags=re.M)
+    for k in range(1, len(blocks) - 1, 2):
+        num, body = int(blocks[k]), blocks[k + 1]
+        if "TOTAL FORCES ON RAIL" not in body:
+            continue
+        parts = re.split(r"^ -+ DATA FOR CONTACT PATCH +\d+ -+\s*$", body, flags=re.M)
+        entry = {"track": _labelled(parts[0]), "patches": [_labelled(p) for p in parts[1:]]}
+        out[num] = entry
+    return out
+
+
+def _labelled(text: str) -> dict[str, str]:
+    vals: dict[str, str] = {}
+    lines = text.splitlines()
+    for i, ln in enumerate(lines[:-1]):
+        labels = re.split(r"\s{2,}", ln.strip())
+        values = lines[i + 1].split()
+        if len(labels) != len(values):
+            labels = ln.split()
+        if len(labels) >= 3 and len(values) == len(labels) and all(re.match(r"^[A-Z]", x) for x in labels) \
+                and all(re.match(r"^[-+.\d]", v) for v in values):
+            vals.update({lab: v for lab, v in zip(labels, values) if lab not in vals})
+    return vals
+
+
+def compare_wheelrail(ours: dict, ref: dict, mu: float) -> dict[str, float]:
+    """Deviations of a module-1 result from CONTACT's, each in units of its tolerance (> 1: outside):
+    patch forces FN, FX, FS and the track forces within max(1 % |F|, 0.002 mu FN) (the Manchester
+    metric of tests/test_manchester.py), contact angle 0.005 rad, lateral position on the rail
+    0.2 mm, pmax 3 %, elements in contact 10 %.  Patches are matched in order of y on the rail;
+    a different number of patches is reported as ``n_patches``."""
+    out: dict[str, float] = {}
+    rp = sorted(ref["patches"], key=lambda p: float(p.get("YCP(R)", 0.0)))
+    op = sorted(ours["patches"], key=lambda p: p["y_rail"] if p["y_rail"] is not None else 0.0)
+    if len(rp) != len(op):
+        return {"n_patches": float("inf")}
+    fn_total = sum(float(p["FN"]) for p in rp)
+    for k, (o, r) in enumerate(zip(op, rp)):
+        fn = float(r["FN"])
+        floor = 0.002 * mu * fn
+        for key, rkey in (("FN", "FN"), ("FX", "FX"), ("FS", "FS")):
+            out[f"patch{k + 1}.{key}"] = abs(o[key] - float(r[rkey])) / max(0.01 * abs(float(r[rkey])), floor)
+        out[f"patch{k + 1}.contact_angle"] = abs(o["contact_angle"] - float(r["DELTCP(TR)"])) / 0.005
+        out[f"patch{k + 1}.y_rail"] = abs(o["y_rail"] - float(r["YCP(R)"])) / 0.2
+        if "PMAX" in r:
+            out[f"patch{k + 1}.pmax"] = abs(o["pmax"] / float(r["PMAX"]) - 1.0) / 0.03
+        if "NCON" in r:
+            out[f"patch{k + 1}.n_contact"] = abs(o["n_contact"] / float(r["NCON"]) - 1.0) / 0.10
+    floor = 0.002 * mu * fn_total
+    for key, rkey in (("FX_track", "FX(TR)"), ("FY_track", "FY(TR)"), ("FZ_track", "FZ(TR)")):
+        if rkey in ref["track"]:
+            out[key] = abs(ours[key] - float(ref["track"][rkey])) / max(0.01 * abs(float(ref["track"][rkey])), floor)
+    return out

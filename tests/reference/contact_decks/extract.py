@@ -21,16 +21,27 @@ from conformal.errors import InputError
 HERE = Path(__file__).resolve().parent
 
 
+#: header lines whose next line holds the values the tests read
+_HEADERS = ("FN ", "FN/G", "NPOT", "FX(TR)", "XCP(TR)")
+
+
 def trimmed_ref_out(text: str) -> str:
-    """The case headers and totals blocks of a .ref_out."""
+    """The case headers and totals blocks of a .ref_out (module 3: totals; module 1: also the
+    forces on the rail, the patch separators and each patch's reference location)."""
     keep, lines = [], text.splitlines()
     for i, ln in enumerate(lines):
         s = ln.strip()
-        if re.match(r"^Case +\d+$", s):
+        if re.match(r"^Case +\d+$", s) or "DATA FOR CONTACT PATCH" in s or s == "TOTAL FORCES ON RAIL":
             keep.append(ln)
-        elif s.startswith("FN ") and " FX " in s or s.startswith("FN/G") or s.startswith("NPOT"):
+        elif s.startswith(_HEADERS) and (not s.startswith("FN ") or " FX " in s):
             keep.extend(lines[i:i + 2])
     return "\n".join(keep) + "\n"
+
+
+def _profiles(inp: Path) -> list[Path]:
+    """The profile files a deck names (quoted names), found beside it."""
+    names = re.findall(r"'([^']+\.(?:prr|prw|ban|whl))'", inp.read_text(encoding="latin-1"), flags=re.I)
+    return sorted({inp.parent / n for n in names if (inp.parent / n).is_file()})
 
 
 def main(root: str) -> int:
@@ -45,8 +56,10 @@ def main(root: str) -> int:
         n_cases = len(re.findall(r"^ Case +\d+\s*$", ref.read_text(encoding="latin-1"), flags=re.M))
         entry = {"deck": rel, "cases": n_cases, "supported": 0, "reasons": {}}
         try:
-            pl = plan(read_deck(inp, ignore_subsurface=True, ignore_temperature=True))
+            parsed = read_deck(inp, ignore_subsurface=True, ignore_temperature=True)
+            pl = plan(parsed)
             entry["supported"] = sum(len(ch) for ch in pl.chains)
+            entry["module"] = sorted({getattr(c, "module", 3) for c in parsed.cases})
             for _, why in pl.unsupported:
                 entry["reasons"][why] = entry["reasons"].get(why, 0) + 1
         except InputError as exc:
@@ -54,6 +67,8 @@ def main(root: str) -> int:
         manifest.append(entry)
         if entry["supported"]:
             shutil.copyfile(inp, HERE / inp.name)
+            for prof in _profiles(inp):
+                shutil.copyfile(prof, HERE / prof.name)
             (HERE / ref.name).write_text(trimmed_ref_out(ref.read_text(encoding="latin-1")), encoding="utf-8")
         print(f"{rel}: {entry['supported']} / {n_cases}")
     total = sum(e["cases"] for e in manifest)
