@@ -15,7 +15,7 @@ from pathlib import Path
 def add_parsers(sub) -> None:
     """Add the ``inp`` sub-command to the CLI's sub-parsers."""
     p = sub.add_parser("inp", help="solve the cases of a CONTACT input deck (.inp): JSON Lines")
-    p.add_argument("deck", help="CONTACT input file (.inp); module-3 cases")
+    p.add_argument("deck", help="CONTACT input file (.inp): module-3 and module-1 (wheel-rail) cases")
     p.add_argument("--out", metavar="DIR", help="also write DIR/<stem>.jsonl")
     p.add_argument("--cases", metavar="N,M,...", help="solve only these case numbers (sequences from their start)")
     p.add_argument("--ignore-subsurface", action="store_true",

@@ -8,7 +8,8 @@ per result element and contact problem).  Cases in a sequence (user guide "Multi
 sequences": P = 0 or 3 with a shift or transient rolling, T = 1, 2) continue from the tractions of
 the previous case: they are solved together as one load history (conformal.solvers.history);
 every other case stands alone.  A case with R = 2 or 3 is read (its data are kept) but not solved,
-as in CONTACT.
+as in CONTACT.  After a case with R = 0 or 2 the next case follows without a module line (user
+guide, the R digit: "stay in the same module").
 """
 from __future__ import annotations
 
@@ -38,27 +39,31 @@ def read_deck(path, *, ignore_subsurface: bool = False, ignore_temperature: bool
     states: dict = {}
     cases: list = []
     number = 0
-    while not deck.at_end:
+    head = None                       # the module call in force: R = 0, 2 stay in the module
+    for _ in range(1_000_000):
+        if deck.at_end:
+            break
         line = deck.line_number
-        head = deck.ints(1, "MODULE", optional=2)
+        if head is None:
+            head = deck.ints(1, "MODULE", optional=2)
         module = head[0]
         if module == 0:
             break
+        if module not in (1, 3):
+            raise unsupported(deck.name, line, f"module {module}")
+        number += 1
+        opts = dict(ignore_subsurface=ignore_subsurface, ignore_temperature=ignore_temperature)
         if module == 1:
             from conformal.contact_inp.module1 import Module1State, read_case as read_case1
 
             state1 = states.setdefault(("module 1", head[1] if len(head) > 1 else 1), Module1State())
-            number += 1
-            cases.append(read_case1(deck, state1, number, line, ignore_subsurface=ignore_subsurface,
-                                    ignore_temperature=ignore_temperature))
-            continue
-        if module != 3:
-            raise unsupported(deck.name, line, f"module {module}")
-        ids = (head[1] if len(head) > 1 else 1, head[2] if len(head) > 2 else 1)
-        state = states.setdefault(ids, Module3State())
-        number += 1
-        cases.append(read_case(deck, state, number, line, ids, ignore_subsurface=ignore_subsurface,
-                               ignore_temperature=ignore_temperature))
+            case = read_case1(deck, state1, number, line, **opts)
+        else:
+            ids = (head[1] if len(head) > 1 else 1, head[2] if len(head) > 2 else 1)
+            case = read_case(deck, states.setdefault(ids, Module3State()), number, line, ids, **opts)
+        cases.append(case)
+        if case.digits["R"] in (1, 3):   # return to the main program: the next case names its module
+            head = None
     return ParsedDeck(path=path, cases=tuple(cases))
 
 
@@ -118,6 +123,8 @@ def plan(parsed: ParsedDeck) -> Plan:
                     prob = scene_of(c, base) if getattr(c, "module", 3) == 1 else problem_of(c, base)
                 except Unsupported as exc:
                     reason = str(exc).split("not supported: ", 1)[-1]
+                except InputError as exc:     # e.g. nu = 0.5, which the project's materials refuse
+                    reason = str(exc)
             if reason is None and k > 0:
                 p0 = items[0][1]
                 if p0.info or prob.info or p0.kinematics.direction != 1 or not same_geometry(p0, prob):
@@ -166,7 +173,8 @@ def solve_deck(parsed: ParsedDeck, cases=None):
 
             yield summary1(first, solve_scene(p0))
             continue
-        if len(chain) == 1 and (first.digits["P"] == 2 or first.digits["T"] in (0, 3)):
+        T0 = first.digits["T"]
+        if len(chain) == 1 and (T0 in (0, 3) or (T0 == 1 and first.digits["P"] == 2)):
             yield summary(first, solve_problem(p0))
             continue
         steps = [history_step(c, k == 0) for k, (c, _) in enumerate(chain)]

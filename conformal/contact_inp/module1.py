@@ -88,9 +88,9 @@ def _profile(deck: Deck, what: str) -> tuple:
     v = deck.mixed("sirr", what, optional="ii")
     prfopt = v[5] if len(v) > 5 else 0
     if prfopt >= 1:
-        deck.reals(5, "ISMOOTH ZIGTHRS KINKHIGH KINKLOW KINKWID")
+        deck.reals(5, "ISMOOTH ZIGTHRS KINKHIGH KINKLOW KINKWID", angle=True)
     if prfopt >= 2:
-        deck.reals(2, "ERRHND MAXOMIT")
+        deck.reals(2, "ERRHND MAXOMIT", angle=True)
     return tuple(v)
 
 
@@ -127,26 +127,26 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
         deck.ints(1, "PSFLCIN debug digits", optional=1)
     eps = None
     if d["G"] != 1:
-        g = deck.reals(5, "MAXGS MAXIN MAXNR MAXOUT EPS", optional=1)
+        g = deck.reals(5, "MAXGS MAXIN MAXNR MAXOUT EPS", optional=1, angle=True)
         eps = g[4]
     if d["G"] in (2, 3):
-        deck.reals(4, "OMEGAH OMEGAS INISLP OMGSLP")
+        deck.reals(4, "OMEGAH OMEGAS INISLP OMGSLP", angle=True)
     elif d["G"] == 4:
-        deck.reals(2, "INISLP OMGSLP")
+        deck.reals(2, "INISLP OMGSLP", angle=True)
     elif d["G"] == 5:
-        deck.reals(8, "FDECAY BETATH KDOWFB D_IFC D_LIN D_CNS D_SLP POW_S")
+        deck.reals(8, "FDECAY BETATH KDOWFB D_IFC D_LIN D_CNS D_SLP POW_S", angle=True)
     L = d["L"]
     nval = {0: 2, 2: 5, 3: 5, 4: 5, 6: 4}.get(L)
     if L != 1:
         if d["V"] == 0:
-            state.friction = tuple(deck.reals(nval, "friction parameters"))
+            state.friction = tuple(deck.reals(nval, "friction parameters", angle=True))
         else:
             nvf = deck.ints(1, "NVF")[0]
             for _ in range(nvf):
                 deck.reals(nval + 1, "ALPHA/SVF and friction parameters", angle=True)
             state.friction = ("varying",)
         if L in (2, 3, 4, 6):
-            deck.reals(2, "MEMDST MEM_S0")
+            deck.reals(2, "MEMDST MEM_S0", angle=True)
         reason = None
         if d["V"]:
             reason = f"module 1, control digit V = {d['V']} (friction varying over the profile)"
@@ -164,12 +164,12 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
     if C >= 2:
         if C == 4:
             deck.ints(2, "IF_METH VARIANT")
-        state.material = tuple(deck.reals(4, "POISS 1, 2  GG 1, 2"))
+        state.material = tuple(deck.reals(4, "POISS 1, 2  GG 1, 2", angle=True))
         if d["B"] == 1:
-            deck.reals(1, "FLXZ")
+            deck.reals(1, "FLXZ", angle=True)
         nmat = {1: 4, 2: 4, 3: 3, 4: 4, 5: 3}.get(M, 0)
         if nmat:
-            deck.reals(nmat, "material model parameters")
+            deck.reals(nmat, "material model parameters", angle=True)
         reason = None
         if C != 2:
             reason = f"module 1, control digit C = {C} (influence coefficients)"
@@ -182,11 +182,11 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
     elif state.material is None:
         raise InputError(f"{deck.name}, line {line}: C = {C} keeps the material of a previous case; there is none")
     if d["M2"] == 2:
-        deck.reals(4, "CDAMPN CDAMPT DFNMAX DFTMAX")
+        deck.reals(4, "CDAMPN CDAMPT DFNMAX DFTMAX", angle=True)
     if d["H"] == 3:
-        deck.reals(8, "BKTEMP HEATCP LAMBDA DENS (bodies 1, 2)")
+        deck.reals(8, "BKTEMP HEATCP LAMBDA DENS (bodies 1, 2)", angle=True)
         if M == 4:
-            deck.reals(1, "BETAPL")
+            deck.reals(1, "BETAPL", angle=True)
     if d["D"] >= 2:
         state.discretisation = tuple(deck.reals(6, "DX DS DQREL A_SEP D_SEP D_COMB", optional=2, angle=True))
         if d["D"] != 2:
@@ -201,20 +201,20 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
     if Z == 3:
         state.rail = _profile(deck, "'RFNAME' MIRRORY SCALEYZ SMOOTH")
     if Z in (2, 3):
-        state.rail_dev = tuple(deck.reals(6, "DYRAIL DZRAIL DROLLR VYRAIL VZRAIL VROLLR"))
+        state.rail_dev = tuple(deck.reals(6, "DYRAIL DZRAIL DROLLR VYRAIL VZRAIL VROLLR", angle=True))
         if d["F"] == 3:
-            deck.reals(4, "KYRAIL FYRAIL KZRAIL FZRAIL", optional=1)
+            deck.reals(4, "KYRAIL FYRAIL KZRAIL FZRAIL", optional=1, angle=True)
     if state.track is None or state.rail is None:
         raise InputError(f"{deck.name}, line {line}: the first case needs the track and rail profile (Z = 3)")
     if E in (3, 5):
-        state.wheelset = tuple(deck.reals(3, "FBDIST FBPOS NOMRADW", optional=1))
+        state.wheelset = tuple(deck.reals(3, "FBDIST FBPOS NOMRADW", optional=1, angle=True))
         state.wheel = _profile(deck, "'WFNAME' MIRRORY SCALEYZ SMOOTH")
     if state.wheelset is None or state.wheel is None:
         raise InputError(f"{deck.name}, line {line}: the first case needs the wheelset and wheel profile (E = 3)")
     if E >= 1:
         state.position = tuple(deck.reals(6, "S_WS Y_WS Z_INP ROLL YAW PITCH", angle=True))
     if E >= 2:
-        state.velocity = tuple(deck.reals(6, "wheelset velocities or shifts"))
+        state.velocity = tuple(deck.reals(6, "wheelset velocities or shifts", angle=True))
     if E >= 4:
         deck.reals(12, "flexible wheelset deviations", angle=True)
     if state.position is None:

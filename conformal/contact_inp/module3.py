@@ -146,7 +146,7 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
     digits = {**d1, **d2, **d3}
     digits.setdefault("V", 0)
     digits.setdefault("M2", 0)
-    hard = {"V": (0,), "L": (0, 1, 2, 3, 4, 6), "C": (0, 1, 2, 3, 4, 9), "M": (0, 1, 2, 3, 4, 5),
+    hard = {"V": (0, 3), "L": (0, 1, 2, 3, 4, 6), "C": (0, 1, 2, 3, 4, 9), "M": (0, 1, 2, 3, 4, 5),
             "H": (0, 1, 3), "M2": (0, 1, 2), "E": (0, 1, 2, 3, 9), "G": (0, 1, 2, 3, 4, 5), "S": (0, 1, 2, 3),
             "T": (0, 1, 2, 3), "N": (0, 1), "F": (0, 1, 2), "D": (0, 1, 2), "Z": (0, 1, 2)}
     for reason in _soft(digits, hard):
@@ -171,7 +171,10 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
         deck.reals(8, "FDECAY BETATH KDOWFB D_IFC D_LIN D_CNS D_SLP POW_S")
     kin = deck.reals(4, "PEN/FN CKSI/FXREL CETA/FYREL CPHI", optional=2)
     spin = (kin[4], kin[5]) if len(kin) >= 6 else (0.0, 0.0)
-    if L == 0:
+    if digits["V"] == 3:
+        if L != 1 or "friction" not in inh:
+            inh["friction"] = "control digit V = 3 (friction varying per grid row)"
+    elif L == 0:
         state.friction = tuple(deck.reals(2, "FSTAT FKIN"))
         inh.pop("friction", None)
     elif L in (2, 3, 4, 6):
@@ -266,6 +269,11 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
             inh["geometry"] = f"IPLAN = {iplan} (restricted planform)"
     if state.grid_spec[0] == "grid" and state.geometry is None and "geometry" not in inh:
         raise InputError(f"{deck.name}, line {line}: a non-Hertzian grid needs an undeformed distance (Z = 2)")
+    if digits["V"] == 3 and L != 1:
+        for _ in range(my):
+            deck.reals({0: 2, 6: 4}.get(L, 5), "friction parameters of one grid row")
+        if L in (2, 3, 4, 6):
+            deck.reals(2, "MEMDST MEM_S0")
     if digits["E"] == 9:
         state.exrhs = np.array(deck.reals(2 * mx * my, "EXRHS(I, 2:3), I = 1 .. NPOT")).reshape(mx * my, 2)
     elif digits["E"] == 0:

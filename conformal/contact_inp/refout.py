@@ -80,6 +80,8 @@ def compare(ours: dict, ref: dict[str, str], *, units: float = 1.0, zero_force: 
         tol = units * last_digit_unit(printed) * (1 + 1e-9)
         if key in ("FX", "FY"):
             tol = max(tol, floor)
+        elif key in ("xi", "eta"):        # a creepage or shift that vanishes: round-off (1e-12)
+            tol = max(tol, 1e-10)
         if abs(float(ours[key]) - float(printed)) > tol:
             bad[key] = (ours[key], printed)
     return bad

@@ -38,12 +38,6 @@ def trimmed_ref_out(text: str) -> str:
     return "\n".join(keep) + "\n"
 
 
-def _profiles(inp: Path) -> list[Path]:
-    """The profile files a deck names (quoted names), found beside it."""
-    names = re.findall(r"'([^']+\.(?:prr|prw|ban|whl))'", inp.read_text(encoding="latin-1"), flags=re.I)
-    return sorted({inp.parent / n for n in names if (inp.parent / n).is_file()})
-
-
 def main(root: str) -> int:
     root = Path(root)
     decks = sorted(root.glob("examples/*.inp")) + sorted(root.glob("testbank/**/*.inp"))
@@ -67,8 +61,10 @@ def main(root: str) -> int:
         manifest.append(entry)
         if entry["supported"]:
             shutil.copyfile(inp, HERE / inp.name)
-            for prof in _profiles(inp):
-                shutil.copyfile(prof, HERE / prof.name)
+            for case, _ in (item for chain in pl.chains for item in chain):
+                for name in (getattr(case, "rail_file", None), getattr(case, "wheel_file", None)):
+                    if name:          # the profiles of the supported wheel-rail cases, beside the deck
+                        shutil.copyfile(inp.parent / name, HERE / Path(name).name)
             (HERE / ref.name).write_text(trimmed_ref_out(ref.read_text(encoding="latin-1")), encoding="utf-8")
         print(f"{rel}: {entry['supported']} / {n_cases}")
     total = sum(e["cases"] for e in manifest)
