@@ -177,7 +177,7 @@ def solve_deck(parsed: ParsedDeck, cases=None):
         if len(chain) == 1 and (T0 in (0, 3) or (T0 == 1 and first.digits["P"] == 2)):
             yield summary(first, solve_problem(p0))
             continue
-        steps = [history_step(c, k == 0) for k, (c, _) in enumerate(chain)]
+        steps = [history_step(c) for c, _ in chain]
         if first.digits["T"] == 3:
             steps[0] = replace(steps[0], rolling="steady")
         hs = [p.h for _, p in chain]

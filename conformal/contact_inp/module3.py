@@ -27,7 +27,7 @@ raises :class:`Unsupported` naming the digit (the CLI prints it as one line, exi
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -330,10 +330,6 @@ def _skip_subsurface(deck: Deck, S: int) -> None:
         elif isubs not in (1, 2, 3, 5, 6, 7):
             raise deck.error("ISUBS", f"unknown block type {isubs}")
     raise deck.error("ISUBS", "more than 10000 blocks")
-
-
-def with_digits(case: Module3Case, **kw) -> Module3Case:
-    return replace(case, digits={**case.digits, **kw})
 
 
 def grid_of(case: Module3Case):

@@ -10,14 +10,12 @@ and the shift formula of section "Tangential quantities in case of a shift"; a s
 """
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 from scipy.optimize import brentq
 
 from conformal.contact_inp.module3 import Module3Case, chi_direction, exrhs_grid, grid_of, unsupported
-from conformal.errors import InputError
 from conformal.grid import PlanarGrid
 from conformal.materials import Material
 from conformal.problem import ContactProblem
@@ -135,7 +133,7 @@ def _fastsim_problem(case: Module3Case, mat: Material, kin: Kinematics, hz, grid
                           normal_force=case.fn, hertz=hz, grid=grid, h=h, label=f"case {case.number}")
 
 
-def history_step(case: Module3Case, first: bool) -> HistoryStep:
+def history_step(case: Module3Case) -> HistoryStep:
     """One step of a load history (T = 1 shift, T = 2 transient rolling over DQ, T = 3 steady)."""
     T = case.digits["T"]
     xo, yo = case.spin_centre
@@ -169,10 +167,3 @@ def summary(case: Module3Case, r) -> dict:
         warnings.append("not converged")
     out["warnings"] = warnings
     return out
-
-
-def _unused(_: object) -> None:   # keep replace imported for callers that patch problems
-    return None
-
-
-__all__ = ["problem_of", "history_step", "same_geometry", "summary", "material_of", "replace"]
