@@ -241,3 +241,32 @@ def test_one_element_start_of_the_normal_problem_grows_the_contact():
     assert fresh.contact.sum() > 1
     assert np.array_equal(warm.contact, fresh.contact)
     assert warm.pmax == pytest.approx(fresh.pmax, rel=1e-6)
+
+
+def test_history_with_a_moving_undeformed_distance():
+    """``solve_history(..., undeformed=...)``: one undeformed distance per applied step; the same h
+    for every step gives the plain history, a wrong count is refused."""
+    from conformal.problem import problems_from_scene
+    from conformal.scene import scene_from_dict
+    from conformal.solvers.history import solve_history
+    from conformal.specs import HistoryStep
+
+    p = problems_from_scene(scene_from_dict({"geometry": {"kind": "hertz", "a": 1.0, "b": 1.0},
+                                             "load": {"normal_force": 1000.0}, "grid": {"n": 16},
+                                             "model": {"theory": "exact"}}))[0]
+    steps = [HistoryStep(fx_rel=-0.5), HistoryStep(fx_rel=-0.8)]
+    plain = solve_history(p, steps)
+    same = solve_history(p, steps, undeformed=[p.h, p.h])
+    assert [s.FX for s in same.steps] == pytest.approx([s.FX for s in plain.steps], rel=1e-12)
+    assert same.shift[-1] == pytest.approx(plain.shift[-1], rel=1e-12)
+    with pytest.raises(InputError, match="one undeformed distance"):
+        solve_history(p, steps, undeformed=[p.h])
+
+
+def test_cli_out_must_be_a_folder(tmp_path, capsys):
+    (tmp_path / "two.inp").write_text(DECK)
+    (tmp_path / "file").write_text("x")
+    assert main(["inp", str(tmp_path / "two.inp"), "--out", str(tmp_path / "file")]) == 2
+    assert "--out" in capsys.readouterr().err
+    assert main(["inp", str(tmp_path / "missing.inp")]) == 2
+    assert "no such file" in capsys.readouterr().err
