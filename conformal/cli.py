@@ -225,6 +225,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     from conformal.dynamics.cli import add_parsers as add_dynamics_parsers  # conformal simulate|stability
     add_dynamics_parsers(sub)
+
+    from conformal.contact_inp.cli import add_parsers as add_inp_parsers  # conformal inp FILE.inp
+    add_inp_parsers(sub)
     return p
 
 

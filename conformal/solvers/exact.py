@@ -183,7 +183,7 @@ def solve(problem: ContactProblem) -> Result:
         from conformal.influence.contact_file import influence_operator
 
         op = influence_operator(problem.info["influence_file"], mx=grid.mx, ms=grid.my, dx=grid.dx, ds=grid.dy,
-                                K=mat.K)
+                                K=mat.K, G=mat.G)
     else:
         op = HalfSpaceInfluence.for_grid(grid.mx, grid.my, grid.dx, grid.dy, mat)
     load = dict(normal_force=problem.normal_force, approach=problem.approach)

@@ -88,7 +88,8 @@ def _shifted(u: np.ndarray, ncol: int) -> np.ndarray:
     return u[:, ncol:]
 
 
-def solve_history(problem: ContactProblem, steps, *, maxout: int | None = None) -> HistoryResult:
+def solve_history(problem: ContactProblem, steps, *, maxout: int | None = None,
+                  undeformed=None) -> HistoryResult:
     """Solve the steps one after the other, each with the memory of the previous tractions.
 
     Parameters
@@ -98,6 +99,9 @@ def solve_history(problem: ContactProblem, steps, *, maxout: int | None = None) 
         is the load of the first step unless that step gives one; its kinematics are not used.
     steps : sequence of :class:`HistoryStep` (at least one).
     maxout : most normal/tangential alternations per step for dissimilar bodies ([model] maxout).
+    undeformed : optional, one undeformed distance per applied step (grid shape, mm) instead of
+        the problem's h: the bodies' profiles moving over the grid between the steps (CONTACT's
+        Z = 2 inside a sequence, e.g. a shift that moves the indenter by one element).
 
     Returns
     -------
@@ -155,7 +159,15 @@ def solve_history(problem: ContactProblem, steps, *, maxout: int | None = None) 
             u = u + op_.apply_coupling_tn(PN)
         return u
 
-    for step in (s for s in steps for _ in range(s.repeat)):
+    applied = [s for s in steps for _ in range(s.repeat)]
+    if undeformed is not None:
+        undeformed = [np.asarray(u, dtype=float) for u in undeformed]
+        if len(undeformed) != len(applied) or any(u.shape != grid.shape for u in undeformed):
+            raise InputError(f"[[history]]: need one undeformed distance of shape {grid.shape} per applied step "
+                             f"({len(applied)})")
+    h0 = h
+    for k_step, step in enumerate(applied):
+        h = h0 if undeformed is None else undeformed[k_step]
         if step.normal_force is not None or step.approach is not None:
             load = dict(normal_force=step.normal_force, approach=step.approach)
         ncol = ncols.get(step, 0)
@@ -176,9 +188,9 @@ def solve_history(problem: ContactProblem, steps, *, maxout: int | None = None) 
             rigid = None
             kind = "shift" if step.rolling == "shift" else "steady"
 
-        def normal_stage(extra_un, p_start, tang, _load=load):
+        def normal_stage(extra_un, p_start, tang, _load=load, _h=h):
             start = p_start if p_start is not None else pn_prev
-            return solve_normal(op, grid, h, tol=tol, maxit=maxit, extra_un=extra_un, p_start=start, material=mat,
+            return solve_normal(op, grid, _h, tol=tol, maxit=maxit, extra_un=extra_un, p_start=start, material=mat,
                                 **_load)
 
         def tangential_stage(pn, extra_u, p_start, _mem=memory, _rigid=rigid, _xi=xi, _eta=eta, _phi=phi,

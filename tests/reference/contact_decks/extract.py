@@ -1,0 +1,80 @@
+"""Rebuild this folder from a CONTACT checkout (github.com/eve70a/CONTACT, Apache-2.0).
+
+    PYTHONPATH=. python tests/reference/contact_decks/extract.py /path/to/CONTACT
+
+For every public deck (examples/*.inp, testbank/**/*.inp) it counts the cases (the ``Case``
+blocks of its .ref_out) and the cases ``conformal inp`` can solve, with the reasons for the
+others, into manifest.json; decks with at least one supported case are copied with their
+.ref_out reduced to the totals of each case (the lines that conformal.contact_inp.refout reads).
+"""
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import sys
+from pathlib import Path
+
+from conformal.contact_inp.deck import plan, read_deck
+from conformal.errors import InputError
+
+HERE = Path(__file__).resolve().parent
+
+
+#: header lines whose next line holds the values the tests read
+_HEADERS = ("FN ", "FN/G", "NPOT", "FX(TR)", "XCP(TR)")
+
+
+def trimmed_ref_out(text: str) -> str:
+    """The case headers and totals blocks of a .ref_out (module 3: totals; module 1: also the
+    forces on the rail, the patch separators and each patch's reference location)."""
+    keep, lines = [], text.splitlines()
+    for i, ln in enumerate(lines):
+        s = ln.strip()
+        if re.match(r"^Case +\d+$", s) or "DATA FOR CONTACT PATCH" in s or s == "TOTAL FORCES ON RAIL":
+            keep.append(ln)
+        elif s.startswith(_HEADERS) and (not s.startswith("FN ") or " FX " in s):
+            keep.extend(lines[i:i + 2])
+    return "\n".join(keep) + "\n"
+
+
+def main(root: str) -> int:
+    root = Path(root)
+    decks = sorted(root.glob("examples/*.inp")) + sorted(root.glob("testbank/**/*.inp"))
+    manifest = []
+    for inp in decks:
+        rel = inp.relative_to(root).as_posix()
+        ref = inp.with_suffix(".ref_out")
+        if not ref.is_file():
+            continue
+        n_cases = len(re.findall(r"^ Case +\d+\s*$", ref.read_text(encoding="latin-1"), flags=re.M))
+        entry = {"deck": rel, "cases": n_cases, "supported": 0, "reasons": {}}
+        try:
+            parsed = read_deck(inp, ignore_subsurface=True, ignore_temperature=True)
+            pl = plan(parsed)
+            entry["supported"] = sum(len(ch) for ch in pl.chains)
+            entry["module"] = sorted({getattr(c, "module", 3) for c in parsed.cases})
+            for _, why in pl.unsupported:
+                entry["reasons"][why] = entry["reasons"].get(why, 0) + 1
+        except InputError as exc:
+            entry["reasons"][str(exc).split(": ", 1)[-1]] = n_cases
+        manifest.append(entry)
+        if entry["supported"]:
+            shutil.copyfile(inp, HERE / inp.name)
+            for case, _ in (item for chain in pl.chains for item in chain):
+                for name in (getattr(case, "rail_file", None), getattr(case, "wheel_file", None)):
+                    if name:          # the profiles of the supported wheel-rail cases, beside the deck
+                        shutil.copyfile(inp.parent / name, HERE / Path(name).name)
+            (HERE / ref.name).write_text(trimmed_ref_out(ref.read_text(encoding="latin-1")), encoding="utf-8")
+        print(f"{rel}: {entry['supported']} / {n_cases}")
+    total = sum(e["cases"] for e in manifest)
+    ok = sum(e["supported"] for e in manifest)
+    out = {"source": "github.com/eve70a/CONTACT (Apache-2.0), E.A.H. Vollebregt / Vtech CMCC",
+           "cases": total, "supported": ok, "decks": manifest}
+    (HERE / "manifest.json").write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
+    print(f"{ok} of {total} cases ({100.0 * ok / total:.1f} %)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1]))
