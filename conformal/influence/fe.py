@@ -94,13 +94,19 @@ from conformal.influence.fe_halfspace3d import _gauss_rectangle_stress, rectangl
 from conformal.meshing.bodies import BodyModel, StripPatch
 from conformal.meshing.gmsh_body import BodyMesh, MeshSpec, mesh_body, surface_frame, surface_point
 
-FE_VERSION = "4"   # 4: bodies swept piece from piece (no boolean fragment): other tetrahedra, numbers
+FE_VERSION = "5"   # 5: profiles that end inside the body's disc continued straight (closure "extend"),
+#                    default body size and grading from studies/fe_far_field_limit.py;
+#                  4: 4: bodies swept piece from piece (no boolean fragment): other tetrahedra, numbers
 #                    moved by the mesh only (51 x 39, 0.4 mm: at most 2.8e-5 / 4.5e-5 of the self
 #                    term on the rail / wheel);
 #                  3: half-space far field on the artificial boundaries (was: clamped)
 METHODS = ("split", "direct")
 SOLVERS = ("auto", "pardiso", "splu", "amg")
 COLLOCATIONS = ("centre", "average")
+#: the body's size and closure (conformal.meshing.gmsh_body.closure_report), reported per body in
+#: the statistics (``stats["body"]``) and so in a solve's JSON (``fe.rail.body``, ``fe.wheel.body``)
+_BODY_KEYS = ("disc_radius_mm", "margin_mm", "margin_requested_mm", "closure_lo", "closure_hi",
+              "extension_lo_mm", "extension_hi_mm", "mesh_reach_mm")
 FAR_FIELDS = ("halfspace", "clamped")
 
 
@@ -563,7 +569,10 @@ def body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
     stats: dict = {}
     t0 = time.perf_counter()
     bm = mesh if mesh is not None else mesh_body(body, patch, settings.mesh)
+    body = bm.body            # the profile as meshed (continued straight where it was short: the
+    #                           arc lengths of the original points, and so the patch, are the same)
     stats.update({f"mesh_{k}": v for k, v in bm.stats.items()})
+    stats["body"] = {k: bm.stats[k] for k in _BODY_KEYS if k in bm.stats}
     t_mesh = time.perf_counter()
     order = settings.mesh.order
     m, space = _space(bm, order)
@@ -922,12 +931,12 @@ def wheel_rail_kernel(grid, material, settings: FESettings = FESettings(), *, ca
 _OPTION_KEYS = {"fe_method": "method", "fe_order": "order", "fe_h_patch": "h_patch", "fe_h_load": "h_load",
                 "fe_growth": "growth", "fe_h_max": "h_max", "fe_conform": "conform",
                 "fe_body_size": "body_size", "fe_solver": "solver", "fe_collocation": "collocation",
-                "fe_far_field": "far_field"}
+                "fe_far_field": "far_field", "fe_closure": "closure"}
 
 
 def settings_from_options(options) -> FESettings:
     """FESettings from a scene's [model] keys fe_method, fe_order, fe_h_patch, fe_h_load, fe_growth,
-    fe_h_max, fe_conform, fe_body_size, fe_solver, fe_collocation, fe_far_field (defaults for
+    fe_h_max, fe_conform, fe_body_size, fe_solver, fe_collocation, fe_far_field, fe_closure (defaults for
     missing keys)."""
     opts = {k: v for k, v in dict(options or {}).items() if str(k).startswith("fe_")}
     unknown = sorted(set(opts) - set(_OPTION_KEYS))
@@ -936,7 +945,7 @@ def settings_from_options(options) -> FESettings:
     mesh_kw, top_kw = {}, {}
     for k, v in opts.items():
         name = _OPTION_KEYS[k]
-        if name in ("method", "solver", "collocation", "conform", "far_field"):
+        if name in ("method", "solver", "collocation", "conform", "far_field", "closure"):
             if not isinstance(v, str):
                 raise InputError(f"[model] {k}: must be a string, got {v!r}")
         elif name == "order":

@@ -44,13 +44,16 @@ BODY_KINDS = ("block", "rail", "wheel")
 class Profile2D:
     """A cross-section surface curve as a polyline of points (y, z) ordered by arc length s.
 
-    ``s`` starts at 0 on the first point.  Any simple curve will do (it need not be a graph over
-    y); the body's material lies on one side of it (:func:`inward_normal`).
+    ``s`` starts at ``s_start`` (default 0) on the first point.  Any simple curve will do (it need
+    not be a graph over y); the body's material lies on one side of it (:func:`inward_normal`).
+    A profile continued before its first point (:func:`grow_profile`) keeps the arc lengths of
+    its original points: its new first point has s < 0.
     """
 
     y: np.ndarray
     z: np.ndarray
     name: str = "profile"
+    s_start: float = 0.0
     s: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -65,7 +68,10 @@ class Profile2D:
         y, z = y[keep], z[keep]
         object.__setattr__(self, "y", y)
         object.__setattr__(self, "z", z)
-        object.__setattr__(self, "s", np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(y), np.diff(z)))]))
+        s0 = float(self.s_start)
+        if not math.isfinite(s0):
+            raise InputError(f"profile {self.name}: s_start must be finite, got {self.s_start!r}")
+        object.__setattr__(self, "s", s0 + np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(y), np.diff(z)))]))
 
     @classmethod
     def from_points(cls, points: np.ndarray, name: str = "profile") -> "Profile2D":
@@ -74,7 +80,7 @@ class Profile2D:
 
     @property
     def length(self) -> float:
-        return float(self.s[-1])
+        return float(self.s[-1] - self.s[0])
 
     def point(self, s) -> np.ndarray:
         """(y, z) at arc length s (linear along the polyline), shape s.shape + (2,)."""
@@ -86,8 +92,8 @@ class Profile2D:
         symmetric chord, so that a point on a vertex gets the mean direction)."""
         s = np.asarray(s, dtype=float)
         h = 0.05
-        a = self.point(np.clip(s - h, 0.0, self.length))
-        b = self.point(np.clip(s + h, 0.0, self.length))
+        a = self.point(np.clip(s - h, self.s[0], self.s[-1]))
+        b = self.point(np.clip(s + h, self.s[0], self.s[-1]))
         t = b - a
         return t / np.linalg.norm(t, axis=-1, keepdims=True)
 
@@ -306,7 +312,7 @@ def _leave_disc(prof: Profile2D, c: np.ndarray, R: float, s_start: float, step: 
     idx = np.arange(len(P))
     cand = idx[(prof.s > s_start) & (dist > R)] if step > 0 else idx[(prof.s < s_start) & (dist > R)][::-1]
     if cand.size == 0:
-        return (prof.length if step > 0 else 0.0), True
+        return float(prof.s[-1] if step > 0 else prof.s[0]), True
     k = int(cand[0])
     j = k - step                                   # the vertex before it (inside, or s_start's segment)
     a = prof.point(s_start) if (prof.s[j] < s_start) == (step > 0) else P[j]
@@ -366,6 +372,104 @@ def _segments_intersect(P: np.ndarray, Q: np.ndarray) -> bool:
     return bool(np.any((o1 * o2 < -1e-18) & (o3 * o4 < -1e-18)))
 
 
+def _disc(body: BodyModel, patch: StripPatch, size: float) -> tuple[np.ndarray, float, float]:
+    """Centre (the profile point at the middle of the patch), radius of the patch about it, and
+    the radius of the body's disc (``size`` patch sizes beyond the patch)."""
+    prof = body.profile
+    e = patch.edges
+    c = prof.point(0.5 * (e[0] + e[-1]))
+    inner = (prof.s > e[0]) & (prof.s < e[-1])
+    r_patch = float(np.max(np.linalg.norm(prof.point(np.concatenate([[e[0]], prof.s[inner], [e[-1]]])) - c, axis=1)))
+    return c, r_patch, r_patch + size * patch.size
+
+
+#: arc length (mm) over which the end tangent of a profile is taken (a chord: on a 0.1 mm
+#: sampled profile the last two segments; on an R10 arc it turns 0.6 degrees from the tangent)
+END_CHORD = 0.2
+
+
+@dataclass(frozen=True)
+class Closure:
+    """How a body's profile was closed at its two ends (low s, high s): the straight continuation
+    added there (``extension_lo``, ``extension_hi``, mm of new profile beyond the original end,
+    0 where none was needed or possible) and the disc radius it was made for."""
+
+    extension_lo: float = 0.0
+    extension_hi: float = 0.0
+    radius: float = 0.0
+
+
+def grow_profile(body: BodyModel, patch: StripPatch, size: float) -> tuple[BodyModel, Closure]:
+    """The body with its profile continued straight along its end tangents where it ends inside
+    the disc of ``size`` patch sizes (:func:`body_extent`), so that the disc, and the FE body, has
+    the size it names.
+
+    Why a straight continuation along the end tangent: the profiles given to the workbench
+    describe the running surface near the contact (a rail head, a wheel tread and flange), and
+    end where the drawing or the measurement ends, not where the body does.  Cutting the body
+    there (the earlier closure: a straight cut to the disc's arc) makes it smaller than
+    ``fe_body_size`` says, by an amount that depends on where the profile file happens to end
+    (the deep pair's rail was the same 36 mm body at sizes 2 and 4), and a finite-body error
+    that does not decrease with the size the user asked for.  The tangent continuation is the
+    C1 extension with no curvature: it adds no geometry the profile does not state (no invented
+    curvature, which would change the compliance near the contact), it keeps the surface smooth
+    where it joins (no kink, whose stress concentration would belong to neither body), and far
+    from the contact only the amount of material matters, which then grows with the size.  The
+    far field imposed beyond the disc (``fe_far_field``) is the half-space tangent to the loaded
+    element, so a straight continuation is also the shape that field assumes.  It is not the
+    real body: a UIC60 head profile ends 35 mm down, where the real rail turns into its web; the
+    continuation makes a deep, straight-sided head instead.  The influence numbers near the
+    contact see that difference only through the far field (the study
+    studies/fe_far_field_limit.py measures how little the size beyond a few patch sizes
+    changes), and a full section (head, web and foot; rim and web) is the domain of the direct
+    FE contact's ground truth (conformal.fe_contact), not of this closure.
+
+    A continuation that would cross the profile itself (a worn gauge face curling back under the
+    head, a concave profile whose end tangents meet) is not made: that end keeps the straight
+    cut of :func:`body_extent`.  The arc lengths of the original points do not change (a
+    continuation before the first point gets s < 0), so a patch given on the original profile
+    is on the grown one at the same s.
+    """
+    if not (size > 0 and math.isfinite(size)):
+        raise InputError(f"[model] fe_body_size: must be > 0, got {size}")
+    prof = body.profile
+    e = patch.edges
+    if e[0] < prof.s[0] - 1e-9 or e[-1] > prof.s[-1] + 1e-9:
+        return body, Closure()                      # body_extent reports it
+    c, _, R = _disc(body, patch, size)
+    P = np.stack([prof.y, prof.z], axis=1)
+    chord = min(END_CHORD, 0.25 * prof.length)
+    ends = {}
+    for side, s_end, s_in in (("lo", prof.s[0], prof.s[0] + chord), ("hi", prof.s[-1], prof.s[-1] - chord)):
+        p = prof.point(s_end)
+        d = p - prof.point(s_in)
+        n = float(np.linalg.norm(d))
+        if n == 0.0 or np.linalg.norm(p - c) >= R:
+            continue
+        d /= n
+        f = p - c
+        b = float(f @ d)
+        t_exit = -b + math.sqrt(max(b * b - (f @ f - R * R), 0.0))
+        q = p + (t_exit + 0.05 * R) * d             # beyond the circle: the body cuts it at R
+        # the continuation must not cross the profile (away from its own end)
+        seg = np.array([p + 1e-6 * (q - p), q])
+        if _segments_intersect(seg, P):
+            continue
+        ends[side] = q
+    if "lo" in ends and "hi" in ends and _segments_intersect(
+            np.array([P[0], ends["lo"]]), np.array([P[-1], ends["hi"]])):
+        ends.pop("lo"), ends.pop("hi")              # the two continuations would meet: cut both
+    if not ends:
+        return body, Closure(radius=R)
+    pts = [ends["lo"][None]] if "lo" in ends else []
+    pts += [P] + ([ends["hi"][None]] if "hi" in ends else [])
+    Q = np.concatenate(pts)
+    ext_lo = float(np.linalg.norm(ends["lo"] - P[0])) if "lo" in ends else 0.0
+    ext_hi = float(np.linalg.norm(ends["hi"] - P[-1])) if "hi" in ends else 0.0
+    grown = Profile2D(Q[:, 0], Q[:, 1], prof.name, s_start=float(prof.s[0]) - ext_lo)
+    return BodyModel(body.kind, grown, body.axle_z), Closure(ext_lo, ext_hi, R)
+
+
 def body_extent(body: BodyModel, patch: StripPatch, size: float = 1.0) -> BodyExtent:
     """Body limits for a patch: a margin of ``size`` x patch size around it (see BodyExtent).
 
@@ -379,13 +483,10 @@ def body_extent(body: BodyModel, patch: StripPatch, size: float = 1.0) -> BodyEx
     if e[0] < prof.s[0] - 1e-9 or e[-1] > prof.s[-1] + 1e-9:
         raise InputError(f"profile {prof.name}: too short for the requested patch: the grid spans "
                          f"s = {e[0]:.3f} .. {e[-1]:.3f} mm along the profile, the profile "
-                         f"0 .. {prof.length:.3f} mm")
+                         f"{prof.s[0]:.3f} .. {prof.s[-1]:.3f} mm")
     margin = size * patch.size
     s_mid = 0.5 * (e[0] + e[-1])
-    c = prof.point(s_mid)
-    inner = (prof.s > e[0]) & (prof.s < e[-1])
-    r_patch = float(np.max(np.linalg.norm(prof.point(np.concatenate([[e[0]], prof.s[inner], [e[-1]]])) - c, axis=1)))
-    R = r_patch + margin
+    c, r_patch, R = _disc(body, patch, size)
     half = patch.n_columns * 0.5 * patch.dx + margin
     r_ref = None
     if not body.below:
