@@ -30,7 +30,7 @@ at sizes 0.5 .. 16 with the default grading, the half-space far field with one r
 grading (all element sizes halved) at the largest sizes, and the production default.
 
     python studies/fe_far_field_limit.py            # the full series (about an hour on 2 busy cores)
-    python studies/fe_far_field_limit.py --quick    # the flat block, clamped, sizes 2-8 (< 60 s; a test)
+    python studies/fe_far_field_limit.py --quick    # the flat block, clamped, sizes 4-16 (< 60 s; a test)
 
 Output: studies/out/fe_far_field_limit/fe_far_field_limit.{md,json,png} and run.json.
 """
@@ -57,9 +57,12 @@ from _provenance import output_dir, write_sidecar  # noqa: E402
 from conformal.errors import ConformalError  # noqa: E402
 
 G, NU = 82000.0, 0.28
-SIZES = (0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
-FINE_SIZES = (4.0, 8.0, 16.0)
-QUICK_SIZES = (2.0, 4.0, 8.0)
+SIZES = (1.0, 2.0, 4.0, 8.0, 16.0)
+CLAMPED_SIZES = (2.0, 4.0, 8.0, 16.0)
+FINE_SIZES = (8.0, 16.0)
+STRAIGHT_SIZES = (4.0, 8.0, 16.0)
+QUICK_SIZES = (4.0, 8.0, 16.0)
+GRID_N = 16          # elements across the overlap (the scenes' 30-40 cost 2-3 min per pair here)
 
 
 # ----------------------------------------------------------------------------- extrapolation
@@ -113,7 +116,7 @@ class Case:
     """One wheel-rail case at its prescribed approach: the curved problem, the half-space
     solution's pressure, and the two bodies with their patches."""
 
-    def __init__(self, key: str, tmp: Path):
+    def __init__(self, key: str, tmp: Path, n: int | None = GRID_N):
         from conformal.cases.conformal import curved_problem_from_wheel_rail
         from conformal.influence.curved import curved_halfspace_kernel
         from conformal.influence.fe import rail_body_from_grid, wheel_body_from_grid
@@ -125,6 +128,8 @@ class Case:
         self.label = label
         sc = scene(tmp) if callable(scene) else load_scene(SCENES / scene)
         sc = replace(sc, load=Load(approach=approach)).with_model(theory="conformal", influence="halfspace")
+        if n is not None:
+            sc = replace(sc, grid=replace(sc.grid, n=n))
         self.problem = curved_problem_from_wheel_rail(sc)
         grid = self.problem.grid
         op, info = influence_operator(grid, sc.material, sc.model)
@@ -148,6 +153,14 @@ class Case:
         kr, kw = body_influences([(self.rail, self.rpatch, m.G1, m.nu1, settings),
                                   (self.wheel, self.wpatch, m.G2, m.nu2, settings)], cache)
         return kr.kernel, rotate_kernel(kw.kernel, self.rot), {"rail": kr.stats, "wheel": kw.stats}
+
+    def slab(self) -> bool:
+        """Whether a body's section is a slab (its ends point the same way, bodies.grow_profile):
+        the default limits its margin to the section's width."""
+        from conformal.meshing.bodies import grow_profile
+
+        return any(grow_profile(b, p, max(SIZES))[1].slab_width > 0
+                   for b, p in ((self.rail, self.rpatch), (self.wheel, self.wpatch)))
 
     def compliance(self, kernel, body: str) -> float:
         return _compliance(kernel, self.hs_body[body], self.p)
@@ -232,12 +245,12 @@ def run_flat(sizes, far: str, cache) -> list[dict]:
     return rows
 
 
-def run_case(case, sizes, far: str, refine: float, cache, grading: str) -> list[dict]:
+def run_case(case, sizes, far: str, refine: float, cache, grading: str, **mesh) -> list[dict]:
     rows = []
     for s in sizes:
         t0 = time.perf_counter()
         try:
-            kr, kw, st = case.kernels(fe_settings(s, far, refine), cache)
+            kr, kw, st = case.kernels(fe_settings(s, far, refine, **mesh), cache)
         except ConformalError as exc:      # e.g. gmsh leaving flat tetrahedra in a small body
             print(f"{case.label}: {far} {grading} size {s:g}: not possible: {exc}", flush=True)
             rows.append({"case": case.key, "far_field": far, "grading": grading, "size": s, "error": str(exc)})
@@ -265,9 +278,13 @@ def limits(rows, case: str, far: str, grading: str, key: str) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="the flat block, clamped, sizes 2, 4, 8 only")
+    ap.add_argument("--quick", action="store_true", help="the flat block, clamped, sizes 4, 8, 16 only")
     ap.add_argument("--cases", default="deep,groove,gauge", help="comma-separated: deep, groove, gauge")
     ap.add_argument("--out", default=None, help="output folder (default studies/out/fe_far_field_limit)")
+    ap.add_argument("--series", default="halfspace,clamped,fine,straight",
+                    help="comma-separated: halfspace, clamped, fine (refined grading), straight (slabs not limited)")
+    ap.add_argument("--append", action="store_true",
+                    help="keep the rows of other cases from the existing JSON (rerun some cases only)")
     args = ap.parse_args(argv)
     out = output_dir("fe_far_field_limit", args)
     out.mkdir(parents=True, exist_ok=True)
@@ -276,20 +293,31 @@ def main(argv=None) -> int:
 
     cache = Cache(None)
     rows: list[dict] = []
+    series = set(args.series.split(","))
+    keys = [k for k in args.cases.split(",") if k]
+    if args.append and (out / "fe_far_field_limit.json").exists():
+        old = json.loads((out / "fe_far_field_limit.json").read_text())["rows"]
+        rows = [r for r in old if r["case"] not in keys and (r["case"] != "flat" or args.quick)]
     if args.quick:
         rows += run_flat(QUICK_SIZES, "clamped", cache)
     else:
-        rows += run_flat(SIZES, "clamped", cache)
+        rows += run_flat((0.5,) + SIZES, "clamped", cache)
         tmp = Path(tempfile.mkdtemp(prefix="fe_far_field_limit_"))
-        for key in [k for k in args.cases.split(",") if k]:
+        for key in keys:
             case = Case(key, tmp)
             print(f"{case.label}: half-space FN = {case.hs.FN:.1f} N {case.warning}", flush=True)
-            rows += run_case(case, SIZES, "halfspace", 1.0, cache, "default")
-            _dump(out, rows)
-            rows += run_case(case, SIZES, "clamped", 1.0, cache, "default")
-            _dump(out, rows)
-            rows += run_case(case, FINE_SIZES, "halfspace", 0.5, cache, "fine")
-            _dump(out, rows)
+            if "halfspace" in series:
+                rows += run_case(case, SIZES, "halfspace", 1.0, cache, "default")
+                _dump(out, rows)
+            if "clamped" in series:
+                rows += run_case(case, CLAMPED_SIZES, "clamped", 1.0, cache, "default")
+                _dump(out, rows)
+            if "fine" in series:
+                rows += run_case(case, FINE_SIZES, "halfspace", 0.5, cache, "fine")
+                _dump(out, rows)
+            if "straight" in series and case.slab():
+                rows += run_case(case, STRAIGHT_SIZES, "halfspace", 1.0, cache, "straight", closure="straight")
+                _dump(out, rows)
     summary = summarise(rows)
     _dump(out, rows, summary)
     (out / "fe_far_field_limit.md").write_text(report(rows, summary))
@@ -303,7 +331,8 @@ def summarise(rows) -> dict:
     out = {}
     for case in dict.fromkeys(r["case"] for r in rows):
         keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio"]
-        for far, grading in (("halfspace", "default"), ("clamped", "default"), ("halfspace", "fine")):
+        for far, grading in (("halfspace", "default"), ("clamped", "default"), ("halfspace", "fine"),
+                             ("halfspace", "straight")):
             for k in keys:
                 lim = limits(rows, case, far, grading, k)
                 if lim:
@@ -344,7 +373,7 @@ def _plot(rows, summary, path: Path) -> None:
         keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio"]
         for k, key in enumerate(keys):
             for far, grading, style in (("halfspace", "default", "-o"), ("clamped", "default", "--s"),
-                                        ("halfspace", "fine", ":^")):
+                                        ("halfspace", "fine", ":^"), ("halfspace", "straight", "-.x")):
                 sel = sorted((r for r in rows if r["case"] == case and r["far_field"] == far
                               and r["grading"] == grading and key in r), key=lambda r: r["size"])
                 if sel:

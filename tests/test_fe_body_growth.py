@@ -49,20 +49,17 @@ def test_grow_profile_continues_straight_and_keeps_arc_lengths():
 
 
 def test_grow_profile_does_not_cross_the_profile():
-    """A hook (a gauge face curling back under the head): its end tangent points back across
-    the profile, so that end keeps the straight cut; a profile long enough needs nothing."""
-    t = np.linspace(0.0, 1.6 * math.pi, 400)                   # 288 degrees of a R10 circle, z down
-    hook = BodyModel("rail", Profile2D.from_points(np.column_stack([10 * np.sin(t), 10 - 10 * np.cos(t)]), "hook"))
-    patch = StripPatch.uniform(3, 1.0, 3, 1.0, 0.5 * hook.profile.length)
-    grown, closure = grow_profile(hook, patch, 4.0)
-    p0, p1 = hook.profile.point(hook.profile.s[[0, -1]])
-    # an end's continuation, where made, never crosses the profile
-    for q, e in ((grown.profile.point(grown.profile.s[0]), p0), (grown.profile.point(grown.profile.s[-1]), p1)):
-        if np.linalg.norm(q - e) > 0:
-            from conformal.meshing.bodies import _segments_intersect
-
-            assert not _segments_intersect(np.array([e + 1e-6 * (q - e), q]),
-                                           np.column_stack([hook.profile.y, hook.profile.z]))
+    """A profile curling back under itself (a rail head's top, field side, underside and an end
+    rising towards the top, as a worn gauge face can): that end's tangent points at the top
+    surface, so it keeps the straight cut; the other end is continued.  A profile long enough
+    needs nothing."""
+    pts = np.array([[0.0, 0.0], [20.0, 0.0], [20.0, 10.0], [5.0, 10.0], [5.0, 3.0]])
+    curl = BodyModel("rail", Profile2D.from_points(pts, "curl"))
+    patch = StripPatch.uniform(3, 1.0, 3, 1.0, 12.0)                # on the top, around y = 12
+    grown, closure = grow_profile(curl, patch, 8.0)
+    assert closure.extension_hi == 0.0 and closure.extension_lo > 10.0
+    assert grown.profile.y[0] < -10.0 and grown.profile.z[0] == pytest.approx(0.0, abs=1e-12)
+    np.testing.assert_allclose(grown.profile.point(curl.profile.s[-1]), [5.0, 3.0], atol=1e-12)
     long_flat = BodyModel("block", Profile2D(np.array([-500.0, 500.0]), np.zeros(2)))
     same, c = grow_profile(long_flat, StripPatch.uniform(3, 1.0, 3, 1.0, 500.0), 4.0)
     assert same is long_flat and c.extension_lo == c.extension_hi == 0.0
@@ -78,13 +75,12 @@ def test_mesh_grows_with_body_size_on_a_short_profile():
     patch = _patch(body)
     reach, free, stats = {}, {}, {}
     for size, closure in ((1.0, "extend"), (4.0, "extend"), (16.0, "extend"), (16.0, "cut")):
-        if True:
-            m = mesh_body(body, patch, MeshSpec(body_size=size, closure=closure, h_patch=4.0, h_load=None))
-            c = np.asarray(m.extent.centre)
-            dist = np.linalg.norm(m.points[:, 1:] - c, axis=1)
-            reach[size, closure] = float(dist.max())
-            free[size, closure] = float(dist[np.unique(m.free_tris)].max())
-            stats[size, closure] = m.stats
+        m = mesh_body(body, patch, MeshSpec(body_size=size, closure=closure, h_patch=4.0, h_load=None))
+        c = np.asarray(m.extent.centre)
+        dist = np.linalg.norm(m.points[:, 1:] - c, axis=1)
+        reach[size, closure] = float(dist.max())
+        free[size, closure] = float(dist[np.unique(m.free_tris)].max())
+        stats[size, closure] = m.stats
     r_patch = stats[1.0, "extend"]["disc_radius_mm"] - 1.0 * patch.size
     ends = max(np.linalg.norm(body.profile.point(body.profile.s[[0, -1]]) - np.asarray(m.extent.centre), axis=1))
     for size in (1.0, 4.0, 16.0):
@@ -100,3 +96,23 @@ def test_mesh_grows_with_body_size_on_a_short_profile():
     # the cut closure: the free surface ends with the profile (about 16 mm from the centre)
     assert free[16.0, "cut"] == pytest.approx(ends, rel=1e-3) and free[16.0, "cut"] < 0.3 * free[16.0, "extend"]
     assert stats[16.0, "cut"]["closure_lo"] == stats[16.0, "cut"]["closure_hi"] == "cut"
+
+
+def test_wheel_body_size_is_limited_by_the_wheel():
+    """A 50 mm wheel cannot hold a body of 16 patch sizes (5 mm patch): the margin is cut to a disc
+    reaching 0.75 of the wheel's radius towards the axle, and the extent says so (the report's
+    margin_limited_by); a grid far larger than the wheel is still refused."""
+    from conformal.errors import InputError
+    from conformal.meshing.bodies import WHEEL_REACH
+
+    t = np.linspace(-0.5, 0.5, 201)
+    wheel = BodyModel("wheel", Profile2D.from_points(np.column_stack([10 * np.sin(t), -10 * (1 - np.cos(t))]),
+                                                     "crown"), axle_z=-50.0)
+    patch = StripPatch.uniform(5, 1.0, 5, 1.0, 0.5 * wheel.profile.length)
+    small, big = (body_extent(grow_profile(wheel, patch, z)[0], patch, z) for z in (1.0, 16.0))
+    assert not small.wheel_limited and small.depth == pytest.approx(patch.size)
+    r_patch = small.radius - small.depth
+    assert big.wheel_limited and big.radius == pytest.approx(WHEEL_REACH * 50.0)
+    assert big.depth == pytest.approx(WHEEL_REACH * 50.0 - r_patch) and big.depth < 16 * patch.size
+    with pytest.raises(InputError, match="larger than the wheel"):
+        body_extent(wheel, StripPatch.uniform(200, 1.0, 5, 1.0, 0.5 * wheel.profile.length), 1.0)

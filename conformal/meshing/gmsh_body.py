@@ -30,7 +30,7 @@ from conformal.meshing.bodies import BodyExtent, BodyModel, StripPatch, body_ext
 
 SAMPLING = 0
 CONFORM = ("all", "column", "none")
-CLOSURES = ("extend", "cut")
+CLOSURES = ("extend", "straight", "cut")
 
 
 class MeshingError(ConformalError):
@@ -53,11 +53,16 @@ class MeshSpec:
     growth: float = 0.35
     h_max: float = 0.2          # largest element, relative to the body margin (depth)
     conform: str = "column"
-    body_size: float = 1.0      # margin around the patch, in patch sizes (see body_extent)
+    # margin around the patch, in patch sizes (see body_extent): 16, chosen from
+    # studies/fe_far_field_limit.py: within 0.3 % (rail corner), 0.1 % (flange root) and 0.2 %
+    # (pair FN) of the size-converged limit of the deep pair, at the unknowns of size 1 (the
+    # grading keeps them nearly constant; size 1, the earlier default, was 2.6 % off on the rail)
+    body_size: float = 16.0
     optimize: bool = True
     # a profile that ends inside the body's disc: continued straight along its end tangent
-    # ("extend", bodies.grow_profile), or cut straight to the disc's arc ("cut", the earlier
-    # closure, which leaves the body smaller than body_size says)
+    # ("extend", bodies.grow_profile; a section whose ends point the same way, a slab, is
+    # limited to a margin of its width; "straight": not limited), or cut straight to the disc's
+    # arc ("cut", the earlier closure, which leaves the body smaller than body_size says)
     closure: str = "extend"
 
     def __post_init__(self):
@@ -449,14 +454,16 @@ def _restore_sigpipe() -> None:
 
 
 def closure_report(original, body: BodyModel, patch: StripPatch, ext: BodyExtent, size: float,
-                   points: np.ndarray | None = None) -> dict:
+                   points: np.ndarray | None = None, slab: bool = False) -> dict:
     """What the body is, for the FE statistics and the solve's JSON: the disc radius it has
     (``disc_radius_mm``) and its margin beyond the patch (``margin_mm``) against the
     ``size`` patch sizes asked for (``margin_requested_mm``); at each end of the ``original``
     profile the closure: ``"profile"`` (the profile reaches the disc), ``"extended"`` (continued
     straight along its end tangent, ``extension_lo_mm`` / ``extension_hi_mm`` of it inside the
-    body) or ``"cut"`` (a straight cut from the profile's end to the disc's arc, the body is
-    smaller).  With ``points`` (the mesh nodes) also what the mesher built: ``mesh_reach_mm``,
+    body) or ``"cut"`` (a straight cut from the profile's end to the disc's arc); what limited
+    the margin where it is smaller than asked for (``margin_limited_by``: ``"wheel radius"``,
+    ``"section width"`` (``slab``: a section whose ends point the same way, see
+    bodies.grow_profile), ``"profile end"`` or ``""``).  With ``points`` (the mesh nodes) also what the mesher built: ``mesh_reach_mm``,
     the largest distance of a node from the disc's centre in the cross-section."""
     lo = max(0.0, float(original.s[0] - ext.s_lo))
     hi = max(0.0, float(ext.s_hi - original.s[-1]))
@@ -464,7 +471,9 @@ def closure_report(original, body: BodyModel, patch: StripPatch, ext: BodyExtent
            "margin_requested_mm": float(size * patch.size),
            "closure_lo": "cut" if ext.cut_lo else ("extended" if lo > 0 else "profile"),
            "closure_hi": "cut" if ext.cut_hi else ("extended" if hi > 0 else "profile"),
-           "extension_lo_mm": lo, "extension_hi_mm": hi}
+           "extension_lo_mm": lo, "extension_hi_mm": hi,
+           "margin_limited_by": ("wheel radius" if ext.wheel_limited else "section width" if slab else
+                                 "profile end" if ext.depth < size * patch.size * (1 - 1e-9) else "")}
     if points is not None:
         _, yz = cross_section_coordinates(body, ext, points)
         out["mesh_reach_mm"] = float(np.max(np.linalg.norm(yz - np.asarray(ext.centre), axis=1)))
@@ -485,11 +494,13 @@ def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
 
     original = body.profile
     joints: tuple[float, ...] = ()
+    size = spec.body_size
     if extent is None:
-        if spec.closure == "extend":
-            body, _ = grow_profile(body, patch, spec.body_size)
+        if spec.closure in ("extend", "straight"):
+            body, closure = grow_profile(body, patch, spec.body_size, limit_slab=spec.closure == "extend")
             joints = tuple(float(v) for v in (original.s[0], original.s[-1]))
-        ext = body_extent(body, patch, spec.body_size)
+            size = closure.size
+        ext = body_extent(body, patch, size)
     else:
         ext = extent
     h_e = min(patch.dx, float(patch.s_widths.min()))
@@ -520,5 +531,5 @@ def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
                            f"{ext.x_hi:.3f}, s = {ext.s_lo:.3f} .. {ext.s_hi:.3f} mm")
     stats = {"geometry_s": t1 - t0, "mesh_s": t2 - t1, "nodes": len(pts), "tets": len(tets),
              "free_tris": len(free), "clamped_tris": len(clamped), "h_element": h_e,
-             **closure_report(original, body, patch, ext, spec.body_size, pts)}
+             **closure_report(original, body, patch, ext, spec.body_size, pts, slab=size < spec.body_size)}
     return BodyMesh(body, patch, ext, spec, pts, tets, free, clamped, uv, stats)
