@@ -20,7 +20,8 @@ Measured per case (idealised long profiles: the scene profiles continued straigh
   the same with the single-body half-space numbers in turned element frames (the influence model
   ``influence = "halfspace"``);
 * per pair: FN with FE numbers over FN with half-space numbers at the same prescribed approach
-  and the same curved grid (conformal.solvers.conformal.solve_curved).
+  and the same curved grid (conformal.solvers.conformal.solve_curved); also with one body's FE
+  numbers and the other's half-space numbers (``FN_rail_only``, ``FN_wheel_only``).
 
 Cases: the flat block (a 9 x 9 patch of 1 mm elements, elliptic Hertz-like pressure: the exact
 limit is 1), the deep pair (rail corner R10 against flange root R10.2, 0.05 mm), a R10 wheel in a
@@ -257,7 +258,10 @@ def run_case(case, sizes, far: str, refine: float, cache, grading: str, **mesh) 
             continue
         row = {"case": case.key, "far_field": far, "grading": grading, "size": s,
                "C_rail": case.compliance(kr, "rail"), "C_wheel": case.compliance(kw, "wheel"),
-               "FN_ratio": case.fn_ratio(kr + kw), "time_s": time.perf_counter() - t0,
+               "FN_ratio": case.fn_ratio(kr + kw),
+               # one FE body against the other's half-space numbers: what each body's shape does
+               "FN_rail_only": case.fn_ratio(kr + case.hs_body["wheel"]),
+               "FN_wheel_only": case.fn_ratio(case.hs_body["rail"] + kw), "time_s": time.perf_counter() - t0,
                "fe_s": sum(float(v.get("total_s", 0.0)) for v in st.values()),
                "dofs": [v.get("dofs") for v in st.values()],
                "body": {b: v.get("body") for b, v in st.items()}}
@@ -319,10 +323,10 @@ def main(argv=None) -> int:
                 rows += run_case(case, STRAIGHT_SIZES, "halfspace", 1.0, cache, "straight", closure="straight")
                 _dump(out, rows)
     summary = summarise(rows)
-    _dump(out, rows, summary)
+    _dump(out, rows, summary, converged(rows, summary))
     (out / "fe_far_field_limit.md").write_text(report(rows, summary))
     _plot(rows, summary, out / "fe_far_field_limit.png")
-    write_sidecar(out, __file__, args, extra={"summary": summary})
+    write_sidecar(out, __file__, args, extra={"converged": converged(rows, summary)})
     print(report(rows, summary))
     return 0
 
@@ -330,7 +334,7 @@ def main(argv=None) -> int:
 def summarise(rows) -> dict:
     out = {}
     for case in dict.fromkeys(r["case"] for r in rows):
-        keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio"]
+        keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio", "FN_rail_only", "FN_wheel_only"]
         for far, grading in (("halfspace", "default"), ("clamped", "default"), ("halfspace", "fine"),
                              ("halfspace", "straight")):
             for k in keys:
@@ -340,14 +344,58 @@ def summarise(rows) -> dict:
     return out
 
 
-def _dump(out: Path, rows, summary=None) -> None:
+def converged(rows, summary) -> list[dict]:
+    """Per case and quantity: the limit (R3 of the half-space far field's series), its error bar
+    (the largest of |R2 - R3|, the clamped series' R3 and the refined grading's R2 against it),
+    and the production default's value and distance from it (the default's size is one of the
+    series' sizes)."""
+    from conformal.meshing.gmsh_body import MeshSpec
+
+    size = MeshSpec().body_size
+    out = []
+    for case, per in summary.items():
+        hs = per.get("halfspace/default", {})
+        for k, lim in hs.items():
+            if "R3" not in lim:
+                continue
+            others = [abs(lim["R2"] - lim["R3"])]
+            cl = per.get("clamped/default", {}).get(k, {})
+            fine = per.get("halfspace/fine", {}).get(k, {})
+            if "R3" in cl:
+                others.append(abs(cl["R3"] - lim["R3"]))
+            if "R2" in fine:
+                others.append(abs(fine["R2"] - lim["R2"]))
+            at = [r[k] for r in rows if r["case"] == case and r["far_field"] == "halfspace"
+                  and r["grading"] == "default" and r["size"] == size and k in r]
+            row = {"case": case, "quantity": k, "limit": lim["R3"], "err": max(others), "ratio": lim.get("ratio"),
+                   "clamped_R3": cl.get("R3"), "fine_R2": fine.get("R2")}
+            if at:
+                row.update(default=at[0], default_off=at[0] / lim["R3"] - 1.0)
+            out.append(row)
+    return out
+
+
+def _dump(out: Path, rows, summary=None, conv=None) -> None:
     tmp = out / "fe_far_field_limit.json.tmp"
-    tmp.write_text(json.dumps({"rows": rows, "summary": summary or {}}, indent=1, default=float))
+    tmp.write_text(json.dumps({"rows": rows, "summary": summary or {}, "converged": conv or []}, indent=1,
+                              default=float))
     os.replace(tmp, out / "fe_far_field_limit.json")
 
 
 def report(rows, summary) -> str:
-    lines = ["| case | quantity | far field / grading | value at size " + " / ".join(f"{s:g}" for s in SIZES)
+    from conformal.meshing.gmsh_body import MeshSpec
+
+    conv = converged(rows, summary)
+    head = ["| case | quantity | limit (R3, half-space far field) | error bar | clamped R3 | refined R2 "
+            f"| default (size {MeshSpec().body_size:g}) | default - limit |", "|---|---|---|---|---|---|---|---|"]
+
+    def f(v, fmt="{:.4f}"):
+        return "-" if v is None else fmt.format(v)
+
+    for c in conv:
+        head.append(f"| {c['case']} | {c['quantity']} | {c['limit']:.4f} | {c['err']:.4f} | {f(c['clamped_R3'])} | "
+                    f"{f(c['fine_R2'])} | {f(c.get('default'))} | {f(c.get('default_off'), '{:+.2%}')} |")
+    lines = head + ["", "| case | quantity | far field / grading | value at size " + " / ".join(f"{s:g}" for s in SIZES)
              + " | R2 | R3 | ratio of differences |", "|---|---|---|---|---|---|---|"]
     for case, per in summary.items():
         for series, d in per.items():

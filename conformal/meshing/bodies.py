@@ -516,7 +516,7 @@ def grow_profile(body: BodyModel, patch: StripPatch, size: float, *, limit_slab:
         t = (P - p) @ d
         off = np.abs((P - p) @ np.array([-d[1], d[0]]))
         ahead = (t > 1e-9 * R) & (np.linalg.norm(P - c, axis=1) <= R)     # in a 45-degree cone
-        if np.any(ahead & (off < np.maximum(t, 0.3 * (R - _disc(body, patch, size)[1])))):
+        if np.any(ahead & (off < t)):
             continue
         ends[side] = q
     if "lo" in ends and "hi" in ends and _segments_intersect(
