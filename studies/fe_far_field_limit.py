@@ -386,15 +386,27 @@ def report(rows, summary) -> str:
     from conformal.meshing.gmsh_body import MeshSpec
 
     conv = converged(rows, summary)
-    head = ["| case | quantity | limit (R3, half-space far field) | error bar | clamped R3 | refined R2 "
-            f"| default (size {MeshSpec().body_size:g}) | default - limit |", "|---|---|---|---|---|---|---|---|"]
+    head = ["| case | quantity | limit (R3, half-space far field) | error bar | ratio of differences 4-8-16 "
+            f"| clamped R3 | refined R2 | default (size {MeshSpec().body_size:g}) | default - limit |",
+            "|---|---|---|---|---|---|---|---|---|"]
 
     def f(v, fmt="{:.4f}"):
         return "-" if v is None else fmt.format(v)
 
     for c in conv:
-        head.append(f"| {c['case']} | {c['quantity']} | {c['limit']:.4f} | {c['err']:.4f} | {f(c['clamped_R3'])} | "
-                    f"{f(c['fine_R2'])} | {f(c.get('default'))} | {f(c.get('default_off'), '{:+.2%}')} |")
+        r = c.get("ratio")
+        regime = f(r, "{:.2f}") + ("" if r is not None and 0.4 <= r <= 0.7 else " (not 1/size)")
+        head.append(f"| {c['case']} | {c['quantity']} | {c['limit']:.4f} | {c['err']:.4f} | {regime} | "
+                    f"{f(c['clamped_R3'])} | {f(c['fine_R2'])} | {f(c.get('default'))} | "
+                    f"{f(c.get('default_off'), '{:+.2%}')} |")
+    slabs = sorted({(r["case"], b, r["size"]) for r in rows for b, v in (r.get("body") or {}).items()
+                    if v and v.get("margin_limited_by") == "section width" and r["grading"] == "default"})
+    for case in dict.fromkeys(c for c, _, _ in slabs):
+        first = min((z, b) for c, b, z in slabs if c == case)
+        head.append("")
+        head.append(f"{case}: the {first[1]} section is a slab (its profile's ends point the same way); from size "
+                    f"{first[0]:g} on its margin is limited to the section's width, so its 'limit' is that of the "
+                    "limited body, not of a large one: the series 'straight' (not limited) grows without bound.")
     lines = head + ["", "| case | quantity | far field / grading | value at size " + " / ".join(f"{s:g}" for s in SIZES)
              + " | R2 | R3 | ratio of differences |", "|---|---|---|---|---|---|---|"]
     for case, per in summary.items():
@@ -432,12 +444,18 @@ def _plot(rows, summary, path: Path) -> None:
                 ax.plot([0], [lim.get("R3", lim["R2"])], "*", color=f"C{k}", ms=10)
         ax.axhline(1.0, color="0.6", lw=0.8)
         ax.set_xlabel("1 / fe_body_size (patch sizes)")
-        ax.set_ylabel("FE / half-space (compliance per body, FN per pair)")
+        if ax is axes[0][0]:
+            ax.set_ylabel("FE / half-space")
         ax.set_title(case, fontsize=10)
         ax.set_ylim(0.85, 1.2)
-        ax.legend(fontsize=6)
-    fig.suptitle("FE bodies over the body size; stars: Richardson limits (half-space far field)")
-    fig.tight_layout()
+    handles = {}
+    for ax in axes[0]:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(lab, h)
+    fig.legend(list(handles.values()), list(handles.keys()), loc="lower center", ncol=4, fontsize=7)
+    fig.suptitle("Compliance per body (C_rail, C_wheel) and FN per pair at a prescribed approach, FE over "
+                 "half-space;\nstars: Richardson limits (R3) of the half-space far field's series", fontsize=10)
+    fig.tight_layout(rect=(0, 0.06 + 0.025 * math.ceil(len(handles) / 4), 1, 1))
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
