@@ -100,8 +100,9 @@ from conformal.meshing.bodies import BodyModel, StripPatch
 from conformal.meshing.gmsh_body import BodyMesh, MeshSpec, mesh_body, surface_frame, surface_point
 
 FE_VERSION = "5"   # 5: profiles that end inside the body's disc continued straight (closure "extend"),
-#                    default body size and grading from studies/fe_far_field_limit.py;
-#                  4: 4: bodies swept piece from piece (no boolean fragment): other tetrahedra, numbers
+#                    wheel bodies limited to 0.75 of the radius, default body size 16
+#                    (studies/fe_far_field_limit.py);
+#                  4: bodies swept piece from piece (no boolean fragment): other tetrahedra, numbers
 #                    moved by the mesh only (51 x 39, 0.4 mm: at most 2.8e-5 / 4.5e-5 of the self
 #                    term on the rail / wheel);
 #                  3: half-space far field on the artificial boundaries (was: clamped)

@@ -446,19 +446,19 @@ def grow_profile(body: BodyModel, patch: StripPatch, size: float, *, limit_slab:
     from the contact only the amount of material matters, which then grows with the size.  The
     far field imposed beyond the disc (``fe_far_field``) is the half-space tangent to the loaded
     element, so a straight continuation is also the shape that field assumes.  It is not the
-    real body: a UIC60 head profile ends 35 mm down, where the real rail turns into its web; the
-    continuation makes a deep, straight-sided head instead.  The influence numbers near the
-    contact see that difference only through the far field (the study
-    studies/fe_far_field_limit.py measures how little the size beyond a few patch sizes
-    changes), and a full section (head, web and foot; rim and web) is the domain of the direct
-    FE contact's ground truth (conformal.fe_contact), not of this closure.
+    real body: a UIC60 head profile ends 35 mm down, where the real rail turns into its web, and
+    an S1002 profile ends at the flange back and the field side of the tread, where the real
+    rim turns into its faces.  On idealised long profiles (a rail corner, a flange root, a
+    groove) the continued bodies converge with the size (studies/fe_far_field_limit.py); on real
+    profiles the full section (head, web and foot; rim and web) is the answer, the domain of the
+    direct FE contact's ground truth (conformal.fe_contact), not of this closure.
 
     A continuation that would cross the profile itself or run close beside a part of it ahead of
     the end (a worn gauge face curling back under the head, a concave profile whose end tangents
     meet) is not made: that end keeps the straight cut of :func:`body_extent`.
 
-    Where the two ends point the same way (within SLAB_ANGLE: the sides of a rail head profile,
-    the flange back and field face of a wheel profile), a straight continuation makes a slab as
+    Where the two ends point the same way (within SLAB_ANGLE: the sides of a rail head profile),
+    a straight continuation makes a slab as
     wide as the section, and an edge-loaded slab has no size-converged compliance (it grows like
     the logarithm of its depth, studies/fe_far_field_limit.py: the UIC60 head continued straight
     went 1.026, 1.037, 1.076 x the half-space at sizes 4, 8, 16).  The real section below a rail
@@ -466,9 +466,10 @@ def grow_profile(body: BodyModel, patch: StripPatch, size: float, *, limit_slab:
     real body there; the body is then limited to a margin of the section's width (at least one
     patch size): the half-space far field takes over about one head width from the patch, and
     ``Closure.size`` (and the FE statistics' ``margin_limited_by = "section width"``) say so
-    (``limit_slab = False``, the closure ``"straight"``: the slab as deep as the size asks).  The arc lengths of the original points do not change (a
-    continuation before the first point gets s < 0), so a patch given on the original profile
-    is on the grown one at the same s.
+    (``limit_slab = False``, the closure ``"straight"``: the slab as deep as the size asks).
+
+    The arc lengths of the original points do not change (a continuation before the first point
+    gets s < 0), so a patch given on the original profile is on the grown one at the same s.
     """
     if not (size > 0 and math.isfinite(size)):
         raise InputError(f"[model] fe_body_size: must be > 0, got {size}")
