@@ -26,11 +26,18 @@ Measured per case (idealised long profiles: the scene profiles continued straigh
 Cases: the flat block (a 9 x 9 patch of 1 mm elements, elliptic Hertz-like pressure: the exact
 limit is 1), the deep pair (rail corner R10 against flange root R10.2, 0.05 mm), a R10 wheel in a
 R10.05 groove (rolling radius 460 mm so that the wheel body can grow; 0.01 mm) and the R13 gauge
-corner of UIC60 against the S1002 flange root (6.2 mm shift, 0.03 mm).  Series: both far fields
-at sizes 0.5 .. 16 with the default grading, the half-space far field with one refinement of the
-grading (all element sizes halved) at the largest sizes, and the production default.
+corner of UIC60 against the S1002 flange root (6.2 mm shift, 0.03 mm), all on grids of n = 16
+(GRID_N).  Series: the half-space far field at sizes 1-16 (the default 16 among them), clamped at
+2-16, the half-space far field with every element size halved at 8 and 16, and where a body's
+section is a slab (the UIC60 head) the unlimited straight continuation at 4-16
+(``fe_closure = "straight"``: its compliance grows without bound, the default limits it).  The
+report gives, per case and quantity, the limit (R3 of the half-space series), an error bar (the
+largest of |R2 - R3|, the clamped R3 and the refined R2 against it) and the default's distance
+from it.
 
-    python studies/fe_far_field_limit.py            # the full series (about an hour on 2 busy cores)
+    python studies/fe_far_field_limit.py            # everything (about 75 min on 2 busy cores)
+    python studies/fe_far_field_limit.py --cases gauge --series halfspace,straight --append
+                                                    # rerun one case, keep the others' rows
     python studies/fe_far_field_limit.py --quick    # the flat block, clamped, sizes 4-16 (< 60 s; a test)
 
 Output: studies/out/fe_far_field_limit/fe_far_field_limit.{md,json,png} and run.json.
