@@ -2,8 +2,15 @@
 
 The question a user asks of FE influence numbers: at the same approach, how much more or less
 load does the real, curved wheel and rail carry than two half-spaces?  The FE bodies are finite
-(a margin of ``fe_body_size`` patch sizes around the contact); this study shows that the answer
-does not depend on that size, and how fast it converges.
+(a margin of ``fe_body_size`` patch sizes around the contact); this study shows how the answer
+depends on that size at 0.5-4.
+
+Superseded for the size question by studies/fe_far_field_limit.py (issue 20): its committed
+outputs were made with FE_VERSION 4, where a profile ending inside the body was cut there (the
+deep pair's bodies stopped growing beyond size 2, so the half-space series looked flat), and sizes
+up to 4; the default body size is now 16 with profiles continued straight.  The sizes here are
+explicit, so a rerun measures the same sizes with the new closure; it was not rerun for the
+change (the new study covers sizes 1-16 with both far fields and extrapolates).
 
 For each scene the conformal solver runs at the scene's prescribed approach with half-space
 numbers (the reference FN_hs) and with FE numbers for body sizes 0.5, 1, 2, 4 (clamped: 0.5, 1, 2)

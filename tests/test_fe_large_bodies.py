@@ -76,15 +76,24 @@ def test_split_and_direct_methods_agree_on_the_gauge_corner():
 def test_fe_for_profiles_that_are_not_graphs_over_y(tmp_path, monkeypatch):
     """The deep conformal pair: vertical gauge and flange faces (neither profile is a graph over
     y), rail corner R10 against flange root R10.2, contact angles over tens of degrees.  FE
-    meshes both bodies along the arc length; at the prescribed approach the FE bodies carry
-    within a few per cent of the half-spaces' load (studies/fe_body_size.py)."""
+    meshes both bodies along the arc length, continued straight beyond the profiles' ends to the
+    default body size (16 patch sizes).  At the prescribed approach 0.05 mm the size-converged FE
+    bodies carry 1.0 % less than the turned-frame half-spaces (studies/fe_far_field_limit.py:
+    limit 0.9897 +- 0.0003; the default 0.9914 on this n = 16 grid, 0.9900 at n = 30); issue 20
+    asks 0.984-0.997.  The JSON reports each body's size and closure."""
     monkeypatch.setenv("CONFORMAL_CACHE", str(tmp_path))
     sc = load_scene(SCENES / "deep_conformal_pair.toml")
     sc = replace(sc, grid=replace(sc.grid, n=16))
     fe = solve_scene(sc)
     hs = solve_scene(sc.with_model(influence="halfspace"))
-    assert fe.converged and fe.FN == pytest.approx(hs.FN, rel=0.05)
+    assert fe.converged and 0.984 < fe.FN / hs.FN < 0.997, fe.FN / hs.FN
     assert fe.summary()["contact_angle_spread_deg"] > 30.0
+    for kind in ("rail", "wheel"):
+        body = fe.to_dict()["fe"][kind]["body"]
+        assert body["margin_mm"] == pytest.approx(body["margin_requested_mm"]) and body["margin_limited_by"] == ""
+        assert body["closure_lo"] == body["closure_hi"] == "extended"
+        assert body["extension_lo_mm"] > 100 and body["extension_hi_mm"] > 100
+        assert body["mesh_reach_mm"] == pytest.approx(body["disc_radius_mm"], rel=1e-3)
 
 
 @pytest.mark.slow

@@ -53,24 +53,29 @@ boundaries carry decides whether the truncated body behaves like the large one:
     exactly (its correction has neither load nor boundary value), and on a curved body u_c
     carries only the effect of the real surface inside the disc, which converges as the disc
     grows.  Measured at a prescribed approach (studies/fe_body_size.py): a crowned wheel on a flat
-    rail gives Hertz's FN within 0.1 % at every body size from 0.5 to 4.
+    rail gives Hertz's FN within 0.1 % at every body size from 0.5 to 4 (its curvature is slight).
 ``"clamped"``
     Zero displacement (the earlier default).  Every number then carries a negative truncation
     offset of about 1/size of the self term; summed over the hundreds of elements in contact it
     made the bodies 20-45 % too stiff at a prescribed approach (crowned wheel: FN +44 % at size
     0.5, +25 % at 1, +7.5 % at 4).  Kept for comparison.
 
-Why not a graded or infinite-element body: a clamped body large enough for 1 % in FN at a
-prescribed approach would need a margin of about 30 patch sizes (the offset decays like 1/size);
-infinite elements need their own decay law.  The half-space field is exact for the flat limit, is
-already evaluated in closed form for the split method (conformal.influence.fe_halfspace3d), and
-costs nothing extra.  Its limit: beyond the disc the body is taken as the tangent half-space of
-the loaded element, so curvature farther than ``fe_body_size`` patch sizes away is not seen; the
-body-size study shows how little that changes the contact.
+Body size (studies/fe_far_field_limit.py).  Both far fields converge to the same large-body
+limit, with an error that decays like 1/size (the clamped one from the stiff side, 5-10 times
+farther off); Richardson extrapolation in 1/size over doubling sizes gives that limit (on the flat
+block it recovers the exact half-space compliance to 2e-4).  What the half-space far field
+cannot remove is the curvature beyond the disc: the body beyond it is taken as the tangent
+half-space of the loaded element, so a convex rail corner (a quarter-space-like wedge) is too
+stiff and a concave flange root too compliant in a small body.  The deep pair's R10 rail corner
+was 2.6 % too stiff at size 1, the earlier default; at the default 16 it is within 0.3 % of the
+limit (flange root 0.1 %, pair FN 0.2 %), and with the existing grading the body of 16 patch
+sizes has the same unknowns as that of size 1.  Where a profile ends inside the disc it is
+continued straight (conformal.meshing.bodies.grow_profile), so that the size is the one asked
+for; a wheel body is limited to 0.75 of the wheel's radius (reported, ``margin_limited_by``).
 
 Defaults (MeshSpec): split, P1, h = 2 d on the observed patch, d/2 at the loaded column, growth
-0.35, body margin 1 x the patch size, scipy splu or pypardiso; chosen from the study's Pareto
-front (studies/fe_influence_speed_error.py).
+0.35, body margin 16 x the patch size, scipy splu or pypardiso; the grading chosen from the
+Pareto front of studies/fe_influence_speed_error.py, the size from studies/fe_far_field_limit.py.
 
 Influence numbers are cached by conformal.influence.cache; bump ``FE_VERSION`` whenever a change
 here changes the numbers.
@@ -94,13 +99,20 @@ from conformal.influence.fe_halfspace3d import _gauss_rectangle_stress, rectangl
 from conformal.meshing.bodies import BodyModel, StripPatch
 from conformal.meshing.gmsh_body import BodyMesh, MeshSpec, mesh_body, surface_frame, surface_point
 
-FE_VERSION = "4"   # 4: bodies swept piece from piece (no boolean fragment): other tetrahedra, numbers
+FE_VERSION = "5"   # 5: profiles that end inside the body's disc continued straight (closure "extend"),
+#                    wheel bodies limited to 0.75 of the radius, default body size 16
+#                    (studies/fe_far_field_limit.py);
+#                  4: bodies swept piece from piece (no boolean fragment): other tetrahedra, numbers
 #                    moved by the mesh only (51 x 39, 0.4 mm: at most 2.8e-5 / 4.5e-5 of the self
 #                    term on the rail / wheel);
 #                  3: half-space far field on the artificial boundaries (was: clamped)
 METHODS = ("split", "direct")
 SOLVERS = ("auto", "pardiso", "splu", "amg")
 COLLOCATIONS = ("centre", "average")
+#: the body's size and closure (conformal.meshing.gmsh_body.closure_report), reported per body in
+#: the statistics (``stats["body"]``) and so in a solve's JSON (``fe.rail.body``, ``fe.wheel.body``)
+_BODY_KEYS = ("disc_radius_mm", "margin_mm", "margin_requested_mm", "closure_lo", "closure_hi",
+              "extension_lo_mm", "extension_hi_mm", "margin_limited_by", "mesh_reach_mm")
 FAR_FIELDS = ("halfspace", "clamped")
 
 
@@ -563,7 +575,10 @@ def body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
     stats: dict = {}
     t0 = time.perf_counter()
     bm = mesh if mesh is not None else mesh_body(body, patch, settings.mesh)
+    body = bm.body            # the profile as meshed (continued straight where it was short: the
+    #                           arc lengths of the original points, and so the patch, are the same)
     stats.update({f"mesh_{k}": v for k, v in bm.stats.items()})
+    stats["body"] = {k: bm.stats[k] for k in _BODY_KEYS if k in bm.stats}
     t_mesh = time.perf_counter()
     order = settings.mesh.order
     m, space = _space(bm, order)
@@ -922,12 +937,12 @@ def wheel_rail_kernel(grid, material, settings: FESettings = FESettings(), *, ca
 _OPTION_KEYS = {"fe_method": "method", "fe_order": "order", "fe_h_patch": "h_patch", "fe_h_load": "h_load",
                 "fe_growth": "growth", "fe_h_max": "h_max", "fe_conform": "conform",
                 "fe_body_size": "body_size", "fe_solver": "solver", "fe_collocation": "collocation",
-                "fe_far_field": "far_field"}
+                "fe_far_field": "far_field", "fe_closure": "closure"}
 
 
 def settings_from_options(options) -> FESettings:
     """FESettings from a scene's [model] keys fe_method, fe_order, fe_h_patch, fe_h_load, fe_growth,
-    fe_h_max, fe_conform, fe_body_size, fe_solver, fe_collocation, fe_far_field (defaults for
+    fe_h_max, fe_conform, fe_body_size, fe_solver, fe_collocation, fe_far_field, fe_closure (defaults for
     missing keys)."""
     opts = {k: v for k, v in dict(options or {}).items() if str(k).startswith("fe_")}
     unknown = sorted(set(opts) - set(_OPTION_KEYS))
@@ -936,7 +951,7 @@ def settings_from_options(options) -> FESettings:
     mesh_kw, top_kw = {}, {}
     for k, v in opts.items():
         name = _OPTION_KEYS[k]
-        if name in ("method", "solver", "collocation", "conform", "far_field"):
+        if name in ("method", "solver", "collocation", "conform", "far_field", "closure"):
             if not isinstance(v, str):
                 raise InputError(f"[model] {k}: must be a string, got {v!r}")
         elif name == "order":

@@ -44,13 +44,16 @@ BODY_KINDS = ("block", "rail", "wheel")
 class Profile2D:
     """A cross-section surface curve as a polyline of points (y, z) ordered by arc length s.
 
-    ``s`` starts at 0 on the first point.  Any simple curve will do (it need not be a graph over
-    y); the body's material lies on one side of it (:func:`inward_normal`).
+    ``s`` starts at ``s_start`` (default 0) on the first point.  Any simple curve will do (it need
+    not be a graph over y); the body's material lies on one side of it (:func:`inward_normal`).
+    A profile continued before its first point (:func:`grow_profile`) keeps the arc lengths of
+    its original points: its new first point has s < 0.
     """
 
     y: np.ndarray
     z: np.ndarray
     name: str = "profile"
+    s_start: float = 0.0
     s: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -65,7 +68,10 @@ class Profile2D:
         y, z = y[keep], z[keep]
         object.__setattr__(self, "y", y)
         object.__setattr__(self, "z", z)
-        object.__setattr__(self, "s", np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(y), np.diff(z)))]))
+        s0 = float(self.s_start)
+        if not math.isfinite(s0):
+            raise InputError(f"profile {self.name}: s_start must be finite, got {self.s_start!r}")
+        object.__setattr__(self, "s", s0 + np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(y), np.diff(z)))]))
 
     @classmethod
     def from_points(cls, points: np.ndarray, name: str = "profile") -> "Profile2D":
@@ -74,7 +80,7 @@ class Profile2D:
 
     @property
     def length(self) -> float:
-        return float(self.s[-1])
+        return float(self.s[-1] - self.s[0])
 
     def point(self, s) -> np.ndarray:
         """(y, z) at arc length s (linear along the polyline), shape s.shape + (2,)."""
@@ -86,8 +92,8 @@ class Profile2D:
         symmetric chord, so that a point on a vertex gets the mean direction)."""
         s = np.asarray(s, dtype=float)
         h = 0.05
-        a = self.point(np.clip(s - h, 0.0, self.length))
-        b = self.point(np.clip(s + h, 0.0, self.length))
+        a = self.point(np.clip(s - h, self.s[0], self.s[-1]))
+        b = self.point(np.clip(s + h, self.s[0], self.s[-1]))
         t = b - a
         return t / np.linalg.norm(t, axis=-1, keepdims=True)
 
@@ -270,6 +276,7 @@ class BodyExtent:
     cut_lo: bool = False
     cut_hi: bool = False
     x_ref_radius: float | None = None  # wheel: radius at which x is arc length
+    wheel_limited: bool = False        # the margin was cut to fit the wheel (bodies._disc)
 
     @property
     def theta_lo(self) -> float:
@@ -306,7 +313,7 @@ def _leave_disc(prof: Profile2D, c: np.ndarray, R: float, s_start: float, step: 
     idx = np.arange(len(P))
     cand = idx[(prof.s > s_start) & (dist > R)] if step > 0 else idx[(prof.s < s_start) & (dist > R)][::-1]
     if cand.size == 0:
-        return (prof.length if step > 0 else 0.0), True
+        return float(prof.s[-1] if step > 0 else prof.s[0]), True
     k = int(cand[0])
     j = k - step                                   # the vertex before it (inside, or s_start's segment)
     a = prof.point(s_start) if (prof.s[j] < s_start) == (step > 0) else P[j]
@@ -366,6 +373,167 @@ def _segments_intersect(P: np.ndarray, Q: np.ndarray) -> bool:
     return bool(np.any((o1 * o2 < -1e-18) & (o3 * o4 < -1e-18)))
 
 
+#: a wheel body's disc reaches at most this fraction of the wheel's radius towards the axle, and
+#: its sector at most this angle (rad): larger sizes are limited to them (and say so)
+WHEEL_REACH = 0.75
+WHEEL_SECTOR = 1.4 * math.pi
+
+
+def _disc(body: BodyModel, patch: StripPatch, size: float) -> tuple[np.ndarray, float, float, float, bool]:
+    """Centre (the profile point at the middle of the patch), radius of the patch about it, the
+    radius of the body's disc (``size`` patch sizes beyond the patch), that margin, and whether a
+    wheel limited it (a disc beyond WHEEL_REACH of the wheel's radius or a sector beyond
+    WHEEL_SECTOR: the margin is cut to fit; a wheel too small for a quarter patch size raises)."""
+    prof = body.profile
+    e = patch.edges
+    s_mid = 0.5 * (e[0] + e[-1])
+    c = prof.point(s_mid)
+    inner = (prof.s > e[0]) & (prof.s < e[-1])
+    r_patch = float(np.max(np.linalg.norm(prof.point(np.concatenate([[e[0]], prof.s[inner], [e[-1]]])) - c, axis=1)))
+    margin = size * patch.size
+    limited = False
+    if not body.below:
+        r_ref = float(body.radius_at(s_mid))
+        cap = min(WHEEL_REACH * r_ref - r_patch, 0.5 * WHEEL_SECTOR * r_ref - patch.n_columns * 0.5 * patch.dx)
+        if cap < min(margin, 0.25 * patch.size):
+            raise InputError(f"wheel body: the grid is larger than the wheel: the FE body would reach "
+                             f"{r_patch + margin:.1f} mm into the wheel and be "
+                             f"{patch.n_columns * patch.dx + 2 * margin:.1f} mm long at radius {r_ref:.1f} mm; "
+                             "reduce mx, dx or [model] fe_body_size")
+        if margin > cap:
+            margin, limited = cap, True
+    return c, r_patch, r_patch + margin, margin, limited
+
+
+#: arc length (mm) over which the end tangent of a profile is taken (a chord: on a 0.1 mm
+#: sampled profile the last two segments; on an R10 arc it turns 0.6 degrees from the tangent)
+END_CHORD = 0.2
+
+
+@dataclass(frozen=True)
+class Closure:
+    """How a body's profile was closed at its two ends (low s, high s): the straight continuation
+    added there (``extension_lo``, ``extension_hi``, mm of new profile beyond the original end,
+    0 where none was needed or possible) and the disc radius it was made for."""
+
+    extension_lo: float = 0.0
+    extension_hi: float = 0.0
+    radius: float = 0.0
+    size: float = 0.0            # the body size made (patch sizes): below the one asked for on a slab
+    slab_width: float = 0.0      # width of the section between parallel continued ends (0: none)
+
+
+#: end directions within this angle (rad) of each other make the continued section a slab
+SLAB_ANGLE = math.radians(30.0)
+
+
+def grow_profile(body: BodyModel, patch: StripPatch, size: float, *, limit_slab: bool = True
+                 ) -> tuple[BodyModel, Closure]:
+    """The body with its profile continued straight along its end tangents where it ends inside
+    the disc of ``size`` patch sizes (:func:`body_extent`), so that the disc, and the FE body, has
+    the size it names.
+
+    Why a straight continuation along the end tangent: the profiles given to the workbench
+    describe the running surface near the contact (a rail head, a wheel tread and flange), and
+    end where the drawing or the measurement ends, not where the body does.  Cutting the body
+    there (the earlier closure: a straight cut to the disc's arc) makes it smaller than
+    ``fe_body_size`` says, by an amount that depends on where the profile file happens to end
+    (the deep pair's rail was the same 36 mm body at sizes 2 and 4), and a finite-body error
+    that does not decrease with the size the user asked for.  The tangent continuation is the
+    C1 extension with no curvature: it adds no geometry the profile does not state (no invented
+    curvature, which would change the compliance near the contact), it keeps the surface smooth
+    where it joins (no kink, whose stress concentration would belong to neither body), and far
+    from the contact only the amount of material matters, which then grows with the size.  The
+    far field imposed beyond the disc (``fe_far_field``) is the half-space tangent to the loaded
+    element, so a straight continuation is also the shape that field assumes.  It is not the
+    real body: a UIC60 head profile ends 35 mm down, where the real rail turns into its web, and
+    an S1002 profile ends at the flange back and the field side of the tread, where the real
+    rim turns into its faces.  On idealised long profiles (a rail corner, a flange root, a
+    groove) the continued bodies converge with the size (studies/fe_far_field_limit.py); on real
+    profiles the full section (head, web and foot; rim and web) is the answer, the domain of the
+    direct FE contact's ground truth (conformal.fe_contact), not of this closure.
+
+    A continuation that would cross the profile itself or run close beside a part of it ahead of
+    the end (a worn gauge face curling back under the head, a concave profile whose end tangents
+    meet) is not made: that end keeps the straight cut of :func:`body_extent`.
+
+    Where the two ends point the same way (within SLAB_ANGLE: the sides of a rail head profile),
+    a straight continuation makes a slab as
+    wide as the section, and an edge-loaded slab has no size-converged compliance (it grows like
+    the logarithm of its depth, studies/fe_far_field_limit.py: the UIC60 head continued straight
+    went 1.026, 1.037, 1.076 x the half-space at sizes 4, 8, 16).  The real section below a rail
+    head or a wheel rim is narrower still (web), so neither the slab nor the half-space is the
+    real body there; the body is then limited to a margin of the section's width (at least one
+    patch size): the half-space far field takes over about one head width from the patch, and
+    ``Closure.size`` (and the FE statistics' ``margin_limited_by = "section width"``) say so
+    (``limit_slab = False``, the closure ``"straight"``: the slab as deep as the size asks).
+
+    The arc lengths of the original points do not change (a continuation before the first point
+    gets s < 0), so a patch given on the original profile is on the grown one at the same s.
+    """
+    if not (size > 0 and math.isfinite(size)):
+        raise InputError(f"[model] fe_body_size: must be > 0, got {size}")
+    prof = body.profile
+    e = patch.edges
+    if e[0] < prof.s[0] - 1e-9 or e[-1] > prof.s[-1] + 1e-9:
+        return body, Closure(size=size)             # body_extent reports it
+    P = np.stack([prof.y, prof.z], axis=1)
+    chord = min(END_CHORD, 0.25 * prof.length)
+    # outward end directions; where they are nearly parallel the continued section is a slab of
+    # the section's width (a rail head's sides, a wheel rim's faces) whose compliance grows
+    # without bound with its depth (an edge-loaded plate): the margin is limited to that width
+    dirs = {}
+    for side, s_end, s_in in (("lo", prof.s[0], prof.s[0] + chord), ("hi", prof.s[-1], prof.s[-1] - chord)):
+        d = prof.point(s_end) - prof.point(s_in)
+        n = float(np.linalg.norm(d))
+        dirs[side] = d / n if n > 0 else None
+    width = 0.0
+    if dirs["lo"] is not None and dirs["hi"] is not None and dirs["lo"] @ dirs["hi"] > math.cos(SLAB_ANGLE):
+        m = dirs["lo"] + dirs["hi"]
+        m /= np.linalg.norm(m)
+        gap = P[-1] - P[0]
+        width = abs(float(gap[0] * m[1] - gap[1] * m[0]))
+        if limit_slab:
+            size = min(size, max(width, patch.size) / patch.size)
+    c, _, R, _, _ = _disc(body, patch, size)
+    ends = {}
+    for side, s_end in (("lo", prof.s[0]), ("hi", prof.s[-1])):
+        p = prof.point(s_end)
+        d = dirs[side]
+        if d is None or np.linalg.norm(p - c) >= R:
+            continue
+        f = p - c
+        b = float(f @ d)
+        t_exit = -b + math.sqrt(max(b * b - (f @ f - R * R), 0.0))
+        L = t_exit + 0.05 * R
+        q = p + L * d                               # beyond the circle: the body cuts it at R
+        # the continuation must not cross the profile, nor run close beside a part of it in the
+        # disc that lies ahead of the end, within 45 degrees of its direction (a hook curling back
+        # under the running surface: a continuation there would slit the material; that end
+        # keeps the cut, which shrinks the disc to the hook)
+        seg = np.array([p + 1e-6 * (q - p), q])
+        if _segments_intersect(seg, P):
+            continue
+        t = (P - p) @ d
+        off = np.abs((P - p) @ np.array([-d[1], d[0]]))
+        ahead = (t > 1e-9 * R) & (np.linalg.norm(P - c, axis=1) <= R)     # in a 45-degree cone
+        if np.any(ahead & (off < t)):
+            continue
+        ends[side] = q
+    if "lo" in ends and "hi" in ends and _segments_intersect(
+            np.array([P[0], ends["lo"]]), np.array([P[-1], ends["hi"]])):
+        ends.pop("lo"), ends.pop("hi")              # the two continuations would meet: cut both
+    if not ends:
+        return body, Closure(radius=R, size=size, slab_width=width)
+    pts = [ends["lo"][None]] if "lo" in ends else []
+    pts += [P] + ([ends["hi"][None]] if "hi" in ends else [])
+    Q = np.concatenate(pts)
+    ext_lo = float(np.linalg.norm(ends["lo"] - P[0])) if "lo" in ends else 0.0
+    ext_hi = float(np.linalg.norm(ends["hi"] - P[-1])) if "hi" in ends else 0.0
+    grown = Profile2D(Q[:, 0], Q[:, 1], prof.name, s_start=float(prof.s[0]) - ext_lo)
+    return BodyModel(body.kind, grown, body.axle_z), Closure(ext_lo, ext_hi, R, size, width)
+
+
 def body_extent(body: BodyModel, patch: StripPatch, size: float = 1.0) -> BodyExtent:
     """Body limits for a patch: a margin of ``size`` x patch size around it (see BodyExtent).
 
@@ -379,21 +547,11 @@ def body_extent(body: BodyModel, patch: StripPatch, size: float = 1.0) -> BodyEx
     if e[0] < prof.s[0] - 1e-9 or e[-1] > prof.s[-1] + 1e-9:
         raise InputError(f"profile {prof.name}: too short for the requested patch: the grid spans "
                          f"s = {e[0]:.3f} .. {e[-1]:.3f} mm along the profile, the profile "
-                         f"0 .. {prof.length:.3f} mm")
-    margin = size * patch.size
+                         f"{prof.s[0]:.3f} .. {prof.s[-1]:.3f} mm")
     s_mid = 0.5 * (e[0] + e[-1])
-    c = prof.point(s_mid)
-    inner = (prof.s > e[0]) & (prof.s < e[-1])
-    r_patch = float(np.max(np.linalg.norm(prof.point(np.concatenate([[e[0]], prof.s[inner], [e[-1]]])) - c, axis=1)))
-    R = r_patch + margin
+    c, r_patch, R, margin, wheel_limited = _disc(body, patch, size)
     half = patch.n_columns * 0.5 * patch.dx + margin
-    r_ref = None
-    if not body.below:
-        r_ref = float(body.radius_at(s_mid))
-        if R >= 0.8 * r_ref or 2 * half / r_ref > 1.5 * math.pi:
-            raise InputError(f"wheel body: the grid is larger than the wheel: the FE body would reach "
-                             f"{R:.1f} mm into the wheel and be {2 * half:.1f} mm long at radius {r_ref:.1f} mm; "
-                             "reduce mx, dx or [model] fe_body_size")
+    r_ref = None if body.below else float(body.radius_at(s_mid))
     # A profile end inside the disc is closed by a straight cut to the circle (along the inward
     # normal, or the nearest direction that does not cross the profile).  Where that cut would be
     # a sliver (the end lies just inside) or cannot be made, the disc shrinks to pass through
@@ -444,4 +602,4 @@ def body_extent(body: BodyModel, patch: StripPatch, size: float = 1.0) -> BodyEx
     mid = arc[64]
     return BodyExtent(-half, half, float(s_lo), float(s_hi), float(R - r_patch), (float(c[0]), float(c[1])),
                       float(R), (float(q_lo[0]), float(q_lo[1])), (float(q_hi[0]), float(q_hi[1])),
-                      (float(mid[0]), float(mid[1])), bool(cut_lo), bool(cut_hi), r_ref)
+                      (float(mid[0]), float(mid[1])), bool(cut_lo), bool(cut_hi), r_ref, wheel_limited)

@@ -26,10 +26,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from conformal.errors import ConformalError, InputError
-from conformal.meshing.bodies import BodyExtent, BodyModel, StripPatch, body_extent
+from conformal.meshing.bodies import BodyExtent, BodyModel, StripPatch, body_extent, grow_profile
 
 SAMPLING = 0
 CONFORM = ("all", "column", "none")
+CLOSURES = ("extend", "straight", "cut")
 
 
 class MeshingError(ConformalError):
@@ -52,12 +53,23 @@ class MeshSpec:
     growth: float = 0.35
     h_max: float = 0.2          # largest element, relative to the body margin (depth)
     conform: str = "column"
-    body_size: float = 1.0      # margin around the patch, in patch sizes (see body_extent)
+    # margin around the patch, in patch sizes (see body_extent): 16, chosen from
+    # studies/fe_far_field_limit.py: within 0.3 % (rail corner), 0.1 % (flange root) and 0.2 %
+    # (pair FN) of the size-converged limit of the deep pair, at the unknowns of size 1 (the
+    # grading keeps them nearly constant; size 1, the earlier default, was 2.6 % off on the rail)
+    body_size: float = 16.0
     optimize: bool = True
+    # a profile that ends inside the body's disc: continued straight along its end tangent
+    # ("extend", bodies.grow_profile; a section whose ends point the same way, a slab, is
+    # limited to a margin of its width; "straight": not limited), or cut straight to the disc's
+    # arc ("cut", the earlier closure, which leaves the body smaller than body_size says)
+    closure: str = "extend"
 
     def __post_init__(self):
         if self.order not in (1, 2):
             raise InputError(f"[model] fe_order: must be 1 or 2, got {self.order}")
+        if self.closure not in CLOSURES:
+            raise InputError(f"[model] fe_closure: must be one of {', '.join(CLOSURES)}, got {self.closure!r}")
         if self.conform not in CONFORM:
             raise InputError(f"[model] fe_conform: must be one of {', '.join(CONFORM)}, got {self.conform!r}")
         for name in ("h_patch", "growth", "h_max", "body_size"):
@@ -70,7 +82,7 @@ class MeshSpec:
     def key(self) -> dict:
         return {"order": self.order, "h_patch": self.h_patch, "h_load": self.h_load, "growth": self.growth,
                 "h_max": self.h_max, "conform": self.conform, "body_size": self.body_size,
-                "optimize": self.optimize}
+                "optimize": self.optimize, "closure": self.closure}
 
 
 @dataclass(frozen=True, eq=False)
@@ -171,12 +183,16 @@ def _cut_positions(patch: StripPatch, conform: str) -> np.ndarray:
     return np.unique(np.array(cuts))
 
 
-def _build(gmsh, body: BodyModel, patch: StripPatch, ext: BodyExtent, spec: MeshSpec):
+def _build(gmsh, body: BodyModel, patch: StripPatch, ext: BodyExtent, spec: MeshSpec, joints=()):
     occ = gmsh.model.occ
     prof = body.profile
     e = patch.edges
-    breaks = [ext.s_lo] if ext.s_lo < e[0] - 1e-9 else []
-    breaks = np.array(breaks + list(e) + ([ext.s_hi] if ext.s_hi > e[-1] + 1e-9 else []))
+    tol = 1e-6 * max(1.0, patch.size)
+    # the joints of a straight continuation (grow_profile) split the curve: the continuation is
+    # one straight line, not the last span of a spline through 0.1 mm points (which would bulge)
+    lo = [ext.s_lo] + [j for j in joints if ext.s_lo + tol < j < e[0] - tol]
+    hi = [j for j in joints if e[-1] + tol < j < ext.s_hi - tol] + [ext.s_hi]
+    breaks = np.array(([v for v in lo if v < e[0] - 1e-9]) + list(e) + [v for v in hi if v > e[-1] + 1e-9])
     pieces = prof.pieces(breaks)
     x0 = 0.0 if body.revolved else ext.x_lo
 
@@ -373,7 +389,7 @@ class _NoTetrahedra(Exception):
     """gmsh's 3-D mesher left the volume empty (try another algorithm)."""
 
 
-def _generate(gmsh, body, patch, ext, spec, h_e, threads, algorithm3d):
+def _generate(gmsh, body, patch, ext, spec, h_e, threads, algorithm3d, joints=()):
     """One gmsh session: geometry, size field, mesh (Mesh.Algorithm3D = algorithm3d), extraction."""
     if gmsh.isInitialized():
         gmsh.finalize()
@@ -385,7 +401,7 @@ def _generate(gmsh, body, patch, ext, spec, h_e, threads, algorithm3d):
         gmsh.model.add("conformal_body")
         step = "building the geometry"
         try:
-            _build(gmsh, body, patch, ext, spec)
+            _build(gmsh, body, patch, ext, spec, joints)
             step = "setting the mesh size"
             n_obs, n_col = _size_field(gmsh, body, patch, ext, spec, h_e)
             if n_obs == 0:
@@ -437,6 +453,33 @@ def _restore_sigpipe() -> None:
             signal.signal(signal.SIGPIPE, handler)
 
 
+def closure_report(original, body: BodyModel, patch: StripPatch, ext: BodyExtent, size: float,
+                   points: np.ndarray | None = None, slab: bool = False) -> dict:
+    """What the body is, for the FE statistics and the solve's JSON: the disc radius it has
+    (``disc_radius_mm``) and its margin beyond the patch (``margin_mm``) against the
+    ``size`` patch sizes asked for (``margin_requested_mm``); at each end of the ``original``
+    profile the closure: ``"profile"`` (the profile reaches the disc), ``"extended"`` (continued
+    straight along its end tangent, ``extension_lo_mm`` / ``extension_hi_mm`` of it inside the
+    body) or ``"cut"`` (a straight cut from the profile's end to the disc's arc); what limited
+    the margin where it is smaller than asked for (``margin_limited_by``: ``"wheel radius"``,
+    ``"section width"`` (``slab``: a section whose ends point the same way, see
+    bodies.grow_profile), ``"profile end"`` or ``""``).  With ``points`` (the mesh nodes) also what the mesher built: ``mesh_reach_mm``,
+    the largest distance of a node from the disc's centre in the cross-section."""
+    lo = max(0.0, float(original.s[0] - ext.s_lo))
+    hi = max(0.0, float(ext.s_hi - original.s[-1]))
+    out = {"disc_radius_mm": float(ext.radius), "margin_mm": float(ext.depth),
+           "margin_requested_mm": float(size * patch.size),
+           "closure_lo": "cut" if ext.cut_lo else ("extended" if lo > 0 else "profile"),
+           "closure_hi": "cut" if ext.cut_hi else ("extended" if hi > 0 else "profile"),
+           "extension_lo_mm": lo, "extension_hi_mm": hi,
+           "margin_limited_by": ("wheel radius" if ext.wheel_limited else "section width" if slab else
+                                 "profile end" if ext.depth < size * patch.size * (1 - 1e-9) else "")}
+    if points is not None:
+        _, yz = cross_section_coordinates(body, ext, points)
+        out["mesh_reach_mm"] = float(np.max(np.linalg.norm(yz - np.asarray(ext.centre), axis=1)))
+    return out
+
+
 def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
               extent: BodyExtent | None = None, *, threads: int = 1) -> BodyMesh:
     """Build and mesh one body for a patch (gmsh, OpenCASCADE).  Raises MeshingError on failure.
@@ -449,16 +492,26 @@ def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
     """
     import gmsh
 
-    ext = extent or body_extent(body, patch, spec.body_size)
+    original = body.profile
+    joints: tuple[float, ...] = ()
+    size = spec.body_size
+    if extent is None:
+        if spec.closure in ("extend", "straight"):
+            body, closure = grow_profile(body, patch, spec.body_size, limit_slab=spec.closure == "extend")
+            joints = tuple(float(v) for v in (original.s[0], original.s[-1]))
+            size = closure.size
+        ext = body_extent(body, patch, size)
+    else:
+        ext = extent
     h_e = min(patch.dx, float(patch.s_widths.min()))
     t0 = time.perf_counter()
     # HXT (fast) first; where it cannot recover the surface mesh ("failed to recover constrained
     # triangles", S1002 at a 5 mm shift) it leaves gmsh unusable ("I'm busy"), so the whole model
     # is built again for gmsh's Delaunay mesher (slower, more tolerant)
     try:
-        pts, tets, free, clamped, t1, t2 = _generate(gmsh, body, patch, ext, spec, h_e, threads, 10)
+        pts, tets, free, clamped, t1, t2 = _generate(gmsh, body, patch, ext, spec, h_e, threads, 10, joints)
     except _NoTetrahedra:
-        pts, tets, free, clamped, t1, t2 = _generate(gmsh, body, patch, ext, spec, h_e, threads, 1)
+        pts, tets, free, clamped, t1, t2 = _generate(gmsh, body, patch, ext, spec, h_e, threads, 1, joints)
     if len(tets) == 0:
         raise MeshingError(f"gmsh produced no tetrahedra for the {body.kind} body")
     tets = _drop_flat(pts, tets, body)
@@ -477,5 +530,6 @@ def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
                            f"s = {got[0, 1]:.3f} .. {got[1, 1]:.3f} mm instead of x = {ext.x_lo:.3f} .. "
                            f"{ext.x_hi:.3f}, s = {ext.s_lo:.3f} .. {ext.s_hi:.3f} mm")
     stats = {"geometry_s": t1 - t0, "mesh_s": t2 - t1, "nodes": len(pts), "tets": len(tets),
-             "free_tris": len(free), "clamped_tris": len(clamped), "h_element": h_e}
+             "free_tris": len(free), "clamped_tris": len(clamped), "h_element": h_e,
+             **closure_report(original, body, patch, ext, spec.body_size, pts, slab=size < spec.body_size)}
     return BodyMesh(body, patch, ext, spec, pts, tets, free, clamped, uv, stats)

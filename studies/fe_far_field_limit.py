@@ -1,0 +1,471 @@
+"""FE bodies converged in size: per-body compliance and pair FN over the body size, extrapolated.
+
+The FE influence numbers of a body (conformal.influence.fe) come from a finite model: a disc of
+``fe_body_size`` patch sizes around the contact in the cross-section (a profile that ends inside
+it is continued straight, conformal.meshing.bodies.grow_profile), with the half-space field of the
+load (``fe_far_field = "halfspace"``) or zero displacement (``"clamped"``) on the artificial
+boundary.  Both series converge to the same large-body limit, the clamped one from the stiff
+side: the error of a finite body decays like 1/size (a truncated Boussinesq field), so the limit
+follows by Richardson extrapolation in 1/size,
+
+    R2 = 2 C(2s) - C(s),    R3 = (8 C(4s) - 6 C(2s) + C(s)) / 3,
+
+from the last two or three sizes of a doubling series, and the successive-difference ratio
+(C(4s) - C(2s)) / (C(2s) - C(s)) is 0.5 in that regime.
+
+Measured per case (idealised long profiles: the scene profiles continued straight):
+
+* per body: the compliance ``C`` = mean normal displacement under the half-space solution's
+  pressure at the prescribed approach, weighted by that pressure (sum p u_n / sum p u_n,hs), over
+  the same with the single-body half-space numbers in turned element frames (the influence model
+  ``influence = "halfspace"``);
+* per pair: FN with FE numbers over FN with half-space numbers at the same prescribed approach
+  and the same curved grid (conformal.solvers.conformal.solve_curved); also with one body's FE
+  numbers and the other's half-space numbers (``FN_rail_only``, ``FN_wheel_only``).
+
+Cases: the flat block (a 9 x 9 patch of 1 mm elements, elliptic Hertz-like pressure: the exact
+limit is 1), the deep pair (rail corner R10 against flange root R10.2, 0.05 mm), a R10 wheel in a
+R10.05 groove (rolling radius 460 mm so that the wheel body can grow; 0.01 mm) and the R13 gauge
+corner of UIC60 against the S1002 flange root (6.2 mm shift, 0.03 mm), all on grids of n = 16
+(GRID_N).  Series: the half-space far field at sizes 1-16 (the default 16 among them), clamped at
+2-16, the half-space far field with every element size halved at 8 and 16, and where a body's
+section is a slab (the UIC60 head) the unlimited straight continuation at 4-16
+(``fe_closure = "straight"``: its compliance grows without bound, the default limits it).  The
+report gives, per case and quantity, the limit (R3 of the half-space series), an error bar (the
+largest of |R2 - R3|, the clamped R3 and the refined R2 against it) and the default's distance
+from it.
+
+    python studies/fe_far_field_limit.py            # everything (about 75 min on 2 busy cores)
+    python studies/fe_far_field_limit.py --cases gauge --series halfspace,straight --append
+                                                    # rerun one case, keep the others' rows
+    python studies/fe_far_field_limit.py --quick    # the flat block, clamped, sizes 4-16 (< 60 s; a test)
+
+Output: studies/out/fe_far_field_limit/fe_far_field_limit.{md,json,png} and run.json.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = ROOT / "meshes" / "scenes"
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _provenance import output_dir, write_sidecar  # noqa: E402
+from conformal.errors import ConformalError  # noqa: E402
+
+G, NU = 82000.0, 0.28
+SIZES = (1.0, 2.0, 4.0, 8.0, 16.0)
+CLAMPED_SIZES = (2.0, 4.0, 8.0, 16.0)
+FINE_SIZES = (8.0, 16.0)
+STRAIGHT_SIZES = (4.0, 8.0, 16.0)
+QUICK_SIZES = (4.0, 8.0, 16.0)
+GRID_N = 16          # elements across the overlap (the scenes' 30-40 cost 2-3 min per pair here)
+
+
+# ----------------------------------------------------------------------------- extrapolation
+def richardson(sizes, values) -> dict:
+    """Limits of a doubling series in 1/size: R2 from the last two sizes, R3 from the last
+    three (error a/s + b/s^2), the successive-difference ratio of the last three, and an error
+    bar: |R2 - R3| (the size of the term R2 neglects)."""
+    s = np.asarray(sizes, float)
+    v = np.asarray(values, float)
+    if len(s) < 2 or not np.allclose(s[1:] / s[:-1], 2.0):
+        raise ValueError(f"richardson: need a doubling series of sizes, got {s.tolist()}")
+    r2 = 2 * v[-1] - v[-2]
+    out = {"R2": float(r2), "last": float(v[-1])}
+    if len(s) >= 3:
+        r3 = (8 * v[-1] - 6 * v[-2] + v[-3]) / 3
+        d1, d2 = v[-2] - v[-3], v[-1] - v[-2]
+        out.update(R3=float(r3), ratio=float(d2 / d1) if d1 != 0 else float("nan"), err=float(abs(r2 - r3)))
+    return out
+
+
+# ----------------------------------------------------------------------------- cases
+def _groove_scene(tmp: Path, r_groove: float = 10.05, r_wheel: float = 10.0):
+    """A R10 wheel crown in a R10.05 rail groove, rolling radius 460 mm (the 50 mm wheel of
+    meshes/scenes/groove_conformal.toml cannot hold a body beyond 2 patch sizes): two circular
+    arcs, continued straight by the FE bodies (as every profile here)."""
+    from conformal.scene import load_scene
+
+    t = np.linspace(-math.asin(9.5 / r_groove), math.asin(9.5 / r_groove), 381)
+    rail = np.column_stack([r_groove * np.sin(t), -r_groove * (1 - np.cos(t))])        # z down: bottom z = 0
+    t = np.linspace(-math.asin(9.0 / r_wheel), math.asin(9.0 / r_wheel), 361)
+    wheel = np.column_stack([r_wheel * np.sin(t), -r_wheel * (1 - np.cos(t))])
+    np.savetxt(tmp / "groove_rail.csv", rail, delimiter=",", fmt="%.10f",
+               header=f"groove rail: concave arc R{r_groove:g}, bottom at (0, 0), z down (mm)")
+    np.savetxt(tmp / "groove_wheel.csv", wheel, delimiter=",", fmt="%.10f",
+               header=f"groove wheel: convex arc R{r_wheel:g}, crown at (0, 0), z = increase of radius (mm)")
+    text = (SCENES / "groove_conformal.toml").read_text()
+    text = (text.replace("groove_wheel_r10.csv", "groove_wheel.csv").replace("groove_rail_r10p02.csv", "groove_rail.csv")
+            .replace("wheel_radius = 50.0", "wheel_radius = 460.0").replace("pitch_velocity = -19.98", "pitch_velocity = -2.17"))
+    (tmp / "groove.toml").write_text(text)
+    return load_scene(tmp / "groove.toml")
+
+
+CASES = {   # label, scene (file or builder), prescribed approach (mm)
+    "deep": ("deep pair R10/R10.2", "deep_conformal_pair.toml", 0.05),
+    "groove": ("R10 wheel in R10.05 groove", _groove_scene, 0.01),
+    "gauge": ("R13 gauge corner / S1002 root", "flange_s1002_uic60_fe.toml", 0.03),
+}
+
+
+class Case:
+    """One wheel-rail case at its prescribed approach: the curved problem, the half-space
+    solution's pressure, and the two bodies with their patches."""
+
+    def __init__(self, key: str, tmp: Path, n: int | None = GRID_N):
+        from conformal.cases.conformal import curved_problem_from_wheel_rail
+        from conformal.influence.curved import curved_halfspace_kernel
+        from conformal.influence.fe import rail_body_from_grid, wheel_body_from_grid
+        from conformal.scene import Load, load_scene
+        from conformal.solvers.conformal import influence_operator, solve_curved
+
+        self.key = key
+        label, scene, approach = CASES[key]
+        self.label = label
+        sc = scene(tmp) if callable(scene) else load_scene(SCENES / scene)
+        sc = replace(sc, load=Load(approach=approach)).with_model(theory="conformal", influence="halfspace")
+        if n is not None:
+            sc = replace(sc, grid=replace(sc.grid, n=n))
+        self.problem = curved_problem_from_wheel_rail(sc)
+        grid = self.problem.grid
+        op, info = influence_operator(grid, sc.material, sc.model)
+        self.hs = solve_curved(self.problem, op, info)
+        self.p = np.asarray(self.hs.field.pn, float)
+        self.material = sc.material
+        m = sc.material
+        self.rail, self.rpatch = rail_body_from_grid(grid, self.problem.rail_points)
+        self.wheel, self.wpatch, self.rot = wheel_body_from_grid(grid, self.problem.wheel_points)
+        # single-body half-space numbers in the turned element frames (the "halfspace" model)
+        self.hs_body = {b: curved_halfspace_kernel(grid.mx, grid.dx, grid.s - grid.s_ref, grid.ds, grid.delta,
+                                                   _identical(m, b)) / 2.0 for b in ("rail", "wheel")}
+        edge = self.p[[0, -1], :].any() or self.p[:, [0, -1]].any()
+        self.warning = "the half-space contact reaches the strip's edge" if edge else ""
+
+    def kernels(self, settings, cache):
+        """(rail kernel, wheel kernel in the rail's element frames, stats) for FE settings."""
+        from conformal.influence.fe import body_influences, rotate_kernel
+
+        m = self.material
+        kr, kw = body_influences([(self.rail, self.rpatch, m.G1, m.nu1, settings),
+                                  (self.wheel, self.wpatch, m.G2, m.nu2, settings)], cache)
+        return kr.kernel, rotate_kernel(kw.kernel, self.rot), {"rail": kr.stats, "wheel": kw.stats}
+
+    def slab(self) -> bool:
+        """Whether a body's section is a slab (its ends point the same way, bodies.grow_profile):
+        the default limits its margin to the section's width."""
+        from conformal.meshing.bodies import grow_profile
+
+        return any(grow_profile(b, p, max(SIZES))[1].slab_width > 0
+                   for b, p in ((self.rail, self.rpatch), (self.wheel, self.wpatch)))
+
+    def compliance(self, kernel, body: str) -> float:
+        return _compliance(kernel, self.hs_body[body], self.p)
+
+    def fn_ratio(self, kernel) -> float:
+        from conformal.influence.curved import CurvedInfluence
+        from conformal.solvers.conformal import solve_curved
+
+        r = solve_curved(self.problem, CurvedInfluence.from_kernel(kernel), {"influence": "fe"})
+        return float(r.FN / self.hs.FN)
+
+
+def _identical(m, body: str):
+    from conformal.materials import Material
+
+    return Material.identical(m.G1, m.nu1) if body == "rail" else Material.identical(m.G2, m.nu2)
+
+
+def _compliance(kernel: np.ndarray, reference: np.ndarray, p: np.ndarray) -> float:
+    """sum p (K_nn * p) / sum p (K_ref,nn * p): the pressure-weighted mean normal displacement."""
+    from conformal.influence.curved import CurvedInfluence
+
+    u = CurvedInfluence.from_kernel(kernel).apply_normal(p)
+    u0 = CurvedInfluence.from_kernel(reference).apply_normal(p)
+    return float((p * u).sum() / (p * u0).sum())
+
+
+class FlatBlock:
+    """The flat block: a 9 x 9 patch of 1 mm elements under an elliptic (Hertz-like) pressure;
+    its exact large-body compliance is the half-space's (1)."""
+
+    key, label, warning = "flat", "flat block (exact 1)", ""
+
+    def __init__(self, n: int = 9, d: float = 1.0):
+        from conformal.influence.curved import curved_halfspace_kernel
+        from conformal.meshing.bodies import BodyModel, StripPatch, flat_profile
+
+        self.body = BodyModel("block", flat_profile(-40.0, 40.0))
+        self.patch = StripPatch.uniform(n, d, n, d, 40.0)
+        c = (np.arange(n) - 0.5 * (n - 1)) * d
+        X, S = np.meshgrid(c, c, indexing="ij")
+        a = 0.5 * n * d
+        self.p = np.sqrt(np.clip(1 - (X / a) ** 2 - (S / (0.8 * a)) ** 2, 0, None))
+        self.hs = curved_halfspace_kernel(n, d, c, np.full(n, d), np.zeros(n), _identical_steel()) / 2.0
+
+    def compliance(self, settings, cache) -> tuple[float, dict]:
+        from conformal.influence.fe import cached_body_influence
+
+        r = cached_body_influence(self.body, self.patch, G, NU, settings, cache=cache)
+        return _compliance(r.kernel, self.hs, self.p), r.stats
+
+
+def _identical_steel():
+    from conformal.materials import Material
+
+    return Material.identical(G, NU)
+
+
+# ----------------------------------------------------------------------------- settings
+def fe_settings(size: float, far: str = "halfspace", refine: float = 1.0, **mesh):
+    """FE settings of the series: the production defaults, the body size and far field given,
+    every element size (h_patch, h_load, h_max) times ``refine``."""
+    from conformal.influence.fe import FESettings
+    from conformal.meshing.gmsh_body import MeshSpec
+
+    base = MeshSpec()
+    spec = replace(base, body_size=size, h_patch=base.h_patch * refine, h_load=base.h_load * refine,
+                   h_max=base.h_max * refine, **mesh)
+    return FESettings(far_field=far, mesh=spec)
+
+
+# ----------------------------------------------------------------------------- runs
+def run_flat(sizes, far: str, cache) -> list[dict]:
+    blk = FlatBlock()
+    rows = []
+    for s in sizes:
+        t0 = time.perf_counter()
+        c, st = blk.compliance(fe_settings(s, far), cache)
+        rows.append({"case": "flat", "far_field": far, "grading": "default", "size": s, "C_block": c,
+                     "time_s": time.perf_counter() - t0, "dofs": st.get("dofs")})
+        print(f"flat block {far:9s} size {s:4g}: C = {c:.5f}", flush=True)
+    return rows
+
+
+def run_case(case, sizes, far: str, refine: float, cache, grading: str, **mesh) -> list[dict]:
+    rows = []
+    for s in sizes:
+        t0 = time.perf_counter()
+        try:
+            kr, kw, st = case.kernels(fe_settings(s, far, refine, **mesh), cache)
+        except ConformalError as exc:      # e.g. gmsh leaving flat tetrahedra in a small body
+            print(f"{case.label}: {far} {grading} size {s:g}: not possible: {exc}", flush=True)
+            rows.append({"case": case.key, "far_field": far, "grading": grading, "size": s, "error": str(exc)})
+            continue
+        row = {"case": case.key, "far_field": far, "grading": grading, "size": s,
+               "C_rail": case.compliance(kr, "rail"), "C_wheel": case.compliance(kw, "wheel"),
+               "FN_ratio": case.fn_ratio(kr + kw),
+               # one FE body against the other's half-space numbers: what each body's shape does
+               "FN_rail_only": case.fn_ratio(kr + case.hs_body["wheel"]),
+               "FN_wheel_only": case.fn_ratio(case.hs_body["rail"] + kw), "time_s": time.perf_counter() - t0,
+               "fe_s": sum(float(v.get("total_s", 0.0)) for v in st.values()),
+               "dofs": [v.get("dofs") for v in st.values()],
+               "body": {b: v.get("body") for b, v in st.items()}}
+        rows.append(row)
+        print(f"{case.label}: {far:9s} {grading:7s} size {s:4g}: C_rail {row['C_rail']:.5f} C_wheel "
+              f"{row['C_wheel']:.5f} FN/FN_hs {row['FN_ratio']:.5f} (FE {row['fe_s']:.1f} s, dofs {row['dofs']})",
+              flush=True)
+    return rows
+
+
+def limits(rows, case: str, far: str, grading: str, key: str) -> dict:
+    sel = sorted((r for r in rows if r["case"] == case and r["far_field"] == far and r["grading"] == grading
+                  and key in r), key=lambda r: r["size"])
+    if len(sel) < 2:
+        return {}
+    return richardson([r["size"] for r in sel], [r[key] for r in sel])
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="the flat block, clamped, sizes 4, 8, 16 only")
+    ap.add_argument("--cases", default="deep,groove,gauge", help="comma-separated: deep, groove, gauge")
+    ap.add_argument("--out", default=None, help="output folder (default studies/out/fe_far_field_limit)")
+    ap.add_argument("--series", default="halfspace,clamped,fine,straight",
+                    help="comma-separated: halfspace, clamped, fine (refined grading), straight (slabs not limited)")
+    ap.add_argument("--append", action="store_true",
+                    help="keep the rows of other cases from the existing JSON (rerun some cases only)")
+    args = ap.parse_args(argv)
+    out = output_dir("fe_far_field_limit", args)
+    out.mkdir(parents=True, exist_ok=True)
+    os.environ.setdefault("CONFORMAL_CACHE", str(Path(tempfile.gettempdir()) / "conformal_fe_far_field_limit"))
+    from conformal.influence.cache import Cache
+
+    cache = Cache(None)
+    rows: list[dict] = []
+    series = set(args.series.split(","))
+    keys = [k for k in args.cases.split(",") if k]
+    if args.append and (out / "fe_far_field_limit.json").exists():
+        old = json.loads((out / "fe_far_field_limit.json").read_text())["rows"]
+        rows = [r for r in old if r["case"] not in keys and (r["case"] != "flat" or args.quick)]
+    if args.quick:
+        rows += run_flat(QUICK_SIZES, "clamped", cache)
+    else:
+        rows += run_flat((0.5,) + SIZES, "clamped", cache)
+        tmp = Path(tempfile.mkdtemp(prefix="fe_far_field_limit_"))
+        for key in keys:
+            case = Case(key, tmp)
+            print(f"{case.label}: half-space FN = {case.hs.FN:.1f} N {case.warning}", flush=True)
+            if "halfspace" in series:
+                rows += run_case(case, SIZES, "halfspace", 1.0, cache, "default")
+                _dump(out, rows)
+            if "clamped" in series:
+                rows += run_case(case, CLAMPED_SIZES, "clamped", 1.0, cache, "default")
+                _dump(out, rows)
+            if "fine" in series:
+                rows += run_case(case, FINE_SIZES, "halfspace", 0.5, cache, "fine")
+                _dump(out, rows)
+            if "straight" in series and case.slab():
+                rows += run_case(case, STRAIGHT_SIZES, "halfspace", 1.0, cache, "straight", closure="straight")
+                _dump(out, rows)
+    summary = summarise(rows)
+    _dump(out, rows, summary, converged(rows, summary))
+    (out / "fe_far_field_limit.md").write_text(report(rows, summary))
+    _plot(rows, summary, out / "fe_far_field_limit.png")
+    write_sidecar(out, __file__, args, extra={"converged": converged(rows, summary)})
+    print(report(rows, summary))
+    return 0
+
+
+def summarise(rows) -> dict:
+    out = {}
+    for case in dict.fromkeys(r["case"] for r in rows):
+        keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio", "FN_rail_only", "FN_wheel_only"]
+        for far, grading in (("halfspace", "default"), ("clamped", "default"), ("halfspace", "fine"),
+                             ("halfspace", "straight")):
+            for k in keys:
+                lim = limits(rows, case, far, grading, k)
+                if lim:
+                    out.setdefault(case, {}).setdefault(f"{far}/{grading}", {})[k] = lim
+    return out
+
+
+def converged(rows, summary) -> list[dict]:
+    """Per case and quantity: the limit (R3 of the half-space far field's series), its error bar
+    (the largest of |R2 - R3|, the clamped series' R3 and the refined grading's R2 against it),
+    and the production default's value and distance from it (the default's size is one of the
+    series' sizes)."""
+    from conformal.meshing.gmsh_body import MeshSpec
+
+    size = MeshSpec().body_size
+    out = []
+    for case, per in summary.items():
+        hs = per.get("halfspace/default", {})
+        for k, lim in hs.items():
+            if "R3" not in lim:
+                continue
+            others = [abs(lim["R2"] - lim["R3"])]
+            cl = per.get("clamped/default", {}).get(k, {})
+            fine = per.get("halfspace/fine", {}).get(k, {})
+            if "R3" in cl:
+                others.append(abs(cl["R3"] - lim["R3"]))
+            if "R2" in fine:
+                others.append(abs(fine["R2"] - lim["R2"]))
+            at = [r[k] for r in rows if r["case"] == case and r["far_field"] == "halfspace"
+                  and r["grading"] == "default" and r["size"] == size and k in r]
+            row = {"case": case, "quantity": k, "limit": lim["R3"], "err": max(others), "ratio": lim.get("ratio"),
+                   "clamped_R3": cl.get("R3"), "fine_R2": fine.get("R2")}
+            if at:
+                row.update(default=at[0], default_off=at[0] / lim["R3"] - 1.0)
+            out.append(row)
+    return out
+
+
+def _dump(out: Path, rows, summary=None, conv=None) -> None:
+    tmp = out / "fe_far_field_limit.json.tmp"
+    tmp.write_text(json.dumps({"rows": rows, "summary": summary or {}, "converged": conv or []}, indent=1,
+                              default=float))
+    os.replace(tmp, out / "fe_far_field_limit.json")
+
+
+def report(rows, summary) -> str:
+    from conformal.meshing.gmsh_body import MeshSpec
+
+    conv = converged(rows, summary)
+    head = ["| case | quantity | limit (R3, half-space far field) | error bar | ratio of differences 4-8-16 "
+            f"| clamped R3 | refined R2 | default (size {MeshSpec().body_size:g}) | default - limit |",
+            "|---|---|---|---|---|---|---|---|---|"]
+
+    def f(v, fmt="{:.4f}"):
+        return "-" if v is None else fmt.format(v)
+
+    for c in conv:
+        r = c.get("ratio")
+        regime = f(r, "{:.2f}") + ("" if r is not None and 0.4 <= r <= 0.7 else " (not 1/size)")
+        head.append(f"| {c['case']} | {c['quantity']} | {c['limit']:.4f} | {c['err']:.4f} | {regime} | "
+                    f"{f(c['clamped_R3'])} | {f(c['fine_R2'])} | {f(c.get('default'))} | "
+                    f"{f(c.get('default_off'), '{:+.2%}')} |")
+    slabs = sorted({(r["case"], b, r["size"]) for r in rows for b, v in (r.get("body") or {}).items()
+                    if v and v.get("margin_limited_by") == "section width" and r["grading"] == "default"})
+    for case in dict.fromkeys(c for c, _, _ in slabs):
+        first = min((z, b) for c, b, z in slabs if c == case)
+        head.append("")
+        head.append(f"{case}: the {first[1]} section is a slab (its profile's ends point the same way); from size "
+                    f"{first[0]:g} on its margin is limited to the section's width, so its 'limit' is that of the "
+                    "limited body, not of a large one: the series 'straight' (not limited) grows without bound.")
+    lines = head + ["", "| case | quantity | far field / grading | value at size " + " / ".join(f"{s:g}" for s in SIZES)
+             + " | R2 | R3 | ratio of differences |", "|---|---|---|---|---|---|---|"]
+    for case, per in summary.items():
+        for series, d in per.items():
+            far, grading = series.split("/")
+            for k, lim in d.items():
+                by = {r["size"]: r[k] for r in rows if r["case"] == case and r["far_field"] == far
+                      and r["grading"] == grading and k in r}
+                vals = " / ".join(f"{by[s]:.4f}" if s in by else "-" for s in SIZES)
+                lines.append(f"| {case} | {k} | {series} | {vals} | {lim['R2']:.4f} | "
+                             f"{lim.get('R3', float('nan')):.4f} | {lim.get('ratio', float('nan')):.2f} |")
+    return "\n".join(lines) + "\n"
+
+
+def _plot(rows, summary, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cases = [c for c in summary if c != "flat"] or ["flat"]
+    fig, axes = plt.subplots(1, len(cases), figsize=(4.6 * len(cases), 4.0), squeeze=False)
+    for ax, case in zip(axes[0], cases):
+        keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio"]
+        for k, key in enumerate(keys):
+            for far, grading, style in (("halfspace", "default", "-o"), ("clamped", "default", "--s"),
+                                        ("halfspace", "fine", ":^"), ("halfspace", "straight", "-.x")):
+                sel = sorted((r for r in rows if r["case"] == case and r["far_field"] == far
+                              and r["grading"] == grading and key in r), key=lambda r: r["size"])
+                if sel:
+                    ax.plot([1 / r["size"] for r in sel], [r[key] for r in sel], style, color=f"C{k}", ms=4,
+                            label=f"{key}, {far}, {grading}")
+            lim = summary.get(case, {}).get("halfspace/default", {}).get(key)
+            if lim:
+                ax.plot([0], [lim.get("R3", lim["R2"])], "*", color=f"C{k}", ms=10)
+        ax.axhline(1.0, color="0.6", lw=0.8)
+        ax.set_xlabel("1 / fe_body_size (patch sizes)")
+        if ax is axes[0][0]:
+            ax.set_ylabel("FE / half-space")
+        ax.set_title(case, fontsize=10)
+        ax.set_ylim(0.85, 1.2)
+    handles = {}
+    for ax in axes[0]:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(lab, h)
+    fig.legend(list(handles.values()), list(handles.keys()), loc="lower center", ncol=4, fontsize=7)
+    fig.suptitle("Compliance per body (C_rail, C_wheel) and FN per pair at a prescribed approach, FE over "
+                 "half-space;\nstars: Richardson limits (R3) of the half-space far field's series", fontsize=10)
+    fig.tight_layout(rect=(0, 0.06 + 0.025 * math.ceil(len(handles) / 4), 1, 1))
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
