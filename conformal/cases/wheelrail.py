@@ -82,6 +82,19 @@ class PairState:
     patches: list[PatchGeometry]
     warnings: tuple[str, ...] = ()            # of the vertical balance (non-convergence)
     placement_warnings: tuple[str, ...] = ()  # of the placement (flange tip, profile ends, lift)
+    z_geometry: float | None = None           # the height where the patches were searched (None: z)
+
+    def lowered(self, dz: float) -> "PairState":
+        """This state lowered by dz (mm) with its geometry kept: each patch's approach grows by
+        dz cos(delta) (first order; the geometry stays that of ``z_geometry``)."""
+        moved = [replace(pg, approach=pg.approach + dz * math.cos(pg.patch.delta)) for pg in self.patches]
+        zg = self.z if self.z_geometry is None else self.z_geometry
+        return replace(self, z=self.z + dz, patches=moved, z_geometry=zg)
+
+    @property
+    def geometry_offset(self) -> float:
+        """|z - z_geometry| (mm): how far the balanced height lies from the searched geometry."""
+        return 0.0 if self.z_geometry is None else abs(self.z - self.z_geometry)
 
 
 #: warn when a contact lies within this radial distance (mm) of the wheel's flange tip
@@ -417,8 +430,7 @@ def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float 
             if counts_out is not None:
                 counts_out.append(BalanceCounts(searches, counts[0]))
             # the state at the balanced height: its approaches moved by dz cos d (first order)
-            moved = [replace(pg, approach=pg.approach + dz * math.cos(pg.patch.delta)) for pg in st.patches]
-            st = replace(st, z=z, patches=moved, warnings=tuple(warnings))
+            st = replace(st.lowered(dz), warnings=tuple(warnings))
             if not on_grid:
                 st = replace(state_at(pl.pair, pl.top, z, pl.roll, scene), warnings=tuple(warnings))
                 if len(st.patches) != len(fns):
@@ -715,10 +727,9 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8, warm: WarmStart | None
     lowering = warm.lowering
     history = []
     counts: list[BalanceCounts] = []
-    st = None
+    _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=lowering, counts_out=counts, warn=False)
+    extra_normal = 0
     for outer in range(1, max_outer + 1):
-        _, st, fns = loaded_state(scene, pl, ratios=ratios, start=st, lowering=lowering, counts_out=counts,
-                                  warn=False)
         z = st.z
         problems = problems_at(scene, pl, st, fns)
         results = [solve_problem(p) for p in problems]
@@ -727,13 +738,29 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8, warm: WarmStart | None
         # side-frame ratio FS/FN (mirroring flips both FS and the angle: the product is invariant)
         ratios = [(pg.patch.s_ref, pl.pair.mirror * r.FY / r.FN if r.FN > 0 else 0.0)
                   for pg, r in zip(st.patches, results)]
-        if abs(FZ - W) <= BALANCE_TOL * W:
+        balanced = abs(FZ - W) <= BALANCE_TOL * W
+        if balanced and st.geometry_offset <= BALANCE_ZTOL:
             break
+        if balanced:      # the ratios have settled on the kept geometry: search it at the balanced height
+            _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
+                                      warn=False)
+            continue
+        # the ratios changed: balance again on the same geometry (seed Eq. 46, linearised in the height)
+        n = [0]
+        warn: list[str] = []
+        dz, fns2 = linear_balance(st, scene, ratios, counts=n, warnings=warn)
+        extra_normal += n[0]
+        if all(fn > 0 for fn in fns2) and len(fns2) == len(st.patches):
+            st, fns = replace(st.lowered(dz), warnings=tuple(warn)), fns2
+        else:
+            _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
+                                      warn=False)
     else:
         raise ConvergenceError(f"[load] wheel_load: the vertical balance did not converge in {max_outer} "
                                f"iterations (FZ = {FZ:.1f} N for {W:g} N)")
     st = replace(st, placement_warnings=tuple(placement_warnings(scene, pl, st)))
-    balance = {"searches": sum(c.searches for c in counts), "normal_solves": sum(c.normal_solves for c in counts),
+    balance = {"searches": sum(c.searches for c in counts),
+               "normal_solves": sum(c.normal_solves for c in counts) + extra_normal,
                "tangential_solves": len(history) * len(problems), "bracketing": any(c.bracketing for c in counts),
                "lowering": float(z - pl.z_touch), "ratios": [[float(a), float(b)] for a, b in ratios]}
     extra = {"z_ws": z, **geo_extra, "wheel_load": W, "balance_iterations": len(history), "balance": balance}
