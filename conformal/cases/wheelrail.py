@@ -729,10 +729,16 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8, warm: WarmStart | None
     counts: list[BalanceCounts] = []
     _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=lowering, counts_out=counts, warn=False)
     extra_normal = 0
+    starts: dict = {}
     for outer in range(1, max_outer + 1):
         z = st.z
         problems = problems_at(scene, pl, st, fns)
+        if scene.model.theory == "exact":   # the previous pass on the same grid starts the iterations
+            problems = [replace(p, start=starts[id(pg.grid)][1]) if starts.get(id(pg.grid), (None,))[0] is pg.grid
+                        else p for p, pg in zip(problems, st.patches)]
         results = [solve_problem(p) for p in problems]
+        starts = {id(pg.grid): (pg.grid, (r.field.pn, r.field.px, r.field.py)) for pg, r in zip(st.patches, results)
+                  if r.field is not None}
         FZ = sum(track_forces(r, p.info["contact_angle"])[2] for r, p in zip(results, problems))
         history.append({"z_ws": z, "FZ_track": float(FZ)})
         # side-frame ratio FS/FN (mirroring flips both FS and the angle: the product is invariant)
