@@ -286,7 +286,8 @@ def _fn_at(pg: PatchGeometry, scene: Scene, approach: float, warnings: list, cou
     return hertz_from_curvatures(pg.A, pg.B, scene.material, approach=approach).FN
 
 
-def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | None = None, warnings: list | None = None) -> tuple[float, list[float]]:
+def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | None = None,
+                   warnings: list | None = None, pressures: dict | None = None) -> tuple[float, list[float]]:
     """The lowering dz (mm, vertical) from the height of ``st`` at which the patches carry the wheel
     load, and their normal forces there (seed Eq. 46 with the height as the unknown):
     sum_i FN_i(a_i + dz cos d_i) (cos d_i + r_i sin d_i) = wheel_load, a_i the approach of patch i
@@ -298,7 +299,9 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
     patch: FN = W / (cos d + r sin d) directly, one force-prescribed normal problem for its
     approach.  Several: secant steps on (F/W)^(2/3), nearly linear in dz for Hertz-like growth.
     Grid theories solve the half-space normal problem on the patch grids, the others use Hertz
-    from the patch curvatures.  ``counts`` = [normal solves] is incremented."""
+    from the patch curvatures.  ``counts`` = [normal solves] is incremented; ``pressures``
+    receives {id(grid): (grid, pn)} of the one-patch normal solution (a start for the contact solve
+    on the same grid)."""
     W = scene.load.wheel_load
     counts = counts if counts is not None else [0]
     warnings = warnings if warnings is not None else []
@@ -317,6 +320,8 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
                                 f"{pg.patch.delta:.3f} rad did not converge ({sol.iterations} iterations, "
                                 f"residual {sol.residual:.2g})")
             a = float(sol.approach)
+            if pressures is not None:
+                pressures[id(pg.grid)] = (pg.grid, sol.pn)
         else:
             a = hertz_from_curvatures(pg.A, pg.B, scene.material, normal_force=fn).approach if pg.hertzian \
                 else _raise_not_hertzian(pg)
@@ -375,7 +380,7 @@ def _raise_not_hertzian(pg: PatchGeometry):
 
 
 def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float | None = None,
-                   start: PairState | None = None, counts_out: list | None = None
+                   start: PairState | None = None, counts_out: list | None = None, pressures: dict | None = None
                    ) -> tuple[float, PairState, list[float]]:
     """Height z at which sum_i FN_i (cos d_i + r_i sin d_i) = wheel_load, with r_i = FS_i/FN_i
     (side frame) the tangential-to-normal ratios of the patches (0: normal forces only).
@@ -424,7 +429,7 @@ def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float 
         st = search(pl.z_touch + trial * (W / F1) ** (2.0 / 3.0))
     for _ in range(MAX_SEARCHES):
         del warnings[:]
-        dz, fns = linear_balance(st, scene, ratios, counts=counts, warnings=warnings)
+        dz, fns = linear_balance(st, scene, ratios, counts=counts, warnings=warnings, pressures=pressures)
         z = st.z + dz
         if abs(dz) <= BALANCE_ZTOL and all(fn > 0 for fn in fns):
             if counts_out is not None:
@@ -622,7 +627,7 @@ class WarmStart:
 
 def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grids: bool = True,
                  lowering: float | None = None, start: PairState | None = None, counts_out: list | None = None,
-                 warn: bool = True) -> tuple[Placement, PairState, list[float] | None]:
+                 warn: bool = True, pressures: dict | None = None) -> tuple[Placement, PairState, list[float] | None]:
     """The one wheel-rail sequence "place, then balance the wheel load or lower by the approach":
     (placement, the patches at the loaded height, the balanced normal forces or None).
 
@@ -635,7 +640,8 @@ def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grid
     pl = pl or place_scene(scene)
     load = scene.load
     if load.wheel_load is not None:
-        _, st, fns = balance_height(pl, scene, ratios, lowering=lowering, start=start, counts_out=counts_out)
+        _, st, fns = balance_height(pl, scene, ratios, lowering=lowering, start=start, counts_out=counts_out,
+                                    pressures=pressures)
     elif load.approach is None:
         raise InputError("[load] wheel_load: a wheel_rail scene needs wheel_load (N) or approach (mm)")
     else:
@@ -727,15 +733,17 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8, warm: WarmStart | None
     lowering = warm.lowering
     history = []
     counts: list[BalanceCounts] = []
-    _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=lowering, counts_out=counts, warn=False)
+    pressures: dict = {}       # normal solutions of the balance: starts of the contact solves on their grids
+    _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=lowering, counts_out=counts, warn=False,
+                              pressures=pressures)
     extra_normal = 0
     starts: dict = {}
     for outer in range(1, max_outer + 1):
         z = st.z
         problems = problems_at(scene, pl, st, fns)
         if scene.model.theory == "exact":   # the previous pass on the same grid starts the iterations
-            problems = [replace(p, start=starts[id(pg.grid)][1]) if starts.get(id(pg.grid), (None,))[0] is pg.grid
-                        else p for p, pg in zip(problems, st.patches)]
+            problems = [replace(p, start=_start_for(pg.grid, starts, pressures, pl.pair.side))
+                        for p, pg in zip(problems, st.patches)]
         results = [solve_problem(p) for p in problems]
         starts = {id(pg.grid): (pg.grid, (r.field.pn, r.field.px, r.field.py)) for pg, r in zip(st.patches, results)
                   if r.field is not None}
@@ -749,12 +757,12 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8, warm: WarmStart | None
             break
         if balanced:      # the ratios have settled on the kept geometry: search it at the balanced height
             _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
-                                      warn=False)
+                                      warn=False, pressures=pressures)
             continue
         # the ratios changed: balance again on the same geometry (seed Eq. 46, linearised in the height)
         n = [0]
         warn: list[str] = []
-        dz, fns2 = linear_balance(st, scene, ratios, counts=n, warnings=warn)
+        dz, fns2 = linear_balance(st, scene, ratios, counts=n, warnings=warn, pressures=pressures)
         extra_normal += n[0]
         if all(fn > 0 for fn in fns2) and len(fns2) == len(st.patches):
             st, fns = replace(st.lowered(dz), warnings=tuple(warn)), fns2
@@ -774,6 +782,19 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8, warm: WarmStart | None
         extra["warnings"] = list(st.warnings) + list(st.placement_warnings)
     out = combine_patches(results, problems, theory, extra)
     return replace(out, approach=pl.approach(z), converged=out.converged and not st.warnings)
+
+
+def _start_for(grid, starts: dict, pressures: dict, side: str):
+    """The start of a contact solve on ``grid`` (side frame): the previous pass's tractions on it,
+    else the balance's pressure on it (mirrored like the problem's grid for a left wheel), else None."""
+    hit = starts.get(id(grid))
+    if hit is not None and hit[0] is grid:
+        return hit[1]
+    hit = pressures.get(id(grid))
+    if hit is not None and hit[0] is grid:
+        pn = hit[1] if side == "right" else hit[1][:, ::-1]
+        return (pn, None, None)
+    return None
 
 
 def curved_creepages(pair: WheelRailPair, z: float, motion: WheelsetMotion, grid, patch: Patch) -> Creepages:

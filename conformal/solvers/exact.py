@@ -196,7 +196,7 @@ def solve(problem: ContactProblem) -> Result:
         return solve_normal(op, grid, h, tol=tol, maxit=maxit, extra_un=extra_un, p_start=p_start, **load)
 
     def tangential_stage(pn, extra_u, p_start):
-        if p_start is None and start is not None:
+        if p_start is None and start is not None and start[1] is not None:
             p_start = np.stack([start[1], start[2]])
         return _tangential(op, grid, pn, problem, extra_u, tol, maxit, p_start)
 
