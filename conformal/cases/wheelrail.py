@@ -6,7 +6,12 @@ the README's References):
 1. the wheelset placed and the height where the wheel of ``side`` first touches its rail
    (:mod:`conformal.geometry.wheelrail`);
 2. the height under load: ``[load] wheel_load`` (vertical, N) is balanced by the
-   vertical components of all patch forces (normal and tangential, as CONTACT's FZ(TR));
+   vertical components of all patch forces (normal and tangential, as CONTACT's FZ(TR)), with
+   the height as the unknown of the normal problem (seed Eq. 46): the geometry is searched once
+   per trial height and a vertical step dz changes each patch's approach by dz cos(delta)
+   (:func:`linear_balance`; one patch: FN = W / (cos d + (FS/FN) sin d) and one force-prescribed
+   normal solve give the height), a few searches in all (:func:`balance_height`; a sweep starts
+   from its neighbour's height, :class:`WarmStart`);
    ``[load] approach`` lowers the wheelset by that many mm below the height where its first wheel
    touches (a wheel that then still has a gap is lifted off: NoContactError).  The reported
    ``approach`` of a wheel-load solve is the same quantity, so that solving at it gives the load
