@@ -167,3 +167,22 @@ def test_import_is_light():
     import conformal
 
     assert v.returncode == 0 and v.stdout.strip() == f"conformal {conformal.__version__}"
+
+
+@pytest.mark.slow
+def test_conformal_sweep_equals_per_position_solve():
+    """Theory "conformal" (one curved strip, half-space numbers, [grid] n = 20): the sweep (its
+    strips built at the planar balance warm-started from the neighbour) gives the per-position
+    solve's forces within 3 BALANCE_TOL of the wheel load, and the per-region columns."""
+    import conformal
+
+    scene = ROOT / "meshes" / "scenes" / "flange_s1002_uic60.toml"
+    shifts = [5.8, 6.2]
+    t = conformal.sweep(scene, shift=shifts, grid__n=20)
+    assert t.theory == "conformal" and t.errors == (None, None)
+    for i, y in enumerate(shifts):
+        ref = conformal.solve(scene, grid__n=20, geometry__lateral_shift=y)
+        for k, v in (("FN", ref.FN), ("FX", ref.FX), ("FZ_track", ref.extra["FZ_track"]),
+                     ("FY_track", ref.extra["FY_track"])):
+            assert abs(t[k][i] - v) <= 3 * BALANCE_TOL * 10000.0, (y, k)
+        assert t["p0_FN"][i] > 0 and np.isfinite(t["p0_s_rail"][i])
