@@ -73,6 +73,13 @@ class PatchGeometry:
     A: float
     B: float
     hertz_angle: float
+    #: the approach the vertical balance uses for a Hertz patch (the locus penetration of the
+    #: overlap search; ``approach`` is then the largest overlap on the grid), None: ``approach``
+    balance_approach: float | None = None
+
+    @property
+    def hertz_approach(self) -> float:
+        return self.approach if self.balance_approach is None else self.balance_approach
 
     @property
     def hertzian(self) -> bool:
@@ -92,7 +99,10 @@ class PairState:
     def lowered(self, dz: float) -> "PairState":
         """This state lowered by dz (mm) with its geometry kept: each patch's approach grows by
         dz cos(delta) (first order; the geometry stays that of ``z_geometry``)."""
-        moved = [replace(pg, approach=pg.approach + dz * math.cos(pg.patch.delta)) for pg in self.patches]
+        c = [math.cos(pg.patch.delta) for pg in self.patches]
+        moved = [replace(pg, approach=pg.approach + dz * ck,
+                         balance_approach=None if pg.balance_approach is None else pg.balance_approach + dz * ck)
+                 for pg, ck in zip(self.patches, c)]
         zg = self.z if self.z_geometry is None else self.z_geometry
         return replace(self, z=self.z + dz, patches=moved, z_geometry=zg)
 
@@ -253,6 +263,9 @@ def place_scene(scene: Scene) -> Placement:
 BALANCE_ZTOL = 1e-4
 #: at most this many geometry searches per balance before the bracketing search takes over
 MAX_SEARCHES = 8
+#: the passes of solve_wheel_rail keep a searched geometry while the height moves at most this (mm)
+#: from it (the first-order gap change dz cos d; the tangential shift dz sin d is left out)
+GEOMETRY_REUSE = 1e-2
 
 
 @dataclass(frozen=True)
@@ -292,7 +305,8 @@ def _fn_at(pg: PatchGeometry, scene: Scene, approach: float, warnings: list, cou
 
 
 def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | None = None,
-                   warnings: list | None = None, pressures: dict | None = None) -> tuple[float, list[float]]:
+                   warnings: list | None = None, pressures: dict | None = None,
+                   normal_force: float | None = None) -> tuple[float, list[float]]:
     """The lowering dz (mm, vertical) from the height of ``st`` at which the patches carry the wheel
     load, and their normal forces there (seed Eq. 46 with the height as the unknown):
     sum_i FN_i(a_i + dz cos d_i) (cos d_i + r_i sin d_i) = wheel_load, a_i the approach of patch i
@@ -306,7 +320,8 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
     Grid theories solve the half-space normal problem on the patch grids, the others use Hertz
     from the patch curvatures.  ``counts`` = [normal solves] is incremented; ``pressures``
     receives {id(grid): (grid, pn)} of the one-patch normal solution (a start for the contact solve
-    on the same grid)."""
+    on the same grid).  ``normal_force``: one patch carries this (N) instead of W / (cos d + r sin d)
+    (a secant step of the caller on the vertical force of the contact solves)."""
     W = scene.load.wheel_load
     counts = counts if counts is not None else [0]
     warnings = warnings if warnings is not None else []
@@ -315,7 +330,7 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
     w = [ci + _ratio(ratios, pg) * math.sin(pg.patch.delta) for ci, pg in zip(c, pgs)]
     on_grid = scene.model.theory in GRID_THEORIES
     if len(pgs) == 1 and w[0] > 0:
-        pg, fn = pgs[0], W / w[0]
+        pg, fn = pgs[0], (normal_force if normal_force is not None and normal_force > 0 else W / w[0])
         if on_grid:
             counts[0] += 1
             sol = solve_normal(None, pg.grid, pg.h, normal_force=fn, material=scene.material,
@@ -330,6 +345,7 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
         else:
             a = hertz_from_curvatures(pg.A, pg.B, scene.material, normal_force=fn).approach if pg.hertzian \
                 else _raise_not_hertzian(pg)
+            return (a - pg.hertz_approach) / c[0], [fn]
         return (a - pg.approach) / c[0], [fn]
     p_start: dict = {}
     cache: dict[float, list[float]] = {}
@@ -338,7 +354,7 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
         if dz not in cache:
             out = []
             for k, pg in enumerate(pgs):
-                a = pg.approach + dz * c[k]
+                a = (pg.approach if on_grid else pg.hertz_approach) + dz * c[k]
                 if on_grid:
                     out.append(_fn_at(pg, scene, a, warnings, counts, p_start, k))
                 elif a > 0:
@@ -385,8 +401,8 @@ def _raise_not_hertzian(pg: PatchGeometry):
 
 
 def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float | None = None,
-                   start: PairState | None = None, counts_out: list | None = None, pressures: dict | None = None
-                   ) -> tuple[float, PairState, list[float]]:
+                   start: PairState | None = None, counts_out: list | None = None, pressures: dict | None = None,
+                   normal_force: float | None = None) -> tuple[float, PairState, list[float]]:
     """Height z at which sum_i FN_i (cos d_i + r_i sin d_i) = wheel_load, with r_i = FS_i/FN_i
     (side frame) the tangential-to-normal ratios of the patches (0: normal forces only).
 
@@ -434,18 +450,22 @@ def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float 
         st = search(pl.z_touch + trial * (W / F1) ** (2.0 / 3.0))
     for _ in range(MAX_SEARCHES):
         del warnings[:]
-        dz, fns = linear_balance(st, scene, ratios, counts=counts, warnings=warnings, pressures=pressures)
+        dz, fns = linear_balance(st, scene, ratios, counts=counts, warnings=warnings, pressures=pressures,
+                                 normal_force=normal_force if len(st.patches) == 1 else None)
         z = st.z + dz
         if abs(dz) <= BALANCE_ZTOL and all(fn > 0 for fn in fns):
             if counts_out is not None:
                 counts_out.append(BalanceCounts(searches, counts[0]))
             # the state at the balanced height: its approaches moved by dz cos d (first order)
             st = replace(st.lowered(dz), warnings=tuple(warnings))
-            if not on_grid:
+            if not on_grid:     # the grids, keeping the approaches the balance used (locus penetration)
+                balanced = st
                 st = replace(state_at(pl.pair, pl.top, z, pl.roll, scene), warnings=tuple(warnings))
                 if len(st.patches) != len(fns):
                     raise ConvergenceError("vertical balance: the patches on the grid differ from those of the "
                                            "overlap")
+                st = replace(st, patches=[replace(pg, balance_approach=b.hertz_approach)
+                                          for pg, b in zip(st.patches, balanced.patches)])
             return z, st, fns
         try:
             st = search(z)
@@ -632,7 +652,8 @@ class WarmStart:
 
 def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grids: bool = True,
                  lowering: float | None = None, start: PairState | None = None, counts_out: list | None = None,
-                 warn: bool = True, pressures: dict | None = None) -> tuple[Placement, PairState, list[float] | None]:
+                 warn: bool = True, pressures: dict | None = None, normal_force: float | None = None
+                 ) -> tuple[Placement, PairState, list[float] | None]:
     """The one wheel-rail sequence "place, then balance the wheel load or lower by the approach":
     (placement, the patches at the loaded height, the balanced normal forces or None).
 
@@ -640,13 +661,16 @@ def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grid
     with the tangential-to-normal ``ratios`` of a previous solve, starting from the state ``start``
     or the ``lowering`` below the touching height); ``[load] approach``: the height that far below
     the first touch of the wheelset.  ``grids=False`` skips the planar grids where only the patches
-    are needed (conformal strips are built afterwards).  ``warn=False`` leaves out the placement
+    are needed (conformal strips are built afterwards from the patches searched at the balanced
+    height itself).  ``warn=False`` leaves out the placement
     warnings (added once by the caller)."""
     pl = pl or place_scene(scene)
     load = scene.load
     if load.wheel_load is not None:
         _, st, fns = balance_height(pl, scene, ratios, lowering=lowering, start=start, counts_out=counts_out,
-                                    pressures=pressures)
+                                    pressures=pressures, normal_force=normal_force)
+        if not grids and st.geometry_offset > 0:   # the patches themselves (curved strips): at the height
+            st = replace(state_at(pl.pair, pl.top, st.z, pl.roll, scene, grids=False), warnings=st.warnings)
     elif load.approach is None:
         raise InputError("[load] wheel_load: a wheel_rail scene needs wheel_load (N) or approach (mm)")
     else:
@@ -710,7 +734,7 @@ def _geometry_extra(scene: Scene, pl: Placement) -> dict:
             "smoothing_error_rail": r.smoothing_error}
 
 
-def solve_wheel_rail(scene: Scene, *, max_outer: int = 8, warm: WarmStart | None = None) -> Result:
+def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | None = None) -> Result:
     """Solve a wheel-rail scene with a planar model (one tangent-plane problem per patch): patches,
     vertical balance including the tangential forces (iterated), and the combined result with
     track-frame totals.  (Any model: :func:`conformal.cases.solve_wheel_rail`.)  ``warm``: the
@@ -743,6 +767,7 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8, warm: WarmStart | None
                               pressures=pressures)
     extra_normal = 0
     starts: dict = {}
+    passes: list[tuple[float, float]] = []      # (FN, FZ) of the passes of a one-patch wheel
     for outer in range(1, max_outer + 1):
         z = st.z
         problems = problems_at(scene, pl, st, fns)
@@ -760,17 +785,32 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8, warm: WarmStart | None
         balanced = abs(FZ - W) <= BALANCE_TOL * W
         if balanced and st.geometry_offset <= BALANCE_ZTOL:
             break
+        # one patch: a secant step on FZ(FN) over the passes (the fixed point FN = W / (cos d + r sin d)
+        # converges slowly in flange contact, where FS sin d carries a third of the load)
+        fn_next = None
+        if len(st.patches) == 1:
+            passes.append((fns[0], FZ))
+            if len(passes) >= 2 and passes[-1][1] != passes[-2][1] and passes[-1][0] != passes[-2][0]:
+                (f0, F0), (f1, F1) = passes[-2], passes[-1]
+                fn_next = f1 + (W - F1) * (f1 - f0) / (F1 - F0)
+                fn_next = fn_next if 0.5 * f1 < fn_next < 2.0 * f1 else None
         if balanced:      # the ratios have settled on the kept geometry: search it at the balanced height
             _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
-                                      warn=False, pressures=pressures)
+                                      warn=False, pressures=pressures, normal_force=fns[0] if len(fns) == 1 else None)
+            passes = []   # a secant step spans passes on one geometry
             continue
         # the ratios changed: balance again on the same geometry (seed Eq. 46, linearised in the height)
         n = [0]
         warn: list[str] = []
-        dz, fns2 = linear_balance(st, scene, ratios, counts=n, warnings=warn, pressures=pressures)
+        dz, fns2 = linear_balance(st, scene, ratios, counts=n, warnings=warn, pressures=pressures,
+                                  normal_force=fn_next)
         extra_normal += n[0]
         if all(fn > 0 for fn in fns2) and len(fns2) == len(st.patches):
             st, fns = replace(st.lowered(dz), warnings=tuple(warn)), fns2
+            if st.geometry_offset > GEOMETRY_REUSE:   # too far from the searched geometry: search again
+                _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
+                                          warn=False, pressures=pressures, normal_force=fn_next)
+                passes = []
         else:
             _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
                                       warn=False)
