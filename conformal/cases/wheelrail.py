@@ -158,7 +158,8 @@ def placement_warnings(scene: Scene, pl: "Placement", st: PairState) -> list[str
                "rail top)")
         geo = scene.geometry
         try:
-            other = place_scene(replace(scene, geometry=replace(geo, lateral_shift=geo.lateral_shift - 0.1)))
+            other = place_scene(replace(scene, geometry=replace(geo, lateral_shift=geo.lateral_shift - 0.1)),
+                                touch_only=True)
             jump = pl.z_touch - other.z_touch
             if abs(jump) > JUMP_WARN:
                 msg += (f", and {abs(jump):.2f} mm {'higher' if jump < 0 else 'lower'} than at 0.1 mm less "
@@ -233,7 +234,10 @@ class Placement:
         return float(z - self.z_first)
 
 
-def place_scene(scene: Scene) -> Placement:
+def place_scene(scene: Scene, *, touch_only: bool = False) -> Placement:
+    """The wheelset placed (roll, the wheel-rail pair) and the heights where this wheel and the first
+    wheel of the wheelset touch; ``touch_only``: z_first is left equal to z_touch (the other wheel
+    is not searched)."""
     geo = scene.geometry
     if not isinstance(geo, WheelRailGeometry):
         raise InputError("[geometry] kind: not a wheel_rail scene")
@@ -249,7 +253,7 @@ def place_scene(scene: Scene) -> Placement:
     z_touch = first_touch(pair, top)
     z_first = z_touch
     # the other wheel sets the height from which [load] approach (and the reported approach) counts
-    if geo.placement == "wheelset":
+    if geo.placement == "wheelset" and not touch_only:
         if z_other is None:
             other = build_pair(geo, base, side="left" if pair.side == "right" else "right", roll=roll)
             z_other = first_touch(other)
