@@ -253,7 +253,8 @@ def solve_sweep(scene, shifts: Sequence[float], *, workers: int | None = None, c
     shifts : sequence of float
     workers : processes for missing FE influence numbers (default: cores / 2).
     cache : the FE cache folder (default: $CONFORMAL_CACHE or the user cache).
-    warm_start : start every balance from the previous position's (default True).
+    warm_start : start every balance from the previous position's (default True; not with FE
+        influence numbers, whose cache holds the strips of the cold balance).
 
     Returns
     -------
@@ -277,6 +278,9 @@ def solve_sweep(scene, shifts: Sequence[float], *, workers: int | None = None, c
         precompute(scene, Sweep("shift", tuple(shifts)), cache=cache, workers=workers, progress=progress)
     results, errors, warns = [], [], []
     warm = None
+    # FE numbers are cached per strip: a warm-started balance moves the strip by up to BALANCE_ZTOL, so
+    # the positions are solved cold, on exactly the strips the precomputation planned
+    warm_start = warm_start and influence != "fe"
     base_warn = scene_warnings(scene)
     with single_threaded_blas():
         for y in shifts:
