@@ -13,14 +13,30 @@ dimensionless, spin in rad/mm.
 10000
 """
 from conformal.errors import ConformalError, InputError, NoContactError, ConvergenceError
-from conformal.materials import Material
-from conformal.api import load_scene
-from conformal.result import Result
-# ``conformal.solve`` is the module conformal/solve.py made callable: conformal.solve(scene, **overrides)
-# is conformal.api.solve, and ``from conformal.solve import solve_scene`` keeps working
-import conformal.solve
-from conformal.scene import Scene
 
 __version__ = "0.1.0"
 __all__ = ["ConformalError", "InputError", "NoContactError", "ConvergenceError", "Material", "Result",
-           "Scene", "load_scene", "solve", "__version__"]
+           "Scene", "load_scene", "solve", "sweep", "__version__"]
+
+# numpy, scipy and the solvers load on first use (issue 23: ``import conformal`` stays light):
+# ``conformal.solve`` is the module conformal/solve.py made callable (conformal.solve(scene, **overrides)
+# is conformal.api.solve, and ``from conformal.solve import solve_scene`` keeps working)
+_LAZY = {"Material": ("conformal.materials", "Material"), "load_scene": ("conformal.api", "load_scene"),
+         "Result": ("conformal.result", "Result"), "Scene": ("conformal.scene", "Scene"),
+         "sweep": ("conformal.api", "sweep"), "solve": ("conformal.solve", None)}
+
+
+def __getattr__(name: str):
+    if name not in _LAZY:
+        raise AttributeError(f"module 'conformal' has no attribute {name!r}")
+    import importlib
+
+    module, attr = _LAZY[name]
+    mod = importlib.import_module(module)
+    value = mod if attr is None else getattr(mod, attr)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

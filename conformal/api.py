@@ -15,7 +15,7 @@ from typing import Any, Mapping
 from conformal.result import Result
 from conformal.scene import Scene, as_scene
 
-__all__ = ["load_scene", "solve"]
+__all__ = ["load_scene", "solve", "sweep"]
 
 
 def load_scene(source: Scene | str | Path | Mapping[str, Any], **overrides: Any) -> Scene:
@@ -77,3 +77,38 @@ def solve(scene: Scene | str | Path | Mapping[str, Any], **overrides: Any) -> Re
     from conformal.solve import solve_scene
 
     return solve_scene(as_scene(scene, **overrides))
+
+
+def sweep(scene: Scene | str | Path | Mapping[str, Any], shift: Any = "0:10:0.5", *, workers: int | None = None,
+          **overrides: Any):
+    """Solve a wheel-rail scene at every lateral shift and return the table of results.
+
+    Parameters
+    ----------
+    scene : Scene, str, pathlib.Path or mapping
+        A wheel-rail scene (what :func:`load_scene` takes).
+    shift : str, float or sequence of float
+        Lateral shifts (mm): ``"start:stop:step"`` (stop included), one value or a list.
+    workers : int, optional
+        Processes for FE influence numbers missing from the cache (theory "conformal" with
+        influence "fe"; default: cores / 2).
+    **overrides
+        ``section__key=value`` changes applied first.
+
+    Returns
+    -------
+    conformal.cases.sweep.SweepTable
+        ``table["FN"]``, ``table["FY_track"]``, ... (one value per shift), ``table.units``,
+        ``to_csv(path)`` (units in the header), ``to_json(path)``, ``plot(path)``.
+
+    Examples
+    --------
+    >>> import conformal
+    >>> from conformal.cli import demo_scene_path
+    >>> t = conformal.sweep(demo_scene_path(), shift=[0.0, 2.0], model__theory="hertz")
+    >>> [round(v) for v in t["FZ_track"]], t.units["FN"]
+    ([10000, 10000], 'N')
+    """
+    from conformal.cases.sweep import parse_shifts, solve_sweep
+
+    return solve_sweep(as_scene(scene, **overrides), parse_shifts(shift), workers=workers)

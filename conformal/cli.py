@@ -4,7 +4,8 @@
     conformal demo [--out DIR]
     conformal precompute SCENE.toml --sweep shift=0:10:0.5 [--workers N] [--scheduler ADDRESS|local]
     conformal cache list|clear [--cache DIR]
-    conformal sweep SCENE.toml [--shift START:STOP:STEP] [--out DIR]
+    conformal sweep SCENE.toml [--shift START:STOP:STEP] [--out DIR] [--solve [--workers N]]
+    conformal --version
 
 Bad input ends with exit code 2 and one line on stderr naming the key and the problem; a solve that
 did not converge writes its JSON with "converged": false and ends with exit code 3 (unless
@@ -164,6 +165,8 @@ def cmd_sweep(args) -> int:
     scene = load_scene(args.scene)
     if scene.geometry.kind != "wheel_rail":
         raise InputError(f"[geometry] kind: a sweep needs a wheel_rail scene, got {scene.geometry.kind!r}")
+    if args.solve:
+        return _sweep_solve(scene, args)
     check_output_path(str(Path(args.out) / "sweep.csv"), "--out")
     rows = sweep(scene.geometry, parse_range(args.shift), scene.base_dir)
     out = Path(args.out)
@@ -177,8 +180,43 @@ def cmd_sweep(args) -> int:
     return 0
 
 
+def _sweep_solve(scene, args) -> int:
+    """``conformal sweep --solve``: the scene solved at every shift (conformal.cases.sweep): the
+    table as sweep_solved.csv (units in the header) and .json, the plot sweep_solved.png."""
+    from conformal.cases.sweep import parse_shifts, solve_sweep
+
+    if args.workers is not None and args.workers < 1:
+        raise InputError(f"--workers: must be >= 1, got {args.workers}")
+    out = Path(args.out)
+    check_output_path(str(out / "sweep_solved.csv"), "--out")
+    table = solve_sweep(scene, parse_shifts(args.shift), workers=args.workers, progress=True)
+    table.to_csv(out / "sweep_solved.csv")
+    table.to_json(out / "sweep_solved.json")
+    for r in table.rows():
+        vals = "  ".join(f"{k}={r[k]:.5g}" if isinstance(r[k], float) else f"{k}={r[k]}"
+                         for k in ("shift", "FN", "FY_track", "FZ_track", "contact_angle", "y_rail", "n_patches"))
+        print(vals + (f"  error: {r['error']}" if r["error"] else ""))
+        for w in r["warnings"]:
+            print(f"conformal: warning: shift {r['shift']:g} mm: {w}", file=sys.stderr)
+    code = 0
+    try:
+        table.plot(out / "sweep_solved.png")
+    except Exception as exc:  # noqa: BLE001 - any plotting failure: the table is already out
+        print(f"conformal: error: plot: {type(exc).__name__}: {exc} (the table was written)", file=sys.stderr)
+        code = 1
+    print(f"wrote {out / 'sweep_solved.csv'}, {out / 'sweep_solved.json'} and {out / 'sweep_solved.png'}",
+          file=sys.stderr)
+    if all(e is not None for e in table.errors):
+        print(f"conformal: error: no shift could be solved ({table.errors[0]})", file=sys.stderr)
+        return 2
+    return code
+
+
 def build_parser() -> argparse.ArgumentParser:
+    from conformal import __version__
+
     p = argparse.ArgumentParser(prog="conformal", description="Conformal wheel-rail rolling contact workbench")
+    p.add_argument("--version", action="version", version=f"conformal {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
     s = sub.add_parser("solve", help="solve a scene file and print a JSON summary")
@@ -197,6 +235,10 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("scene", help="wheel_rail scene file (TOML)")
     w.add_argument("--shift", default="0:10:0.5", help="lateral shifts start:stop:step in mm (default 0:10:0.5)")
     w.add_argument("--out", default="out", help="output folder (default: out)")
+    w.add_argument("--solve", action="store_true", help="solve every shift with the scene's theory and influence "
+                   "numbers: forces, creepages, patches (sweep_solved.csv / .json / .png)")
+    w.add_argument("--workers", type=int, default=None, help="with --solve: processes for missing FE influence "
+                   "numbers (default: cores/2)")
     w.set_defaults(func=cmd_sweep)
 
     d = sub.add_parser("demo", help="solve the built-in demo scene, write JSON and PNG")

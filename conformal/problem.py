@@ -44,6 +44,10 @@ class ContactProblem:
     h: np.ndarray | None = None
     label: str = "contact"
     info: Mapping[str, Any] = field(default_factory=dict)  # e.g. contact angle, position (wheel-rail)
+    #: starting (pn, px, py) on ``grid`` for the iterations (a neighbouring solve on the same grid, e.g.
+    #: the previous pass of a wheel-rail balance; px, py may be None); the solution is the same to the
+    #: solver's tolerance
+    start: tuple[np.ndarray, np.ndarray | None, np.ndarray | None] | None = None
 
     def require_hertz(self, who: str) -> HertzContact:
         if self.hertz is None:

@@ -24,9 +24,17 @@ sensitive):
    of its child (the second body), FN.
 5. **conformal demo**: wall time of the installed command (best of ``--repeats``).
 6. ``--tests``: wall time of the README's test command ``python -m pytest``.
+7. **Against CONTACT** (issue 23; CONTACT's times for the same jobs are stored in ``CONTACT`` below
+   with their source): the Manchester A-2.2 right-wheel sequence (21 shifts, CONTACT's roll and
+   pitch velocity per case, 0.2 mm elements, exact theory) solved in one process (its own
+   process: the solves timed, import and scene building not), with the largest FN error against
+   CONTACT; the start-up (``python -X importtime -c "import conformal"``
+   and the wall time of a process that only imports the package, less that of an empty
+   process); one small solve as a process (``conformal solve`` of case circ, n = 50, steady
+   rolling, exact theory); and every half-space row as a ratio to CONTACT's time for it.
 
 ``--quick``: n = 25, 50, 100, a 21 x 15 FE patch instead of 51 x 39, the smallest FE scene only,
-one demo run (used by tests/test_performance_study.py).  Writes
+the Manchester sequence at 0, 5 and 7 mm only (0.4 mm elements), one demo run (used by tests/test_performance_study.py).  Writes
 studies/out/performance/{performance.md, performance.json, run.json}.
 
     python studies/performance.py [--quick] [--sizes 50 100 200 300 400] [--worn] [--tests]
@@ -230,6 +238,105 @@ def demo_command() -> list[str]:
     return [str(exe), "demo"] if exe.exists() else [sys.executable, "-m", "conformal.cli", "demo"]
 
 
+# ----------------------------------------------------------------------------- 7: against CONTACT
+#: CONTACT's wall times for the jobs measured here, with their source (CONTACT rev. 2707 built from
+#: source on a machine of this kind, one thread)
+CONTACT = {
+    "mbench_right_s": 1.37,
+    "mbench_source": "issue 23: the whole deck examples/mbench_a22_right (21 cases, 65 ms CPU per case), "
+                     "answers checked equal before timing",
+    "normal_s": {50: 0.012, 100: 0.046, 150: 0.071, 200: 0.14},
+    "gdsteady_s": {50: 0.29, 100: 1.17, 150: 2.87, 200: 6.80},
+    "steadygs_s": {25: 0.025, 50: 0.40, 100: 6.8, 150: 44.0, 200: 211.0},
+    "circ_source": "tests/reference/contact_performance.md, case circ (whole program run)",
+    "gdsteady_growth_200_400": 1.53,
+    "growth_source": "issue 23 (GDsteady, N^q from 200^2 to 400^2)",
+}
+IMPORT_TARGET_S = 0.15
+MBENCH_REF = ROOT / "tests" / "reference" / "contact_cases.json"
+
+
+def mbench_sequence(quick: bool) -> dict:
+    """The Manchester A-2.2 right-wheel sequence in this process (studies/manchester_a22.py's
+    scenes: CONTACT's yaw, roll and pitch velocity per case), as a sweep would run it (each case
+    warm-started from the one before)."""
+    from manchester_a22 import scene_for
+
+    import conformal.cases.wheelrail as wr
+
+    cases = json.loads(MBENCH_REF.read_text())["cases"]["mbench_a22"]["right"]
+    if quick:
+        cases = [c for c in cases if c["inputs"]["Y_WS_mm"] in (0.0, 5.0, 7.0)]
+    scenes = [scene_for("right", c, 0.4 if quick else 0.2) for c in cases]
+    la = load()
+    warm, errs, counts = None, [], {"searches": 0, "normal_solves": 0, "tangential_solves": 0}
+    t0, c0 = time.perf_counter(), time.process_time()
+    for sc, c in zip(scenes, cases):
+        r = wr.solve_wheel_rail(sc, warm=warm)
+        warm = wr.WarmStart.from_result(r)
+        main = max(r.patches, key=lambda p: p.FN)
+        errs.append(abs(main.FN / c["outputs"]["patches"][0]["FN"] - 1.0))
+        for k in counts:
+            counts[k] += r.extra["balance"][k]
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    return dict(kind="mbench", cases=len(cases), quick=quick, wall_s=wall, cpu_s=cpu, load=la,
+                max_FN_error=max(errs), **counts)
+
+
+def startup() -> dict:
+    """Start-up: ``-X importtime`` of ``import conformal`` (its cumulative line), and the best of 5
+    wall times of a process importing the package less that of an empty process."""
+    p = subprocess.run([sys.executable, "-X", "importtime", "-c", "import conformal"], capture_output=True,
+                       text=True, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    us = [int(ln.split("|")[1]) for ln in p.stderr.splitlines() if ln.rstrip().endswith("| conformal")]
+
+    def best(code):
+        walls = []
+        for _ in range(5):
+            t0 = time.perf_counter()
+            subprocess.run([sys.executable, "-c", code], cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
+            walls.append(time.perf_counter() - t0)
+        return min(walls)
+
+    la = load()
+    return dict(importtime_s=(us[-1] * 1e-6 if us else None), process_s=best("import conformal") - best("pass"),
+                load=la, target_s=IMPORT_TARGET_S)
+
+
+def small_solve_process() -> dict:
+    """``conformal solve`` of case circ (n = 50, steady rolling) with the exact theory as its own
+    process: CONTACT's 0.29 s (GDsteady) is its whole program run too."""
+    cmd = [sys.executable, "-m", "conformal.cli", "solve", str(SCENES / "circ.toml"), "--theory", "exact"]
+    r = timed_command(cmd, 3, ROOT, timeout=120)
+    r["contact_s"] = CONTACT["gdsteady_s"][50]
+    return r
+
+
+def contact_ratios(res: dict) -> list[dict]:
+    """Every measured job as a ratio to CONTACT's time for it (< 1: faster than CONTACT)."""
+    out = []
+    for r in res.get("mbench", []):
+        if r.get("quick") is False and "error" not in r:
+            out.append(dict(job="Manchester A-2.2 right wheel, 21 shifts, one process",
+                            ours_s=r["wall_s"], cpu_s=r["cpu_s"], contact_s=CONTACT["mbench_right_s"],
+                            source=CONTACT["mbench_source"], load=r["load"]))
+    for h in res.get("halfspace", []):
+        n = h["n"]
+        if n in CONTACT["normal_s"]:
+            out.append(dict(job=f"normal problem, circ {n}^2", ours_s=h["normal_wall_s"], contact_s=CONTACT["normal_s"][n],
+                            source=CONTACT["circ_source"], load=h["load"]))
+        if n in CONTACT["gdsteady_s"]:
+            out.append(dict(job=f"steady rolling, circ {n}^2 (GDsteady)", ours_s=h["steady_wall_s"],
+                            contact_s=CONTACT["gdsteady_s"][n], source=CONTACT["circ_source"], load=h["load"]))
+    sp = res.get("small_solve")
+    if sp:
+        out.append(dict(job="`conformal solve` circ 50^2 steady rolling, as a process", ours_s=sp["wall_s"],
+                        cpu_s=sp["cpu_s"], contact_s=sp["contact_s"], source=CONTACT["circ_source"], load=sp["load"]))
+    for r in out:
+        r["ratio"] = r["ours_s"] / r["contact_s"]
+    return out
+
+
 # ----------------------------------------------------------------------------- report
 def _f(v, fmt=".2f", none="-"):
     return none if v is None else format(v, fmt)
@@ -290,6 +397,35 @@ def report(res: dict, out: Path) -> str:
             L += [f"## {title}", "", f"`{r['command']}`: best wall **{r['wall_s']:.1f} s** of {len(r['walls'])} "
                   f"(all: {', '.join(f'{w:.1f}' for w in r['walls'])}), CPU {r['cpu_s']:.1f} s (all processes), "
                   f"load {r['load']:.1f}, exit {r['rc']}; target {target:g} s.", ""]
+    ratios = res.get("contact_ratios") or []
+    if ratios or res.get("startup") or res.get("mbench"):
+        L += ["## Against CONTACT (issue 23)", "",
+              "Ratio = our wall time / CONTACT's for the same job (< 1: faster); CONTACT's times are stored in "
+              "`studies/performance.py` (`CONTACT`) with their source.", "",
+              "| job | ours s | CONTACT s | ratio | source of CONTACT's time | load |", "|---|---:|---:|---:|---|---:|"]
+        for r in ratios:
+            L.append(f"| {r['job']} | {r['ours_s']:.3f}" + (f" (CPU {r['cpu_s']:.2f})" if r.get("cpu_s") else "")
+                     + f" | {r['contact_s']:.3f} | **{r['ratio']:.2f}** | {r['source']} | {r['load']:.1f} |")
+        L.append("")
+        for r in res.get("mbench", []):
+            if "error" in r:
+                L += [f"Manchester sequence failed: {r['error']}", ""]
+                continue
+            L += [f"Manchester A-2.2 right wheel, {r['cases']} cases{' (quick: 0.4 mm elements)' if r['quick'] else ''}"
+                  f": {r['wall_s']:.2f} s wall, "
+                  f"{r['cpu_s']:.2f} s CPU (load {r['load']:.1f}); {r['searches']} geometry searches, "
+                  f"{r['normal_solves']} normal solves in the balance, {r['tangential_solves']} contact solves; "
+                  f"largest FN error against CONTACT {100 * r['max_FN_error']:.2f} % (target: 1 %, and <= "
+                  f"{0.5 * CONTACT['mbench_right_s']:.3f} s on a quiet machine).", ""]
+        st = res.get("startup")
+        if st:
+            L += [f"Start-up: `python -X importtime -c \"import conformal\"` {_f(st['importtime_s'], '.3f')} s for the "
+                  f"package; a process importing it {st['process_s']:.3f} s more than an empty process (load "
+                  f"{st['load']:.1f}); target {st['target_s']:g} s.", ""]
+        g = res.get("growth_200_400")
+        if g is not None:
+            L += [f"Steady rolling growth from 200^2 to 400^2: N^{g:.2f} (CONTACT's GDsteady N^"
+                  f"{CONTACT['gdsteady_growth_200_400']}, {CONTACT['growth_source']}; target N^1.15).", ""]
     text = "\n".join(L) + "\n"
     out.mkdir(parents=True, exist_ok=True)
     (out / "performance.md").write_text(text, encoding="utf-8")
@@ -306,11 +442,15 @@ def main(argv=None) -> int:
     ap.add_argument("--worn", action="store_true", help="also the worn three-patch scene with FE numbers")
     ap.add_argument("--tests", action="store_true", help="also time the README's test command")
     ap.add_argument("--no-demo", action="store_true")
+    ap.add_argument("--no-fe", action="store_true", help="leave out the FE numbers and the FE scenes")
     ap.add_argument("--out", type=Path, default=OUT)
     ap.add_argument("--one", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.one:
         what = json.loads(args.one)
+        if what["kind"] == "mbench":
+            print(json.dumps(mbench_sequence(what["quick"]), default=str))
+            return 0
         r = fe_pair(what["mx"], what["ms"], what["workers"]) if what["kind"] == "pair" else \
             fe_scene(what["scene"], what.get("influence_fe", False))
         print(json.dumps(r, default=str))
@@ -323,15 +463,29 @@ def main(argv=None) -> int:
     res["halfspace"] = rows
     res["growth"] = {"sizes": [r["n"] for r in big], "products": growth([r["n"] for r in big], [r["cost_products"] for r in big]),
                      "wall": growth([r["n"] for r in big], [r["steady_wall_s"] for r in big])}
+    sz = {r["n"]: r["steady_wall_s"] for r in rows}
+    if 200 in sz and 400 in sz:
+        res["growth_200_400"] = growth([200, 400], [sz[200], sz[400]])
+    res["mbench"] = []
+    r = spawn({"kind": "mbench", "quick": bool(args.quick)}, timeout=1200)
+    res["mbench"].append(r)
+    print("[mbench] " + (r.get("error") or f"{r['wall_s']:.2f} s wall, {r['cpu_s']:.2f} s CPU, max FN error "
+                         f"{100 * r['max_FN_error']:.2f} %"), flush=True)
+    res["startup"] = startup()
+    print(f"[startup] importtime {res['startup']['importtime_s']} s, process {res['startup']['process_s']:.3f} s",
+          flush=True)
+    res["small_solve"] = small_solve_process()
+    print(f"[small solve] {res['small_solve']['wall_s']:.2f} s", flush=True)
+    res["contact_ratios"] = contact_ratios(res)
     mx, ms = (21, 15) if args.quick else (51, 39)
     res["fe_pair"] = []
-    for workers in ([2, 1] if args.sequential else [2]):
+    for workers in ([] if args.no_fe else [2, 1] if args.sequential else [2]):
         r = spawn({"kind": "pair", "mx": mx, "ms": ms, "workers": workers}, timeout=900)
         res["fe_pair"].append(r)
         print(f"[fe] {mx} x {ms}, {workers} process(es): " + (r.get("error") or f"{r['wall_s']:.1f} s wall, "
               f"{r['cpu_s']:.1f} s CPU, {r['peak_gib']:.2f} GiB"), flush=True)
     res["fe_scenes"] = []
-    for path in fe_scenes(args.quick, args.worn):
+    for path in ([] if args.no_fe else fe_scenes(args.quick, args.worn)):
         cache = tempfile.mkdtemp(prefix="conformal_perf_cache_")
         try:
             worn = Path(path).name == WORN

@@ -57,3 +57,11 @@ def test_performance_study_quick(tmp_path):
     # the demo ran and succeeded
     assert res["demo"]["rc"] == 0 and res["demo"]["wall_s"] > 0
     assert "## Steady rolling" in text and "## `conformal demo`" in text
+    # against CONTACT (issue 23): the Manchester cases within 1 % of CONTACT's FN, the import light,
+    # and every ratio is our time over CONTACT's stored one
+    mb = res["mbench"][0]
+    assert "error" not in mb and mb["cases"] == 3 and mb["max_FN_error"] < 0.01
+    assert res["startup"]["importtime_s"] < 0.15
+    for r in res["contact_ratios"]:
+        assert r["ratio"] == pytest.approx(r["ours_s"] / r["contact_s"], rel=1e-12) and r["source"]
+    assert "## Against CONTACT (issue 23)" in text

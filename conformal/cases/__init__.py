@@ -13,7 +13,7 @@ from conformal.cases.wheelrail import solve_wheel_rail as solve_wheel_rail_plana
 __all__ = ["problems_from_wheel_rail", "solve_wheel_rail", "solve_wheel_rail_conformal", "solve_wheel_rail_planar"]
 
 
-def solve_wheel_rail(scene):
+def solve_wheel_rail(scene, *, warm=None):
     """Solve a wheel-rail scene with its model: the conformal theory on one curved strip per wheel
     (:func:`~conformal.cases.conformal.solve_wheel_rail_conformal`), every other model per
     contact patch on its tangent plane (:func:`~conformal.cases.wheelrail.solve_wheel_rail`).
@@ -22,6 +22,9 @@ def solve_wheel_rail(scene):
     ----------
     scene : conformal.scene.Scene
         A scene with ``[geometry] kind = "wheel_rail"``.
+    warm : conformal.cases.wheelrail.WarmStart, optional
+        Where a neighbouring solve (a sweep's previous position) balanced the wheel load: the
+        vertical balance starts from there (planar theories and the conformal strip's placement).
 
     Returns
     -------
@@ -43,5 +46,5 @@ def solve_wheel_rail(scene):
         from conformal.cases.fe_contact import solve_wheel_rail_fe_contact
         return solve_wheel_rail_fe_contact(scene)
     if scene.model.theory == "conformal":
-        return solve_wheel_rail_conformal(scene)
-    return solve_wheel_rail_planar(scene)
+        return solve_wheel_rail_conformal(scene, warm=warm)
+    return solve_wheel_rail_planar(scene, warm=warm)

@@ -268,13 +268,17 @@ def _pitch_for_reference_creepage(problem: CurvedProblem, motion, xi_target: flo
     return float(q / r_ref), float(r_ref)
 
 
-def solve_wheel_rail_conformal(scene, *, max_enlarge: int = 2, max_pitch: int = 8) -> Result:
+def solve_wheel_rail_conformal(scene, *, max_enlarge: int = 2, max_pitch: int = 8, warm=None) -> Result:
     """Solve a wheel-rail scene with the conformal theory; with ``[kinematics] speed`` and ``fx_rel``
     (e.g. ``fx_rel = 0``: free rolling) the wheelset's pitch velocity is solved so that FX/(mu FN)
-    takes that value (:func:`_solve_pitch`), else :func:`_solve_conformal` at the scene's motion."""
+    takes that value (:func:`_solve_pitch`), else :func:`_solve_conformal` at the scene's motion.
+    ``warm``: a neighbour's WarmStart (its lowering starts the planar balance the strip is built at)."""
     k = scene.kinematics
     if k.fx_rel is None or k.speed is None:
-        return _solve_conformal(scene, max_enlarge=max_enlarge)
+        state = None
+        if warm is not None and warm.lowering is not None and scene.load.wheel_load is not None:
+            state = loaded_state(scene, grids=False, lowering=warm.lowering)[:2]
+        return _solve_conformal(scene, max_enlarge=max_enlarge, state=state)
     return _solve_pitch(scene, max_enlarge=max_enlarge, max_pitch=max_pitch)
 
 
@@ -374,6 +378,8 @@ def _solve_conformal(scene, *, max_enlarge: int = 6, with_problem: bool = False,
     problem = builder.problem()
     result, problem, attempt, ext_warn = _solve_extending(builder, problem, max_enlarge)
     out = _finish(scene, problem, result, attempt, ext_warn)
+    # the next position of a sweep starts its planar balance from this lowering (WarmStart)
+    out = replace(out, extra=dict(out.extra, balance={"lowering": float(st.z - pl.z_touch)}))
     if getattr(scene.grid, "strips", "coupled") == "separate":
         out, problem = _solve_separate(scene, builder, problem, out, max_enlarge)
     return (out, problem) if with_problem else out

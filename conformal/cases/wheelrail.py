@@ -6,7 +6,12 @@ the README's References):
 1. the wheelset placed and the height where the wheel of ``side`` first touches its rail
    (:mod:`conformal.geometry.wheelrail`);
 2. the height under load: ``[load] wheel_load`` (vertical, N) is balanced by the
-   vertical components of all patch forces (normal and tangential, as CONTACT's FZ(TR));
+   vertical components of all patch forces (normal and tangential, as CONTACT's FZ(TR)), with
+   the height as the unknown of the normal problem (seed Eq. 46): the geometry is searched once
+   per trial height and a vertical step dz changes each patch's approach by dz cos(delta)
+   (:func:`linear_balance`; one patch: FN = W / (cos d + (FS/FN) sin d) and one force-prescribed
+   normal solve give the height), a few searches in all (:func:`balance_height`; a sweep starts
+   from its neighbour's height, :class:`WarmStart`);
    ``[load] approach`` lowers the wheelset by that many mm below the height where its first wheel
    touches (a wheel that then still has a gap is lifted off: NoContactError).  The reported
    ``approach`` of a wheel-load solve is the same quantity, so that solving at it gives the load
@@ -69,6 +74,13 @@ class PatchGeometry:
     A: float
     B: float
     hertz_angle: float
+    #: the approach the vertical balance uses for a Hertz patch (the locus penetration of the
+    #: overlap search; ``approach`` is then the largest overlap on the grid), None: ``approach``
+    balance_approach: float | None = None
+
+    @property
+    def hertz_approach(self) -> float:
+        return self.approach if self.balance_approach is None else self.balance_approach
 
     @property
     def hertzian(self) -> bool:
@@ -83,6 +95,22 @@ class PairState:
     patches: list[PatchGeometry]
     warnings: tuple[str, ...] = ()            # of the vertical balance (non-convergence)
     placement_warnings: tuple[str, ...] = ()  # of the placement (flange tip, profile ends, lift)
+    z_geometry: float | None = None           # the height where the patches were searched (None: z)
+
+    def lowered(self, dz: float) -> "PairState":
+        """This state lowered by dz (mm) with its geometry kept: each patch's approach grows by
+        dz cos(delta) (first order; the geometry stays that of ``z_geometry``)."""
+        c = [math.cos(pg.patch.delta) for pg in self.patches]
+        moved = [replace(pg, approach=pg.approach + dz * ck,
+                         balance_approach=None if pg.balance_approach is None else pg.balance_approach + dz * ck)
+                 for pg, ck in zip(self.patches, c)]
+        zg = self.z if self.z_geometry is None else self.z_geometry
+        return replace(self, z=self.z + dz, patches=moved, z_geometry=zg)
+
+    @property
+    def geometry_offset(self) -> float:
+        """|z - z_geometry| (mm): how far the balanced height lies from the searched geometry."""
+        return 0.0 if self.z_geometry is None else abs(self.z - self.z_geometry)
 
 
 #: warn when a contact lies within this radial distance (mm) of the wheel's flange tip
@@ -131,7 +159,8 @@ def placement_warnings(scene: Scene, pl: "Placement", st: PairState) -> list[str
                "rail top)")
         geo = scene.geometry
         try:
-            other = place_scene(replace(scene, geometry=replace(geo, lateral_shift=geo.lateral_shift - 0.1)))
+            other = place_scene(replace(scene, geometry=replace(geo, lateral_shift=geo.lateral_shift - 0.1)),
+                                touch_only=True)
             jump = pl.z_touch - other.z_touch
             if abs(jump) > JUMP_WARN:
                 msg += (f", and {abs(jump):.2f} mm {'higher' if jump < 0 else 'lower'} than at 0.1 mm less "
@@ -206,7 +235,10 @@ class Placement:
         return float(z - self.z_first)
 
 
-def place_scene(scene: Scene) -> Placement:
+def place_scene(scene: Scene, *, touch_only: bool = False) -> Placement:
+    """The wheelset placed (roll, the wheel-rail pair) and the heights where this wheel and the first
+    wheel of the wheelset touch; ``touch_only``: z_first is left equal to z_touch (the other wheel
+    is not searched)."""
     geo = scene.geometry
     if not isinstance(geo, WheelRailGeometry):
         raise InputError("[geometry] kind: not a wheel_rail scene")
@@ -222,7 +254,7 @@ def place_scene(scene: Scene) -> Placement:
     z_touch = first_touch(pair, top)
     z_first = z_touch
     # the other wheel sets the height from which [load] approach (and the reported approach) counts
-    if geo.placement == "wheelset":
+    if geo.placement == "wheelset" and not touch_only:
         if z_other is None:
             other = build_pair(geo, base, side="left" if pair.side == "right" else "right", roll=roll)
             z_other = first_touch(other)
@@ -230,9 +262,240 @@ def place_scene(scene: Scene) -> Placement:
     return Placement(pair, top, roll, z_touch, z_first)
 
 
-def balance_height(pl: Placement, scene: Scene, ratios=None) -> tuple[float, PairState, list[float]]:
+#: the wheelset height is balanced when the linearised balance on the geometry of the last search
+#: moves it by at most this (mm): the geometry (tangent plane, curvatures, grid extents) changes
+#: by the lateral part dz sin(delta) of a lowering dz, far below the element size
+BALANCE_ZTOL = 1e-4
+#: at most this many geometry searches per balance before the bracketing search takes over
+MAX_SEARCHES = 8
+#: the passes of solve_wheel_rail keep a searched geometry while the height moves at most this (mm)
+#: from it (the first-order gap change dz cos d; the tangential shift dz sin d is left out)
+GEOMETRY_REUSE = 1e-2
+
+
+@dataclass(frozen=True)
+class BalanceCounts:
+    """Work of one vertical balance: geometry (contact) searches and normal solves."""
+
+    searches: int
+    normal_solves: int
+    bracketing: bool = False
+
+
+def _fn_at(pg: PatchGeometry, scene: Scene, approach: float, warnings: list, counts: list,
+           p_start: dict | None = None, key=None) -> float:
+    """Normal force of a patch when its rigid approach along its normal is ``approach`` (mm), on the
+    grid and undeformed distance of the patch's geometry (0 when it no longer touches)."""
+    if approach <= 0:
+        return 0.0
+    if scene.model.theory in GRID_THEORIES:
+        counts[0] += 1
+        start = None if p_start is None else p_start.get(key)
+        try:
+            sol = solve_normal(None, pg.grid, pg.h, approach=approach, material=scene.material,
+                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit, p_start=start)
+        except NoContactError:
+            return 0.0
+        if p_start is not None:
+            p_start[key] = sol.pn
+        if not sol.converged:
+            warnings.append(f"vertical balance: the normal problem of the patch at contact angle "
+                            f"{pg.patch.delta:.3f} rad did not converge ({sol.iterations} iterations, "
+                            f"residual {sol.residual:.2g})")
+        return float(sol.FN)
+    if not pg.hertzian:
+        raise InputError(f"[model] theory: patch at contact angle {pg.patch.delta:.3f} rad is not Hertzian "
+                         f"(relative curvatures A = {pg.A:.3g}, B = {pg.B:.3g} 1/mm); use theory = \"exact\"")
+    return hertz_from_curvatures(pg.A, pg.B, scene.material, approach=approach).FN
+
+
+def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | None = None,
+                   warnings: list | None = None, pressures: dict | None = None,
+                   normal_force: float | None = None) -> tuple[float, list[float]]:
+    """The lowering dz (mm, vertical) from the height of ``st`` at which the patches carry the wheel
+    load, and their normal forces there (seed Eq. 46 with the height as the unknown):
+    sum_i FN_i(a_i + dz cos d_i) (cos d_i + r_i sin d_i) = wheel_load, a_i the approach of patch i
+    along its normal at the height of ``st``, r_i = FS_i/FN_i (:func:`_ratio`).
+
+    The geometry of ``st`` is reused for every trial height: a vertical step dz moves the wheel by
+    dz cos d_i along the normal of patch i (and by dz sin d_i in its tangent plane, which is left
+    out: the caller searches the geometry again at the new height until the step is small).  One
+    patch: FN = W / (cos d + r sin d) directly, one force-prescribed normal problem for its
+    approach.  Several: secant steps on (F/W)^(2/3), nearly linear in dz for Hertz-like growth.
+    Grid theories solve the half-space normal problem on the patch grids, the others use Hertz
+    from the patch curvatures.  ``counts`` = [normal solves] is incremented; ``pressures``
+    receives {id(grid): (grid, pn)} of the one-patch normal solution (a start for the contact solve
+    on the same grid).  ``normal_force``: one patch carries this (N) instead of W / (cos d + r sin d)
+    (a secant step of the caller on the vertical force of the contact solves)."""
+    W = scene.load.wheel_load
+    counts = counts if counts is not None else [0]
+    warnings = warnings if warnings is not None else []
+    pgs = st.patches
+    c = [math.cos(pg.patch.delta) for pg in pgs]
+    w = [ci + _ratio(ratios, pg) * math.sin(pg.patch.delta) for ci, pg in zip(c, pgs)]
+    on_grid = scene.model.theory in GRID_THEORIES
+    if len(pgs) == 1 and w[0] > 0:
+        pg, fn = pgs[0], (normal_force if normal_force is not None and normal_force > 0 else W / w[0])
+        if on_grid:
+            counts[0] += 1
+            sol = solve_normal(None, pg.grid, pg.h, normal_force=fn, material=scene.material,
+                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit)
+            if not sol.converged:
+                warnings.append(f"vertical balance: the normal problem of the patch at contact angle "
+                                f"{pg.patch.delta:.3f} rad did not converge ({sol.iterations} iterations, "
+                                f"residual {sol.residual:.2g})")
+            a = float(sol.approach)
+            if pressures is not None:
+                pressures[id(pg.grid)] = (pg.grid, sol.pn)
+        else:
+            a = hertz_from_curvatures(pg.A, pg.B, scene.material, normal_force=fn).approach if pg.hertzian \
+                else _raise_not_hertzian(pg)
+            return (a - pg.hertz_approach) / c[0], [fn]
+        return (a - pg.approach) / c[0], [fn]
+    p_start: dict = {}
+    cache: dict[float, list[float]] = {}
+
+    def fns_at(dz: float) -> list[float]:
+        if dz not in cache:
+            out = []
+            for k, pg in enumerate(pgs):
+                a = (pg.approach if on_grid else pg.hertz_approach) + dz * c[k]
+                if on_grid:
+                    out.append(_fn_at(pg, scene, a, warnings, counts, p_start, k))
+                elif a > 0:
+                    out.append(hertz_from_curvatures(pg.A, pg.B, scene.material, approach=a).FN
+                               if pg.hertzian else _raise_not_hertzian(pg))
+                else:
+                    out.append(0.0)
+            cache[dz] = out
+        return cache[dz]
+
+    def f(dz: float) -> float:
+        return sum(fn * wk for fn, wk in zip(fns_at(dz), w)) - W
+
+    def g(dz: float) -> float:
+        v = f(dz) / W + 1.0
+        return math.copysign(abs(v) ** (2.0 / 3.0), v) - 1.0
+
+    main = max(range(len(pgs)), key=lambda k: pgs[k].approach)
+    a_m, c_m = pgs[main].approach, c[main]
+    F0 = f(0.0) + W
+    x0 = 0.0
+    x1 = (a_m * ((W / F0) ** (2.0 / 3.0) - 1.0) / c_m) if F0 > 0 else a_m / c_m
+    g0, g1 = g(x0), g(x1)
+    pts = [(x0, g0), (x1, g1)]
+    for _ in range(12):
+        if abs(f(x1)) <= 1e-7 * W:
+            return x1, fns_at(x1)
+        if g1 == g0:
+            break
+        x0, g0, x1 = x1, g1, x1 - g1 * (x1 - x0) / (g1 - g0)
+        g1 = g(x1)
+        pts.append((x1, g1))
+    neg = [x for x, v in pts if v < 0]
+    pos = [x for x, v in pts if v > 0]
+    if not (neg and pos):
+        raise ConvergenceError("[load] wheel_load: the linearised vertical balance did not settle")
+    x = brentq(f, max(neg), min(pos), xtol=1e-10, rtol=1e-12)
+    return x, fns_at(x)
+
+
+def _raise_not_hertzian(pg: PatchGeometry):
+    raise InputError(f"[model] theory: patch at contact angle {pg.patch.delta:.3f} rad is not Hertzian "
+                     f"(relative curvatures A = {pg.A:.3g}, B = {pg.B:.3g} 1/mm); use theory = \"exact\"")
+
+
+def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float | None = None,
+                   start: PairState | None = None, counts_out: list | None = None, pressures: dict | None = None,
+                   normal_force: float | None = None) -> tuple[float, PairState, list[float]]:
     """Height z at which sum_i FN_i (cos d_i + r_i sin d_i) = wheel_load, with r_i = FS_i/FN_i
-    (side frame) the tangential-to-normal ratios of the patches (0: normal forces only)."""
+    (side frame) the tangential-to-normal ratios of the patches (0: normal forces only).
+
+    Newton-like on the height with the geometry searched once per trial height
+    (:func:`linear_balance` on the patches found there gives the next height) until the step is
+    below BALANCE_ZTOL; the state returned is that of the last search, at the balanced height.
+    Start: ``start`` (a state of the same placement, e.g. the previous outer iteration), else
+    ``lowering`` (mm below the touching height, e.g. the neighbour's in a sweep), else a Hertz
+    estimate from the overlap at a small trial lowering.  Falls back to the bracketing root
+    search on the vertical force (:func:`balance_height_bracketing`) when the searches do not
+    settle in MAX_SEARCHES.  ``counts_out`` receives a :class:`BalanceCounts`."""
+    W = scene.load.wheel_load
+    on_grid = scene.model.theory in GRID_THEORIES
+    warnings: list[str] = []
+    counts = [0]
+    searches = 0
+
+    def search(z):
+        nonlocal searches
+        searches += 1
+        return state_at(pl.pair, pl.top, z, pl.roll, scene, grids=on_grid)
+
+    st = start
+    if st is None and lowering is not None and lowering > 0:
+        try:
+            st = search(pl.z_touch + lowering)
+        except NoContactError:
+            st = None
+    if st is None:          # a Hertz-like estimate from a small trial lowering (doubled until it overlaps)
+        trial, F1 = 0.01, 0.0
+        for _ in range(12):
+            try:
+                searches += 1
+                st0 = state_at(pl.pair, pl.top, pl.z_touch + trial, pl.roll, scene, grids=False)
+                if on_grid and not all(pg.hertzian for pg in st0.patches):
+                    st0 = search(pl.z_touch + trial)
+                F1 = sum(_trial_force(pg, scene, warnings, counts) * math.cos(pg.patch.delta) for pg in st0.patches)
+            except NoContactError:
+                F1 = 0.0
+            if F1 > 0:
+                break
+            trial *= 2.0
+        else:
+            raise ConvergenceError("[load] wheel_load: the vertical force does not grow when the wheel is lowered")
+        st = search(pl.z_touch + trial * (W / F1) ** (2.0 / 3.0))
+    for _ in range(MAX_SEARCHES):
+        del warnings[:]
+        dz, fns = linear_balance(st, scene, ratios, counts=counts, warnings=warnings, pressures=pressures,
+                                 normal_force=normal_force if len(st.patches) == 1 else None)
+        z = st.z + dz
+        if abs(dz) <= BALANCE_ZTOL and all(fn > 0 for fn in fns):
+            if counts_out is not None:
+                counts_out.append(BalanceCounts(searches, counts[0]))
+            # the state at the balanced height: its approaches moved by dz cos d (first order)
+            st = replace(st.lowered(dz), warnings=tuple(warnings))
+            if not on_grid:     # the grids, keeping the approaches the balance used (locus penetration)
+                balanced = st
+                st = replace(state_at(pl.pair, pl.top, z, pl.roll, scene), warnings=tuple(warnings))
+                if len(st.patches) != len(fns):
+                    raise ConvergenceError("vertical balance: the patches on the grid differ from those of the "
+                                           "overlap")
+                st = replace(st, patches=[replace(pg, balance_approach=b.hertz_approach)
+                                          for pg, b in zip(st.patches, balanced.patches)])
+            return z, st, fns
+        try:
+            st = search(z)
+        except NoContactError:
+            break
+    z, st, fns = balance_height_bracketing(pl, scene, ratios)
+    if counts_out is not None:
+        counts_out.append(BalanceCounts(searches, counts[0], bracketing=True))
+    return z, st, fns
+
+
+def _trial_force(pg: PatchGeometry, scene: Scene, warnings: list, counts: list) -> float:
+    """Normal force of a patch at its own approach for the first height estimate: Hertz where the
+    patch is Hertzian, else its grid normal problem."""
+    if pg.hertzian:
+        return hertz_from_curvatures(pg.A, pg.B, scene.material, approach=pg.approach).FN
+    if pg.grid is None:
+        return _raise_not_hertzian(pg)
+    return _fn_at(pg, scene, pg.approach, warnings, counts)
+
+
+def balance_height_bracketing(pl: Placement, scene: Scene, ratios=None) -> tuple[float, PairState, list[float]]:
+    """The reference balance (before issue 23): a bracketing root search on the vertical force
+    FZ(z), every trial height with its own geometry search and normal solves (about 28 force
+    evaluations per balance).  Kept as the fallback of :func:`balance_height` and for tests."""
     W = scene.load.wheel_load
     cache: dict[float, tuple[PairState, list[float]]] = {}
     warnings: list[str] = []
@@ -399,24 +662,50 @@ def problems_at(scene: Scene, pl: Placement, st: PairState, fns: list[float] | N
     return out
 
 
-def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grids: bool = True
+@dataclass(frozen=True)
+class WarmStart:
+    """What a neighbouring solve (the previous position of a sweep) knows: its wheelset lowering
+    below the height where the wheel touches (mm) and the tangential-to-normal ratios of its
+    patches ((rail arc length s_ref, FS/FN) pairs, side frame), the starting point of the next
+    vertical balance."""
+
+    lowering: float | None = None
+    ratios: tuple[tuple[float, float], ...] = ()
+
+    @classmethod
+    def from_result(cls, result: Result) -> "WarmStart":
+        b = result.extra.get("balance") or {}
+        return cls(b.get("lowering"), tuple((float(s), float(r)) for s, r in b.get("ratios", ())))
+
+
+def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grids: bool = True,
+                 lowering: float | None = None, start: PairState | None = None, counts_out: list | None = None,
+                 warn: bool = True, pressures: dict | None = None, normal_force: float | None = None
                  ) -> tuple[Placement, PairState, list[float] | None]:
     """The one wheel-rail sequence "place, then balance the wheel load or lower by the approach":
     (placement, the patches at the loaded height, the balanced normal forces or None).
 
     ``[load] wheel_load``: the height where the vertical forces balance it (:func:`balance_height`,
-    with the tangential-to-normal ``ratios`` of a previous solve); ``[load] approach``: the height
-    that far below the first touch of the wheelset.  ``grids=False`` skips the planar grids where
-    only the patches are needed (conformal strips are built afterwards)."""
+    with the tangential-to-normal ``ratios`` of a previous solve, starting from the state ``start``
+    or the ``lowering`` below the touching height); ``[load] approach``: the height that far below
+    the first touch of the wheelset.  ``grids=False`` skips the planar grids where only the patches
+    are needed (conformal strips are built afterwards from the patches searched at the balanced
+    height itself).  ``warn=False`` leaves out the placement
+    warnings (added once by the caller)."""
     pl = pl or place_scene(scene)
     load = scene.load
     if load.wheel_load is not None:
-        _, st, fns = balance_height(pl, scene, ratios)
+        _, st, fns = balance_height(pl, scene, ratios, lowering=lowering, start=start, counts_out=counts_out,
+                                    pressures=pressures, normal_force=normal_force)
+        if not grids and st.geometry_offset > 0:   # the patches themselves (curved strips): at the height
+            st = replace(state_at(pl.pair, pl.top, st.z, pl.roll, scene, grids=False), warnings=st.warnings)
     elif load.approach is None:
         raise InputError("[load] wheel_load: a wheel_rail scene needs wheel_load (N) or approach (mm)")
     else:
         st, fns = state_at(pl.pair, pl.top, pl.z_first + load.approach, pl.roll, scene, grids=grids), None
-    return pl, replace(st, placement_warnings=tuple(placement_warnings(scene, pl, st))), fns
+    if warn:
+        st = replace(st, placement_warnings=tuple(placement_warnings(scene, pl, st)))
+    return pl, st, fns
 
 
 def problems_from_wheel_rail(scene: Scene) -> list[ContactProblem]:
@@ -480,10 +769,13 @@ def _geometry_extra(scene: Scene, pl: Placement) -> dict:
             "smoothing_error_rail": r.smoothing_error}
 
 
-def solve_wheel_rail(scene: Scene, *, max_outer: int = 8) -> Result:
+def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | None = None) -> Result:
     """Solve a wheel-rail scene with a planar model (one tangent-plane problem per patch): patches,
     vertical balance including the tangential forces (iterated), and the combined result with
-    track-frame totals.  (Any model: :func:`conformal.cases.solve_wheel_rail`.)"""
+    track-frame totals.  (Any model: :func:`conformal.cases.solve_wheel_rail`.)  ``warm``: the
+    :class:`WarmStart` of a neighbouring solve (a sweep's previous position); ``extra["balance"]``
+    counts the geometry searches, normal and tangential solves of the balance and carries the
+    next position's warm start."""
     if scene.model.theory == "conformal":   # one curved grid per wheel: conformal.cases.conformal
         raise InputError("[model] theory: the conformal theory solves a wheel on ONE curved strip: "
                          "conformal.cases.solve_wheel_rail (or conformal.solve) dispatches it")
@@ -500,28 +792,89 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 8) -> Result:
         out = combine_patches(results, problems, theory, ext, pl.pair)
         return replace(out, approach=pl.approach(st.z))
     W = scene.load.wheel_load
-    ratios = None
+    warm = warm or WarmStart()
+    ratios = list(warm.ratios) or None
+    lowering = warm.lowering
     history = []
+    counts: list[BalanceCounts] = []
+    pressures: dict = {}       # normal solutions of the balance: starts of the contact solves on their grids
+    _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=lowering, counts_out=counts, warn=False,
+                              pressures=pressures)
+    extra_normal = 0
+    starts: dict = {}
+    passes: list[tuple[float, float]] = []      # (FN, FZ) of the passes of a one-patch wheel
     for outer in range(1, max_outer + 1):
-        _, st, fns = loaded_state(scene, pl, ratios=ratios)
         z = st.z
         problems = problems_at(scene, pl, st, fns)
+        if scene.model.theory == "exact":   # the previous pass on the same grid starts the iterations
+            problems = [replace(p, start=_start_for(pg.grid, starts, pressures, pl.pair.side))
+                        for p, pg in zip(problems, st.patches)]
         results = [solve_problem(p) for p in problems]
+        starts = {id(pg.grid): (pg.grid, (r.field.pn, r.field.px, r.field.py)) for pg, r in zip(st.patches, results)
+                  if r.field is not None}
         FZ = sum(track_forces(r, p.info["contact_angle"])[2] for r, p in zip(results, problems))
         history.append({"z_ws": z, "FZ_track": float(FZ)})
-        if abs(FZ - W) <= BALANCE_TOL * W:
-            break
         # side-frame ratio FS/FN (mirroring flips both FS and the angle: the product is invariant)
         ratios = [(pg.patch.s_ref, pl.pair.mirror * r.FY / r.FN if r.FN > 0 else 0.0)
                   for pg, r in zip(st.patches, results)]
+        balanced = abs(FZ - W) <= BALANCE_TOL * W
+        if balanced and st.geometry_offset <= BALANCE_ZTOL:
+            break
+        # one patch: a secant step on FZ(FN) over the passes (the fixed point FN = W / (cos d + r sin d)
+        # converges slowly in flange contact, where FS sin d carries a third of the load)
+        fn_next = None
+        if len(st.patches) == 1:
+            passes.append((fns[0], FZ))
+            if len(passes) >= 2 and passes[-1][1] != passes[-2][1] and passes[-1][0] != passes[-2][0]:
+                (f0, F0), (f1, F1) = passes[-2], passes[-1]
+                fn_next = f1 + (W - F1) * (f1 - f0) / (F1 - F0)
+                fn_next = fn_next if 0.5 * f1 < fn_next < 2.0 * f1 else None
+        if balanced:      # the ratios have settled on the kept geometry: search it at the balanced height
+            _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
+                                      warn=False, pressures=pressures, normal_force=fns[0] if len(fns) == 1 else None)
+            passes = []   # a secant step spans passes on one geometry
+            continue
+        # the ratios changed: balance again on the same geometry (seed Eq. 46, linearised in the height)
+        n = [0]
+        warn: list[str] = []
+        dz, fns2 = linear_balance(st, scene, ratios, counts=n, warnings=warn, pressures=pressures,
+                                  normal_force=fn_next)
+        extra_normal += n[0]
+        if all(fn > 0 for fn in fns2) and len(fns2) == len(st.patches):
+            st, fns = replace(st.lowered(dz), warnings=tuple(warn)), fns2
+            if st.geometry_offset > GEOMETRY_REUSE:   # too far from the searched geometry: search again
+                _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
+                                          warn=False, pressures=pressures, normal_force=fn_next)
+                passes = []
+        else:
+            _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
+                                      warn=False)
     else:
         raise ConvergenceError(f"[load] wheel_load: the vertical balance did not converge in {max_outer} "
                                f"iterations (FZ = {FZ:.1f} N for {W:g} N)")
-    extra = {"z_ws": z, **geo_extra, "wheel_load": W, "balance_iterations": len(history)}
+    st = replace(st, placement_warnings=tuple(placement_warnings(scene, pl, st)))
+    balance = {"searches": sum(c.searches for c in counts),
+               "normal_solves": sum(c.normal_solves for c in counts) + extra_normal,
+               "tangential_solves": len(history) * len(problems), "bracketing": any(c.bracketing for c in counts),
+               "lowering": float(z - pl.z_touch), "ratios": [[float(a), float(b)] for a, b in ratios]}
+    extra = {"z_ws": z, **geo_extra, "wheel_load": W, "balance_iterations": len(history), "balance": balance}
     if st.warnings or st.placement_warnings:
         extra["warnings"] = list(st.warnings) + list(st.placement_warnings)
     out = combine_patches(results, problems, theory, extra, pl.pair)
     return replace(out, approach=pl.approach(z), converged=out.converged and not st.warnings)
+
+
+def _start_for(grid, starts: dict, pressures: dict, side: str):
+    """The start of a contact solve on ``grid`` (side frame): the previous pass's tractions on it,
+    else the balance's pressure on it (mirrored like the problem's grid for a left wheel), else None."""
+    hit = starts.get(id(grid))
+    if hit is not None and hit[0] is grid:
+        return hit[1]
+    hit = pressures.get(id(grid))
+    if hit is not None and hit[0] is grid:
+        pn = hit[1] if side == "right" else hit[1][:, ::-1]
+        return (pn, None, None)
+    return None
 
 
 def curved_creepages(pair: WheelRailPair, z: float, motion: WheelsetMotion, grid, patch: Patch) -> Creepages:

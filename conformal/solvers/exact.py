@@ -188,10 +188,16 @@ def solve(problem: ContactProblem) -> Result:
         op = HalfSpaceInfluence.for_grid(grid.mx, grid.my, grid.dx, grid.dy, mat)
     load = dict(normal_force=problem.normal_force, approach=problem.approach)
 
+    start = problem.start    # a neighbouring solution on this grid: the iterations start there
+
     def normal_stage(extra_un, p_start, tang):
+        if p_start is None and start is not None:
+            p_start = start[0]
         return solve_normal(op, grid, h, tol=tol, maxit=maxit, extra_un=extra_un, p_start=p_start, **load)
 
     def tangential_stage(pn, extra_u, p_start):
+        if p_start is None and start is not None and start[1] is not None:
+            p_start = np.stack([start[1], start[2]])
         return _tangential(op, grid, pn, problem, extra_u, tol, maxit, p_start)
 
     stages = alternate(op, normal_stage, tangential_stage, tangential=_needs_tangential(problem, op), tol=tol,

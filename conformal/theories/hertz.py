@@ -19,7 +19,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
 from conformal.errors import InputError
@@ -89,6 +88,8 @@ def aspect_from_curvatures(A: float, B: float) -> float:
         return math.log(kB / kA) - math.log(ratio)
 
     # k = b/a from 1 down to 1e-6 covers curvature ratios beyond 1e9
+    from scipy.optimize import brentq   # here: scipy.optimize costs 0.2-0.3 s to import
+
     k = math.exp(brentq(f, math.log(1e-6), 0.0, xtol=1e-15, rtol=1e-15))
     return 1.0 / k if A < B else k  # A < B: curvature in x smaller, ellipse long in x
 
