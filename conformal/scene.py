@@ -28,6 +28,10 @@ from conformal.specs import Friction, HistoryStep, Kinematics, ModelSpec  # noqa
 
 THEORIES = ("hertz", "linear", "empirical", "johnson_vermeulen", "fastsim", "exact", "conformal", "table", "fe_contact")
 GEOMETRY_KINDS = ("quadratic", "hertz", "table", "wheel_rail")
+#: ``[model] influence``: half-space numbers with the element frames turned by the contact angles (the
+#: default), without that turn ("halfspace_planar": CONTACT's conformal approach, its D = 4 with
+#: C3 = 2; theory conformal only) or the finite-element numbers of the real wheel and rail
+INFLUENCES = ("halfspace", "halfspace_planar", "fe")
 
 #: model-specific ``[model]`` keys (besides theory, bound, influence, tol, maxit, layer_flexibility),
 #: with the module that reads them.  Any other key is rejected (a misspelt key would otherwise be
@@ -108,6 +112,7 @@ class WheelRailGeometry:
     flange_back_pos: float | None = None  # mm, flange back in wheel-profile y (None: from the profile)
     smoothing: float = 1.0               # mm, profile smoothing-spline wavelength (0 = interpolate)
     element_size: float | None = None    # mm, square grid elements covering each patch (CONTACT DX = DS)
+    element_size_s: float | None = None  # mm, conformal strips: the element length along s (CONTACT DS; DX = element_size)
     patch_combine: float = 8.0           # mm, overlap regions closer than this form one patch
     wheel_z: str = "down"                # "up": the wheel file gives z positive upwards (negated on reading)
     rail_z: str = "down"                 # "up": the rail file gives z positive upwards (negated on reading)
@@ -464,12 +469,22 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
         flange_back=sec.number("flange_back", d.flange_back, positive=True),
         wheel_radius=sec.number("wheel_radius", d.wheel_radius, positive=True),
         flange_back_pos=sec.number("flange_back_pos"),
+        element_size_s=_element_size_s(sec),
         smoothing=sec.number("smoothing", d.smoothing, nonnegative=True),
         element_size=sec.number("element_size", positive=True),
         patch_combine=sec.number("patch_combine", d.patch_combine, nonnegative=True),
         wheel_z=sec.choice("wheel_z", ("down", "up"), d.wheel_z),
         rail_z=sec.choice("rail_z", ("down", "up"), d.rail_z),
     )
+
+
+def _element_size_s(sec: "_Section") -> float | None:
+    """``[geometry] element_size_s``: the element length along s of a conformal strip (CONTACT's DS),
+    beside ``element_size`` (then the length along x, CONTACT's DX)."""
+    value = sec.number("element_size_s", positive=True)
+    if value is not None and not sec.has("element_size"):
+        raise sec.error("element_size_s", "give element_size (the element length along x) with it")
+    return value
 
 
 def _load(data: Any, geometry: Geometry) -> Load:
@@ -576,7 +591,7 @@ def _model(data: Any, base_dir: Path = Path(".")) -> ModelSpec:
         options["table"] = str(_input_file(_Section("model", options), "table", base_dir).resolve())
     return ModelSpec(theory=sec.choice("theory", THEORIES, "fastsim"),
                      bound=sec.choice("bound", ("parabolic", "elliptic"), "parabolic"),
-                     influence=sec.choice("influence", ("halfspace", "fe"), "halfspace"),
+                     influence=sec.choice("influence", INFLUENCES, "halfspace"),
                      tol=sec.number("tol", 1e-6, positive=True),
                      maxit=sec.integer("maxit", 1000),
                      layer_flexibility=sec.number("layer_flexibility", 0.0, nonnegative=True),
@@ -650,6 +665,9 @@ def validate(scene: "Scene") -> "Scene":
         if kin.direction == -1 or kin.rigid_slip is not None or fr.mu_table is not None \
                 or "influence_file" in scene.model.options:
             raise InputError("[[history]]: not combined with direction = -1, rigid_slip, mu_table or influence_file")
+    if scene.model.influence == "halfspace_planar" and scene.model.theory != "conformal":
+        raise InputError(f"[model] influence: \"halfspace_planar\" (CONTACT's conformal approach) is for theory "
+                         f"\"conformal\", got theory {scene.model.theory!r}")
     if scene.load.load_angle != 0.0 and scene.model.theory != "conformal":
         raise InputError(f"[load] load_angle: a load direction other than vertical needs [model] theory = "
                          f"\"conformal\" (the {scene.model.theory!r} model balances the vertical load)")

@@ -62,7 +62,8 @@ def _element_sizes(scene, patches, merged, scale: float) -> tuple[float, float, 
     es = scene.geometry.element_size
     p, g = patches[0], scene.grid
     if es is not None:
-        dx = ds = float(es)
+        dx = float(es)
+        ds = float(getattr(scene.geometry, "element_size_s", None) or es)
     else:
         dx = (p.x_range[1] - p.x_range[0]) * g.scale / g.n
         ds = max(p.s_range[1] - p.s_range[0], 1e-3) * g.scale / g.n
@@ -139,6 +140,11 @@ class StripBuilder:
         if sizes is not None:
             grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, target, sizes=sizes, scale=scale,
                                                        side=pl.pair.side)
+        elif (self.n_patches == 1 or patch is not None) and n is None \
+                and getattr(scene.geometry, "element_size_s", None) is not None:   # CONTACT's DX, DS
+            grid, h, approach0 = curved_grid_for_patch(
+                wheel, pl.pair.rail, target, sizes=(scene.geometry.element_size, scene.geometry.element_size_s),
+                scale=scale, side=pl.pair.side)
         elif self.n_patches == 1 or patch is not None:   # the grid of conformal.geometry (and of precompute)
             grid, h, approach0 = curved_grid_for_patch(
                 wheel, pl.pair.rail, target, element_size=None if n is not None else scene.geometry.element_size,

@@ -44,7 +44,7 @@ tests/test_conformal.py).
 
 Wheel-rail scenes (``[model] theory = "conformal"``): one curved strip on the rail covers every
 contact patch of the wheel (built by :mod:`conformal.cases.conformal`); ``[model]`` keys: influence
-("halfspace" | "fe", FE keys fe_* of conformal.influence.fe), maxout, max_mx / max_ms (strip
+("halfspace" | "halfspace_planar" | "fe", FE keys fe_* of conformal.influence.fe), maxout, max_mx / max_ms (strip
 size limits), creepage ("surface": from the wheelset motion at every point, or "reference": the
 reference point's creepages spread as a rigid motion, the planar assumption).
 
@@ -213,7 +213,8 @@ def column_creepages(grid: CurvedGrid, xi: float, eta: float, phi: float
 def influence_operator(grid: CurvedGrid, material: Material, model: ModelSpec, *, planar: bool = False,
                        cache=None, rail_points=None, wheel_points=None) -> tuple[CurvedInfluence, dict]:
     """The curved grid's influence operator: ``model.influence`` = "halfspace" (per curved grid,
-    frames rotated by the contact angles) or "fe" (finite elements of the real wheel and rail,
+    frames rotated by the contact angles), "halfspace_planar" (the same numbers without the turn
+    between element frames: CONTACT's conformal approach) or "fe" (finite elements of the real wheel and rail,
     cached; ``rail_points``, ``wheel_points``: the whole profiles the FE bodies are cut from).
     Returns (operator, info with the timings and the FE statistics)."""
     t0 = time.perf_counter()
@@ -233,8 +234,13 @@ def influence_operator(grid: CurvedGrid, material: Material, model: ModelSpec, *
                                "[grid] n / fe_* settings") from exc
         info = {"influence": "fe", "fe": stats}
     else:
-        kernel = curved_halfspace_kernel(grid.mx, grid.dx, grid.s - grid.s_ref, grid.ds, grid.delta, material)
-        info = {"influence": "halfspace"}
+        # "halfspace_planar": CONTACT's conformal approach (its D = 4 with C3 = 2): the planar half-space
+        # numbers on the developed (x, s) grid, every element in its own local frame but no turn between
+        # the frames of two elements (Vollebregt 2014; CONTACT user guide, digit C3)
+        turned = model.influence != "halfspace_planar"
+        kernel = curved_halfspace_kernel(grid.mx, grid.dx, grid.s - grid.s_ref, grid.ds, grid.delta, material,
+                                         angle_correction=turned)
+        info = {"influence": model.influence}
     op = CurvedInfluence.from_kernel(kernel)
     info["influence_s"] = time.perf_counter() - t0
     return op, info
