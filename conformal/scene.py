@@ -131,6 +131,7 @@ class Load:
     approach: float | None = None
     wheel_load: float | None = None
     load_angle: float = 0.0
+    approach_along: float | None = None   # mm along the load direction, from the height of ``approach``
 
 
 @dataclass(frozen=True)
@@ -270,8 +271,10 @@ def _with_path(scene: "Scene", path: str, value: Any) -> "Scene":
     if key not in names:
         raise InputError(f"[{sec}] {key}: unknown key{_did_you_mean(key, sorted(names))}")
     if sec == "load":            # exactly one of normal_force, approach, wheel_load: the new one replaces
-        kept = {"load_angle": obj.load_angle} if key != "load_angle" else {
-            k: getattr(obj, k) for k in ("normal_force", "approach", "wheel_load") if getattr(obj, k) is not None}
+        keep = {"load_angle": ("normal_force", "approach", "wheel_load", "approach_along"),
+                "approach_along": ("approach",)}.get(key, ())
+        kept = {"load_angle": obj.load_angle} if key != "load_angle" else {}
+        kept.update({k: getattr(obj, k) for k in keep if getattr(obj, k) is not None})
         return replace(scene, load=_load({**kept, key: value}, scene.geometry))
     if isinstance(value, int) and not isinstance(value, bool) and isinstance(getattr(obj, key), float):
         value = float(value)
@@ -488,21 +491,41 @@ def _element_size_s(sec: "_Section") -> float | None:
 
 
 def _load(data: Any, geometry: Geometry) -> Load:
-    sec = _Section("load", data, {"normal_force", "approach", "wheel_load", "load_angle"})
+    sec = _Section("load", data, {"normal_force", "approach", "wheel_load", "load_angle", "approach_along"})
     given = [k for k in ("normal_force", "approach", "wheel_load") if sec.has(k)]
+    along = sec.number("approach_along")
+    if along is not None:
+        # the approach along the load direction (CONTACT's PEN along a direction), from the height
+        # [load] approach (default 0: the first touch) below the first touch
+        if geometry.kind != "wheel_rail":
+            raise sec.error("approach_along", "only for [geometry] kind = \"wheel_rail\" (other scenes: approach)")
+        if any(k in given for k in ("normal_force", "wheel_load")):
+            raise sec.error("approach_along", "give either a load (wheel_load) or approach_along, not both")
+        vertical = sec.number("approach", 0.0, nonnegative=True)
+        if not (along > 0.0 or vertical > 0.0):
+            raise sec.error("approach_along", f"must be > 0 from the first touch (without [load] approach), got {along:g}")
+        return Load(approach=vertical, approach_along=along, load_angle=_load_angle(sec, geometry))
     if len(given) != 1:
         raise sec.error("normal_force", "give exactly one of normal_force (N), approach (mm) or wheel_load (N)")
     key = given[0]
     if key == "wheel_load" and geometry.kind != "wheel_rail":
         raise sec.error("wheel_load", "only for [geometry] kind = \"wheel_rail\"; use normal_force")
-    value = sec.number(key, positive=True)
+    if key == "approach" and geometry.kind == "table":
+        # a gap table may already hold the approach (CONTACT's PEN = 0 with IBASE = 9): 0 is allowed
+        value = sec.number(key, nonnegative=True)
+    else:
+        value = sec.number(key, positive=True)
+    return Load(**{key: value}, load_angle=_load_angle(sec, geometry))
+
+
+def _load_angle(sec: "_Section", geometry: Geometry) -> float:
     angle = sec.number("load_angle", 0.0)
     if angle != 0.0 and geometry.kind != "wheel_rail":
         raise sec.error("load_angle", "only for [geometry] kind = \"wheel_rail\" (the load of other scenes is "
                         "along the contact normal)")
     if not abs(angle) < 1.4:
         raise sec.error("load_angle", f"must lie within +-1.4 rad (80 degrees) of the vertical, got {angle!r}")
-    return Load(**{key: value}, load_angle=angle)
+    return angle
 
 
 def _kinematics(data: Any, base_dir: Path = Path(".")) -> Kinematics:
@@ -668,6 +691,9 @@ def validate(scene: "Scene") -> "Scene":
     if scene.model.influence == "halfspace_planar" and scene.model.theory != "conformal":
         raise InputError(f"[model] influence: \"halfspace_planar\" (CONTACT's conformal approach) is for theory "
                          f"\"conformal\", got theory {scene.model.theory!r}")
+    if scene.load.approach_along is not None and scene.model.theory != "conformal":
+        raise InputError(f"[load] approach_along: an approach along the load direction needs [model] theory = "
+                         f"\"conformal\", got {scene.model.theory!r}")
     if scene.load.load_angle != 0.0 and scene.model.theory != "conformal":
         raise InputError(f"[load] load_angle: a load direction other than vertical needs [model] theory = "
                          f"\"conformal\" (the {scene.model.theory!r} model balances the vertical load)")

@@ -28,7 +28,8 @@ from conformal.geometry.wheelrail import profile_curves
 from conformal.influence.curved import CurvedInfluence
 from conformal.influence.fe import settings_from_options, wheel_rail_kernel
 from conformal.result import EXTERIOR, Result
-from conformal.solvers.conformal import MAX_ELEMENTS, CurvedProblem, column_creepages, solve_curved
+from conformal.solvers.conformal import (MAX_ELEMENTS, CurvedProblem, approach_weights, column_creepages,
+                                        solve_curved)
 
 
 def scene_profiles(scene) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -176,13 +177,23 @@ class StripBuilder:
                     side=pl.pair.side)
         if st.warnings or size_warnings or st.placement_warnings:
             info["warnings"] = list(st.warnings) + size_warnings + list(st.placement_warnings)
-        if approach is not None:
+        h_strip = h - approach0          # the signed distance along the local normals at the height st.z
+        if getattr(load, "approach_along", None) is not None:
+            # [load] approach_along: from the height of [load] approach (below the first touch) the wheel
+            # moves that far along the load direction; the strip was found at a height st.z, so h is taken
+            # back to the reference height by the vertical motion's projection on the normals (first
+            # order, as the motion along the load direction itself; seed Eq. 45)
+            z_ref = pl.z_first + load.approach
+            h_strip = h_strip + (st.z - z_ref) * approach_weights(grid, 0.0)
+            info["z_ws_reference"] = z_ref
+            normal = dict(approach=float(load.approach_along if approach is None else approach))
+        elif approach is not None:
             normal = dict(approach=float(approach))
         else:
             normal = dict(normal_force=load.wheel_load) if load.wheel_load is not None else dict(approach=0.0)
         rail_points, wheel_points = scene_profiles(scene)   # whole profiles for the FE bodies
         profiles = dict(rail_points=rail_points, wheel_points=wheel_points)
-        return CurvedProblem(grid=grid, h=h - approach0, material=scene.material, friction=scene.friction,
+        return CurvedProblem(grid=grid, h=h_strip, material=scene.material, friction=scene.friction,
                              kinematics=kin, model=scene.model, xi_s=np.asarray(xi_s, float),
                              eta_s=np.asarray(eta_s, float), phi_s=np.asarray(phi_s, float),
                              load_angle=m * load.load_angle,     # the side frame (left wheel mirrored)
@@ -391,6 +402,10 @@ def _finish(scene, problem: CurvedProblem, result: Result, attempt: int, ext_war
     # ``approach`` means what [load] approach means: the wheelset's lowering below the height where
     # its first wheel touches; the largest overlap along the local normals is ``overlap_max``
     extra = dict(result.extra, z_ws=z_ws, grid_scale=scene.grid.scale, enlargements=attempt,
+                 # the lowering below the first touch from which the wheel moves along the load direction:
+                 # [load] approach = approach_reference with approach_along = approach_along_load gives
+                 # this solve back
+                 approach_reference=float(problem.info["z_ws_reference"] - problem.info["z_first_touch"]),
                  wheel_load=scene.load.wheel_load, overlap_max=result.approach,
                  strips=getattr(scene.grid, "strips", "coupled"))
     if ext_warn:
@@ -449,7 +464,8 @@ def _solve_separate(scene, builder: StripBuilder, coupled_problem: CurvedProblem
     parts = _contact_parts(coupled_problem, coupled, builder)
     g = scene.grid
     W = scene.load.wheel_load
-    dz0 = float(coupled.extra["approach_along_load"]) if coupled_problem.normal_force is not None else 0.0
+    dz0 = (float(coupled.extra["approach_along_load"]) if coupled_problem.normal_force is not None
+           else float(coupled_problem.approach or 0.0))
     # the coupled strip's contact regions are coarse: each strip spans 1.5 times its region
     scale = max(g.scale, 1.5)
     problems = [builder.problem(patch=p, n=g.n, scale=scale, approach=dz0, label=f":strip{k}", sizes=sizes)

@@ -391,7 +391,13 @@ def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grid
     elif load.approach is None:
         raise InputError("[load] wheel_load: a wheel_rail scene needs wheel_load (N) or approach (mm)")
     else:
-        st, fns = state_at(pl.pair, pl.top, pl.z_first + load.approach, pl.roll, scene, grids=grids), None
+        lowering = load.approach
+        if getattr(load, "approach_along", None) is not None and lowering == 0.0:
+            # from the first touch: the patches where the wheel overlaps after the approach along the load
+            # direction are found at the height of its vertical part (conformal.cases.conformal.StripBuilder
+            # takes h back to the first touch)
+            lowering += load.approach_along * math.cos(load.load_angle)
+        st, fns = state_at(pl.pair, pl.top, pl.z_first + lowering, pl.roll, scene, grids=grids), None
     return pl, replace(st, placement_warnings=tuple(placement_warnings(scene, pl, st))), fns
 
 
