@@ -138,23 +138,25 @@ class StripBuilder:
         scale = scale or g.scale
         size_warnings: list[str] = []
         target = patch or self.patch
+        # CONTACT's formulation: its grids put an element centre on the reference point
+        centred = scene.model.influence == "halfspace_planar"
         if sizes is not None:
             grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, target, sizes=sizes, scale=scale,
-                                                       side=pl.pair.side)
+                                                       side=pl.pair.side, centred=centred)
         elif (self.n_patches == 1 or patch is not None) and n is None \
                 and getattr(scene.geometry, "element_size_s", None) is not None:   # CONTACT's DX, DS
             grid, h, approach0 = curved_grid_for_patch(
                 wheel, pl.pair.rail, target, sizes=(scene.geometry.element_size, scene.geometry.element_size_s),
-                scale=scale, side=pl.pair.side)
+                scale=scale, side=pl.pair.side, centred=centred)
         elif self.n_patches == 1 or patch is not None:   # the grid of conformal.geometry (and of precompute)
             grid, h, approach0 = curved_grid_for_patch(
                 wheel, pl.pair.rail, target, element_size=None if n is not None else scene.geometry.element_size,
-                n=n or g.n, scale=scale, side=pl.pair.side)
+                n=n or g.n, scale=scale, side=pl.pair.side, centred=centred)
         else:
             patches = [pg.patch for pg in st.patches]
             dx, ds, size_warnings = _element_sizes(scene, patches, target, scale)
             grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, target, sizes=(dx, ds), scale=scale,
-                                                       side=pl.pair.side)
+                                                       side=pl.pair.side, centred=centred)
         merged = self.patch
         m = pl.pair.mirror
         k = scene.kinematics
@@ -174,7 +176,7 @@ class StripBuilder:
             kin = k
         info = patch_info(pl.pair, st, st.patches[0], 0)
         info.update(n_geometric_patches=self.n_patches, z_ws_reference=st.z, z_first_touch=pl.z_first,
-                    side=pl.pair.side)
+                    side=pl.pair.side, centred=centred)
         if st.warnings or size_warnings or st.placement_warnings:
             info["warnings"] = list(st.warnings) + size_warnings + list(st.placement_warnings)
         h_strip = h - approach0          # the signed distance along the local normals at the height st.z
