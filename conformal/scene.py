@@ -40,7 +40,7 @@ MODEL_OPTIONS = {
     "maxout": "outer (normal-tangential) iterations of the exact and conformal solvers",
     "max_mx": "conformal: largest number of strip elements along x",
     "max_ms": "conformal: largest number of strip elements along s",
-    "creepage": "conformal: \"surface\" | \"reference\" creepages on the strip",
+    "creepage": "conformal: \"surface\" | \"reference\" | \"wheel_surface\" (CONTACT's rigid slip) creepages on the strip",
     "creep_coefficients": "empirical: \"kalker\" | \"elliptic\"",
     "n": "fastsim: number of strips",
     "flexibilities": "fastsim: the flexibilities L1, L2, L3",

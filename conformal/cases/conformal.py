@@ -21,7 +21,8 @@ from typing import Any
 import numpy as np
 from scipy.optimize import brentq
 
-from conformal.cases.wheelrail import curved_creepages, loaded_state, patch_info, wheelset_motion
+from conformal.cases.wheelrail import (curved_creepages, loaded_state, patch_info, wheel_surface_slip,
+                                       wheelset_motion)
 from conformal.errors import ConvergenceError, InputError
 from conformal.geometry.patches import Patch, curved_grid_for_patch
 from conformal.geometry.wheelrail import profile_curves
@@ -52,6 +53,23 @@ def influence_for_grid(scene, grid, *, cache=None):
                                      cache=cache, rail_points=rail_pts, wheel_points=wheel_pts,
                                      names=(str(geo.rail_profile), str(geo.wheel_profile)))
     return CurvedInfluence.from_kernel(kernel), info
+
+
+CREEPAGES = ("surface", "reference", "wheel_surface")
+
+
+def creepage_option(model) -> str:
+    """``[model] creepage`` of the conformal theory: "surface" (the creepages of each column from the
+    wheelset motion, the wheel's material point on the rail surface of the just-touching wheel; the
+    default), "reference" (the reference point's creepages spread as a rigid motion: the planar
+    theories' assumption) or "wheel_surface" (CONTACT's conformal rigid slip: the wheel's velocity at
+    its own undeformed surface point of every element; the default of influence =
+    "halfspace_planar")."""
+    default = "wheel_surface" if model.influence == "halfspace_planar" else "surface"
+    creep = dict(model.options).get("creepage", default)
+    if creep not in CREEPAGES:
+        raise InputError(f"[model] creepage: must be one of {', '.join(CREEPAGES)}, got {creep!r}")
+    return creep
 
 
 # ----------------------------------------------------------------------------- wheel and rail
@@ -138,11 +156,12 @@ class StripBuilder:
         scale = scale or g.scale
         size_warnings: list[str] = []
         target = patch or self.patch
-        # CONTACT's formulation: its grids put an element centre on the reference point
-        centred = scene.model.influence == "halfspace_planar"
+        # CONTACT's formulation (its kernel or its rigid slip): its grids put an element centre on the
+        # reference point
+        centred = scene.model.influence == "halfspace_planar" or creepage_option(scene.model) == "wheel_surface"
         if sizes is not None:
             grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, target, sizes=sizes, scale=scale,
-                                                       side=pl.pair.side, centred=centred)
+                                                       side=pl.pair.side)
         elif (self.n_patches == 1 or patch is not None) and n is None \
                 and getattr(scene.geometry, "element_size_s", None) is not None:   # CONTACT's DX, DS
             grid, h, approach0 = curved_grid_for_patch(
@@ -156,13 +175,11 @@ class StripBuilder:
             patches = [pg.patch for pg in st.patches]
             dx, ds, size_warnings = _element_sizes(scene, patches, target, scale)
             grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, target, sizes=(dx, ds), scale=scale,
-                                                       side=pl.pair.side, centred=centred)
+                                                       side=pl.pair.side)
         merged = self.patch
         m = pl.pair.mirror
         k = scene.kinematics
-        creep = scene.model.options.get("creepage", "surface")
-        if creep not in ("surface", "reference"):
-            raise InputError(f"[model] creepage: must be \"surface\" or \"reference\", got {creep!r}")
+        creep = creepage_option(scene.model)
         motion = wheelset_motion(scene)
         if motion is not None:
             c = curved_creepages(pl.pair, st.z, motion, grid, merged)
@@ -176,10 +193,14 @@ class StripBuilder:
             kin = k
         info = patch_info(pl.pair, st, st.patches[0], 0)
         info.update(n_geometric_patches=self.n_patches, z_ws_reference=st.z, z_first_touch=pl.z_first,
-                    side=pl.pair.side, centred=centred)
+                    side=pl.pair.side)
         if st.warnings or size_warnings or st.placement_warnings:
             info["warnings"] = list(st.warnings) + size_warnings + list(st.placement_warnings)
         h_strip = h - approach0          # the signed distance along the local normals at the height st.z
+        if motion is not None and creep == "wheel_surface":
+            # CONTACT's D = 4 rigid slip: the wheel's velocity at its own surface point of each element
+            info["rigid_slip_extra"] = wheel_surface_slip(pl.pair, st.z, motion, grid, target.x_ref, h_strip,
+                                                          merged.penetration)
         if getattr(load, "approach_along", None) is not None:
             # [load] approach_along: from the height of [load] approach (below the first touch) the wheel
             # moves that far along the load direction; the strip was found at a height st.z, so h is taken

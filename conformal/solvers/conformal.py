@@ -353,6 +353,9 @@ def solve_stages(problem: CurvedProblem, op) -> Stages:
     sin_w = np.broadcast_to(np.sin(grid.delta - problem.load_angle), grid.shape)
     dS = np.broadcast_to(grid.area, grid.shape)
     slip = column_rigid_slip(grid, problem.xi_s, problem.eta_s, problem.phi_s, k.rolling == "steady")
+    extra_slip = problem.info.get("rigid_slip_extra")   # per element (conformal.cases.wheelrail.wheel_surface_slip)
+    if extra_slip is not None:
+        slip = slip + np.asarray(extra_slip, float)
 
     def normal_stage(extra_un, p_start, tang):
         if problem.normal_force is None:
@@ -447,7 +450,7 @@ def _result(problem: CurvedProblem, op, op_info: dict, stages: Stages) -> Result
     }
     extra.update(solution_extra(problem, stages, tr, dS))
     extra.update(op_info)
-    extra.update({k: v for k, v in problem.info.items() if k not in extra})
+    extra.update({k: v for k, v in problem.info.items() if k not in extra and k != "rigid_slip_extra"})
     warnings = list(problem.info.get("warnings", []))
     edge = _edge_warning(contact)
     if edge:
