@@ -60,9 +60,9 @@ MBENCH = [(8677.0, -573.0, -1669.0, 1075.0, 321, -24.25, 2.476e-2),
           (3310.0, -220.4, -626.1, 1195.0, 129, -70.01, 1.182e-2)]
 MBENCH_TRACK = (-793.4, 4939.0, 1.032e4)
 VARIANTS = {"contact": {"influence": "halfspace_planar"},
+            "project": {"influence": "halfspace"},
             "planar_surface_creep": {"influence": "halfspace_planar", "creepage": "surface"},
-            "turned_contact_creep": {"influence": "halfspace", "creepage": "wheel_surface"},
-            "project": {"influence": "halfspace"}}
+            "turned_contact_creep": {"influence": "halfspace", "creepage": "wheel_surface"}}
 
 
 def groove_scene(radius: str, model: dict):
@@ -174,16 +174,17 @@ def main(argv=None):
     grooves = ("1025",) if args.quick else tuple(GROOVE_LI)
     variants = ("contact",) if args.quick else tuple(VARIANTS)
     groove = []
-    for radius in grooves:
-        for v in variants:
+    for v in variants:
+        for radius in grooves:
             groove.append(groove_row(radius, v))
-            print(f"groove {radius} {v}: pitch {groove[-1]['err_pitch_pct']:+.2f} %", flush=True)
+            print("groove", groove[-1], flush=True)
+    groove.sort(key=lambda r: (-int(r["groove"]), list(VARIANTS).index(r["variant"])))
     write_csv(out / "groove.csv", groove)
     mbench = []
     if not args.quick:
         for v in variants:
             mbench += mbench_rows(v, VARIANTS[v], "separate")
-            print(f"mbench {v} done", flush=True)
+            print("mbench", mbench[-5:], flush=True)
         mbench += mbench_rows("project_coupled", VARIANTS["project"], "coupled")
         write_csv(out / "mbench.csv", mbench)
     text = summary(groove, mbench)
