@@ -196,7 +196,7 @@ class Scene:
         >>> s2.load.normal_force, s2.model.options["maxout"], s.load.normal_force
         (20000.0, 5, 10000.0)
         >>> s.with_("load.approach", 0.01).load        # one load replaces the other
-        Load(normal_force=None, approach=0.01, wheel_load=None, load_angle=0.0)
+        Load(normal_force=None, approach=0.01, wheel_load=None, load_angle=0.0, approach_along=None)
         """
         if key is not None:
             changes = {key: value, **changes}
