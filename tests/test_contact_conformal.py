@@ -110,9 +110,22 @@ def _flank(load, n=16):
     return scene_from_dict(raw, base_dir=SCENES, name="flank")
 
 
+def test_element_size_s_needs_element_size():
+    raw = load_scene(SCENES / "single_flange70.toml").to_dict()
+    raw["geometry"].pop("element_size", None)
+    raw["geometry"]["element_size_s"] = 0.25
+    with pytest.raises(InputError, match=r"\[geometry\] element_size_s"):
+        scene_from_dict(raw, base_dir=SCENES)
+    raw["geometry"]["element_size"] = 0.1
+    g = scene_from_dict(raw, base_dir=SCENES).geometry
+    assert (g.element_size, g.element_size_s) == (0.1, 0.25)
+
+
 def test_approach_along_is_checked():
     with pytest.raises(InputError, match=r"\[load\] approach_along"):
         _flank({"wheel_load": 1e4, "approach_along": 0.01})
+    with pytest.raises(InputError, match=r"\[load\] approach: must be > 0"):
+        _flank({"approach": 0.0})                # a wheel-rail approach is a lowering below the first touch
     with pytest.raises(InputError, match=r"\[load\] approach_along: must be > 0"):
         _flank({"approach_along": -0.01})
     with pytest.raises(InputError, match=r"\[load\] approach_along"):
