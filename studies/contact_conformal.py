@@ -20,7 +20,8 @@ turned frames with CONTACT's rigid slip; ``project`` = the project's default (in
 creepage "surface").  mbench_conf adds ``project_coupled`` (one strip over both patches, with their
 elastic interaction).
 
-Writes studies/out/contact_conformal/ (or --out): groove.csv, mbench.csv, summary.md, run.json.
+Writes studies/out/contact_conformal/ (or --out): groove.csv, mbench.csv, summary.md, run.json
+(``--cases mbench`` reruns one deck and keeps the other's CSV).
 
 Run:  nice -n 5 python studies/contact_conformal.py [--quick]
       (full: 4 grooves x 4 variants + mbench x 4, about 20 min on the 2-core machine;
@@ -119,10 +120,12 @@ def mbench_rows(variant: str, model: dict, strips: str) -> list[dict]:
             bar_fn, bar_fs = FZ * math.cos(d) - FY * math.sin(d), FY * math.cos(d) + FZ * math.sin(d)
             mid = 0.5 * (p.extra["contact_angle_min"] + p.extra["contact_angle_max"])
             rows.append({"variant": variant, "item": f"patch {k + 1}", "overlap": p.extra["overlap_max"],
+                         "dx": p.extra["grid"]["dx"], "ds": p.extra["grid"]["ds"],
                          "err_overlap_pct": pct(p.extra["overlap_max"], pen), "angle_deg": math.degrees(mid),
                          "ref_angle_deg": dref, "FN": bar_fn, "err_FN_pct": pct(bar_fn, fn), "FX": p.FX,
                          "err_FX_pct": pct(p.FX, fx), "FS": bar_fs, "err_FS_pct": pct(bar_fs, fs), "pmax": p.pmax,
-                         "err_pmax_pct": pct(p.pmax, pmax), "n_contact": round(p.extra["contact_area"] / 0.04),
+                         "err_pmax_pct": pct(p.pmax, pmax),
+                         "n_contact": round(p.extra["contact_area"] / (p.extra["grid"]["dx"] * p.extra["grid"]["ds"])),
                          "ref_n_contact": ncon, "wall_s": wall})
     for key, ref in zip(("FX_track", "FY_track", "FZ_track"), MBENCH_TRACK):
         rows.append({"variant": variant, "item": key, "FN": r.extra[key], "err_FN_pct": pct(r.extra[key], ref),
@@ -140,13 +143,32 @@ def write_csv(path: Path, rows: list[dict]) -> None:
     os.replace(tmp, path)
 
 
+def read_csv(path: Path) -> list[dict]:
+    """Rows of a CSV written by :func:`write_csv`, numbers as floats (empty cells as None)."""
+    def value(v: str):
+        if v == "":
+            return None
+        try:
+            return float(v)
+        except ValueError:
+            return v
+
+    with path.open(newline="", encoding="utf-8") as fh:
+        rows = [{k: value(v) for k, v in row.items()} for row in csv.DictReader(fh)]
+    for row in rows:        # identifiers stay text
+        for key in ("groove", "variant", "item"):
+            if key in row and isinstance(row[key], float):
+                row[key] = str(int(row[key]))
+    return rows
+
+
 def summary(groove: list[dict], mbench: list[dict]) -> str:
     lines = ["# CONTACT's conformal formulation against the project's (studies/contact_conformal.py)", "",
              "Deviation from CONTACT's printed results (%), geometry built from the profiles by this project.", "",
              "## groove_li (free rolling, FX = 0)", "",
              "| groove | variant | pitch creepage | err % | pmax err % | area err % | FN err % |", "|---|---|---|---|---|---|---|"]
     for r in groove:
-        lines.append(f"| R {int(r['groove']) / 100:.2f} | {r['variant']} | {r['pitch_creepage']:.4e} | "
+        lines.append(f"| R {int(r['groove']) / 100:.2f} | {r['variant']} | {float(r['pitch_creepage']):.4e} | "
                      f"{r['err_pitch_pct']:+.2f} | {r['err_pmax_pct']:+.2f} | {r['err_area_pct']:+.2f} | "
                      f"{r['err_FN_pct']:+.2f} |")
     if mbench:
@@ -168,20 +190,28 @@ def main(argv=None):
     ap.add_argument("--out", default=None,
                     help="output folder (default studies/out/contact_conformal; with --quick a temporary folder)")
     ap.add_argument("--quick", action="store_true", help="groove 10.25 mm in CONTACT's formulation only")
+    ap.add_argument("--cases", default="groove,mbench",
+                    help="which decks to run (groove, mbench); the other's CSV in the output folder is kept")
     args = ap.parse_args(argv)
+    cases = set(args.cases.split(","))
     out = output_dir("contact_conformal", args)
     out.mkdir(parents=True, exist_ok=True)
     grooves = ("1025",) if args.quick else tuple(GROOVE_LI)
     variants = ("contact",) if args.quick else tuple(VARIANTS)
     groove = []
-    for v in variants:
-        for radius in grooves:
-            groove.append(groove_row(radius, v))
-            print("groove", groove[-1], flush=True)
-    groove.sort(key=lambda r: (-int(r["groove"]), list(VARIANTS).index(r["variant"])))
-    write_csv(out / "groove.csv", groove)
+    if "groove" in cases:
+        for v in variants:
+            for radius in grooves:
+                groove.append(groove_row(radius, v))
+                print("groove", groove[-1], flush=True)
+        groove.sort(key=lambda r: (-int(r["groove"]), list(VARIANTS).index(r["variant"])))
+        write_csv(out / "groove.csv", groove)
+    elif (out / "groove.csv").is_file():
+        groove = read_csv(out / "groove.csv")
     mbench = []
-    if not args.quick:
+    if not args.quick and "mbench" not in cases and (out / "mbench.csv").is_file():
+        mbench = read_csv(out / "mbench.csv")
+    elif not args.quick:
         for v in variants:
             mbench += mbench_rows(v, VARIANTS[v], "separate")
             print("mbench", mbench[-5:], flush=True)
@@ -192,7 +222,7 @@ def main(argv=None):
     tmp.write_text(text, encoding="utf-8")
     os.replace(tmp, out / "summary.md")
     write_sidecar(out, __file__, vars(args), extra={"summary": {
-        "groove_pitch_err_pct": {f"{r['groove']}:{r['variant']}": round(r["err_pitch_pct"], 3) for r in groove}}})
+        "groove_pitch_err_pct": {f"{r['groove']}:{r['variant']}": round(float(r["err_pitch_pct"]), 3) for r in groove}}})
     print(text)
 
 

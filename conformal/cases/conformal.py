@@ -161,7 +161,7 @@ class StripBuilder:
         centred = scene.model.influence == "halfspace_planar" or creepage_option(scene.model) == "wheel_surface"
         if sizes is not None:
             grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, target, sizes=sizes, scale=scale,
-                                                       side=pl.pair.side)
+                                                       side=pl.pair.side, centred=centred)
         elif (self.n_patches == 1 or patch is not None) and n is None \
                 and getattr(scene.geometry, "element_size_s", None) is not None:   # CONTACT's DX, DS
             grid, h, approach0 = curved_grid_for_patch(
@@ -475,7 +475,8 @@ def _solve_separate(scene, builder: StripBuilder, coupled_problem: CurvedProblem
     """``[grid] strips = "separate"``: every contact patch of the coupled solution on a strip of
     its own, without elastic interaction between the strips (as CONTACT solves the patches of a
     wheel), each with ``[grid] n`` elements per axis over ``[grid] scale`` times its patch (its
-    own element size), extended where its contact reaches an end.  The strips share the wheelset
+    own element size; with ``[geometry] element_size`` (and ``element_size_s``) those elements,
+    CONTACT's DX and DS), extended where its contact reaches an end.  The strips share the wheelset
     height: with ``[load] wheel_load`` the common lowering dz along the load direction below the
     reference height is found by Brent's method on sum_k F_k(dz) = wheel_load (F_k: the force along
     the load direction, :func:`force_along_load`, with the tangential tractions, seed Eq. 46); with ``[load] approach`` the height is the scene's.  ``sizes`` = (dx, ds)
@@ -491,6 +492,9 @@ def _solve_separate(scene, builder: StripBuilder, coupled_problem: CurvedProblem
            else float(coupled_problem.approach or 0.0))
     # the coupled strip's contact regions are coarse: each strip spans 1.5 times its region
     scale = max(g.scale, 1.5)
+    geo = scene.geometry
+    if sizes is None and getattr(geo, "element_size", None) is not None:   # CONTACT's DX, DS on every strip
+        sizes = (float(geo.element_size), float(getattr(geo, "element_size_s", None) or geo.element_size))
     problems = [builder.problem(patch=p, n=g.n, scale=scale, approach=dz0, label=f":strip{k}", sizes=sizes)
                 for k, p in enumerate(parts)]
     warnings: list[str] = []
