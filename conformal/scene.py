@@ -30,6 +30,10 @@ THEORIES = ("hertz", "linear", "empirical", "johnson_vermeulen", "fastsim", "exa
 #: theories that solve the normal problem only (no tangential tractions)
 NORMAL_ONLY_THEORIES = ("hertz", "fe_contact")
 GEOMETRY_KINDS = ("quadratic", "hertz", "table", "wheel_rail")
+#: ``[model] influence``: half-space numbers with the element frames turned by the contact angles (the
+#: default), without that turn ("halfspace_planar": CONTACT's conformal approach, its D = 4 with
+#: C3 = 2; theory conformal only) or the finite-element numbers of the real wheel and rail
+INFLUENCES = ("halfspace", "halfspace_planar", "fe")
 
 #: model-specific ``[model]`` keys (besides theory, bound, influence, tol, maxit, layer_flexibility),
 #: with the module that reads them.  Any other key is rejected (a misspelt key would otherwise be
@@ -38,7 +42,7 @@ MODEL_OPTIONS = {
     "maxout": "outer (normal-tangential) iterations of the exact and conformal solvers",
     "max_mx": "conformal: largest number of strip elements along x",
     "max_ms": "conformal: largest number of strip elements along s",
-    "creepage": "conformal: \"surface\" | \"reference\" creepages on the strip",
+    "creepage": "conformal: \"surface\" | \"reference\" | \"wheel_surface\" (CONTACT's rigid slip) creepages on the strip",
     "creep_coefficients": "empirical: \"kalker\" | \"elliptic\"",
     "n": "fastsim: number of strips",
     "flexibilities": "fastsim: the flexibilities L1, L2, L3",
@@ -121,6 +125,7 @@ class WheelRailGeometry:
     flange_back_pos: float | None = None  # mm, flange back in wheel-profile y (None: from the profile)
     smoothing: float = 1.0               # mm, profile smoothing-spline wavelength (0 = interpolate)
     element_size: float | None = None    # mm, square grid elements covering each patch (CONTACT DX = DS)
+    element_size_s: float | None = None  # mm, conformal strips: the element length along s (CONTACT DS; DX = element_size)
     patch_combine: float = 8.0           # mm, overlap regions closer than this form one patch
     wheel_z: str = "down"                # "up": the wheel file gives z positive upwards (negated on reading)
     rail_z: str = "down"                 # "up": the rail file gives z positive upwards (negated on reading)
@@ -139,6 +144,7 @@ class Load:
     approach: float | None = None
     wheel_load: float | None = None
     load_angle: float = 0.0
+    approach_along: float | None = None   # mm along the load direction, from the height of ``approach``
 
 
 @dataclass(frozen=True)
@@ -203,7 +209,7 @@ class Scene:
         >>> s2.load.normal_force, s2.model.options["maxout"], s.load.normal_force
         (20000.0, 5, 10000.0)
         >>> s.with_("load.approach", 0.01).load        # one load replaces the other
-        Load(normal_force=None, approach=0.01, wheel_load=None, load_angle=0.0)
+        Load(normal_force=None, approach=0.01, wheel_load=None, load_angle=0.0, approach_along=None)
 
         Keys are the TOML file's names: ``material.nu`` sets Poisson's ratio of body 1 and, where
         the scene has no ``[material.body2]``, of body 2 too (``material.body2.nu`` body 2 alone);
@@ -308,6 +314,10 @@ def _set_toml_key(data: dict, path: str, value: Any) -> None:
         if key in group:
             for other in group:
                 table.pop(other, None)
+    if sec == "load" and key == "approach_along":       # an approach along the load direction: from
+        table.pop("normal_force", None), table.pop("wheel_load", None)   # first touch or [load] approach
+    elif sec == "load" and key in ("normal_force", "approach", "wheel_load"):
+        table.pop("approach_along", None)
     table[key] = value
 
 
@@ -538,6 +548,7 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
         flange_back=flange_back,
         wheel_radius=sec.number("wheel_radius", d.wheel_radius, positive=True),
         flange_back_pos=sec.number("flange_back_pos"),
+        element_size_s=_element_size_s(sec),
         smoothing=sec.number("smoothing", d.smoothing, nonnegative=True),
         element_size=sec.number("element_size", positive=True),
         patch_combine=sec.number("patch_combine", d.patch_combine, nonnegative=True),
@@ -546,22 +557,51 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
     )
 
 
+def _element_size_s(sec: "_Section") -> float | None:
+    """``[geometry] element_size_s``: the element length along s of a conformal strip (CONTACT's DS),
+    beside ``element_size`` (then the length along x, CONTACT's DX)."""
+    value = sec.number("element_size_s", positive=True)
+    if value is not None and not sec.has("element_size"):
+        raise sec.error("element_size_s", "give element_size (the element length along x) with it")
+    return value
+
+
 def _load(data: Any, geometry: Geometry) -> Load:
-    sec = _Section("load", data, {"normal_force", "approach", "wheel_load", "load_angle"})
+    sec = _Section("load", data, {"normal_force", "approach", "wheel_load", "load_angle", "approach_along"})
     given = [k for k in ("normal_force", "approach", "wheel_load") if sec.has(k)]
+    along = sec.number("approach_along")
+    if along is not None:
+        # the approach along the load direction (CONTACT's PEN along a direction), from the height
+        # [load] approach (default 0: the first touch) below the first touch
+        if geometry.kind != "wheel_rail":
+            raise sec.error("approach_along", "only for [geometry] kind = \"wheel_rail\" (other scenes: approach)")
+        if any(k in given for k in ("normal_force", "wheel_load")):
+            raise sec.error("approach_along", "give either a load (wheel_load) or approach_along, not both")
+        vertical = sec.number("approach", 0.0, nonnegative=True)
+        if not (along > 0.0 or vertical > 0.0):
+            raise sec.error("approach_along", f"must be > 0 from the first touch (without [load] approach), got {along:g}")
+        return Load(approach=vertical, approach_along=along, load_angle=_load_angle(sec, geometry))
     if len(given) != 1:
         raise sec.error("normal_force", "give exactly one of normal_force (N), approach (mm) or wheel_load (N)")
     key = given[0]
     if key == "wheel_load" and geometry.kind != "wheel_rail":
         raise sec.error("wheel_load", "only for [geometry] kind = \"wheel_rail\"; use normal_force")
-    value = sec.number(key, positive=True)
+    if key == "approach" and geometry.kind == "table":
+        # a gap table may already hold the approach (CONTACT's PEN = 0 with IBASE = 9): 0 is allowed
+        value = sec.number(key, nonnegative=True)
+    else:
+        value = sec.number(key, positive=True)
+    return Load(**{key: value}, load_angle=_load_angle(sec, geometry))
+
+
+def _load_angle(sec: "_Section", geometry: Geometry) -> float:
     angle = sec.number("load_angle", 0.0)
     if angle != 0.0 and geometry.kind != "wheel_rail":
         raise sec.error("load_angle", "only for [geometry] kind = \"wheel_rail\" (the load of other scenes is "
                         "along the contact normal)")
     if not abs(angle) < 1.4:
         raise sec.error("load_angle", f"must lie within +-1.4 rad (80 degrees) of the vertical, got {angle!r}")
-    return Load(**{key: value}, load_angle=angle)
+    return angle
 
 
 def _kinematics(data: Any, base_dir: Path = Path(".")) -> Kinematics:
@@ -661,7 +701,7 @@ def _model(data: Any, base_dir: Path = Path(".")) -> ModelSpec:
                         "(a larger one stops before the tractions are found; the default is 1e-6)")
     return ModelSpec(theory=sec.choice("theory", THEORIES, "fastsim"),
                      bound=sec.choice("bound", ("parabolic", "elliptic"), "parabolic"),
-                     influence=sec.choice("influence", ("halfspace", "fe"), "halfspace"),
+                     influence=sec.choice("influence", INFLUENCES, "halfspace"),
                      tol=tol,
                      maxit=sec.integer("maxit", 1000),
                      layer_flexibility=sec.number("layer_flexibility", 0.0, nonnegative=True),
@@ -778,6 +818,12 @@ def validate(scene: "Scene") -> "Scene":
         if kin.direction == -1 or kin.rigid_slip is not None or fr.mu_table is not None \
                 or "influence_file" in scene.model.options:
             raise InputError("[[history]]: not combined with direction = -1, rigid_slip, mu_table or influence_file")
+    if scene.model.influence == "halfspace_planar" and scene.model.theory != "conformal":
+        raise InputError(f"[model] influence: \"halfspace_planar\" (CONTACT's conformal approach) is for theory "
+                         f"\"conformal\", got theory {scene.model.theory!r}")
+    if scene.load.approach_along is not None and scene.model.theory != "conformal":
+        raise InputError(f"[load] approach_along: an approach along the load direction needs [model] theory = "
+                         f"\"conformal\", got {scene.model.theory!r}")
     if scene.load.load_angle != 0.0 and scene.model.theory != "conformal":
         raise InputError(f"[load] load_angle: a load direction other than vertical needs [model] theory = "
                          f"\"conformal\" (the {scene.model.theory!r} model balances the vertical load)")

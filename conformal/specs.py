@@ -55,7 +55,7 @@ class Kinematics:
 class ModelSpec:
     theory: str = "fastsim"
     bound: str = "parabolic"          # fastsim traction bound: "parabolic" | "elliptic"
-    influence: str = "halfspace"      # "halfspace" | "fe"
+    influence: str = "halfspace"      # "halfspace" | "halfspace_planar" (conformal: CONTACT's D = 4, C3 = 2) | "fe"
     tol: float = 1e-6
     maxit: int = 1000
     layer_flexibility: float = 0.0    # mm/(N/mm²), FASTSIM contamination layer (seed Eqs. 34-36)

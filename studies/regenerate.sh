@@ -32,6 +32,7 @@ STUDIES=(
   "fast_theories_benchmark|studies/fast_theories_benchmark.py"      # ~1 min
   "creep_coefficients|studies/creep_coefficients.py"                # ~3 min, also conformal/data
   "manchester_a22|studies/manchester_a22.py"                        # ~2 min
+  "contact_conformal|studies/contact_conformal.py"                  # ~15 min (CONTACT testbank)
   "halfspace_scaling|studies/halfspace_scaling.py"                  # ~5 min (timings)
   "steady_rolling_speed|studies/steady_rolling_speed.py"            # minutes (timings)
   "performance|studies/performance.py"                              # if present

@@ -21,14 +21,16 @@ from typing import Any
 import numpy as np
 from scipy.optimize import brentq
 
-from conformal.cases.wheelrail import curved_creepages, loaded_state, patch_info, wheelset_motion
+from conformal.cases.wheelrail import (curved_creepages, loaded_state, patch_info, wheel_surface_slip,
+                                       wheelset_motion)
 from conformal.errors import ConvergenceError, InputError
 from conformal.geometry.patches import Patch, curved_grid_for_patch
 from conformal.geometry.wheelrail import profile_curves
 from conformal.influence.curved import CurvedInfluence
 from conformal.influence.fe import settings_from_options, wheel_rail_kernel
 from conformal.result import EXTERIOR, Result
-from conformal.solvers.conformal import MAX_ELEMENTS, CurvedProblem, column_creepages, solve_curved
+from conformal.solvers.conformal import (MAX_ELEMENTS, CurvedProblem, approach_weights, column_creepages,
+                                        solve_curved)
 
 
 def scene_profiles(scene) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -53,6 +55,23 @@ def influence_for_grid(scene, grid, *, cache=None):
     return CurvedInfluence.from_kernel(kernel), info
 
 
+CREEPAGES = ("surface", "reference", "wheel_surface")
+
+
+def creepage_option(model) -> str:
+    """``[model] creepage`` of the conformal theory: "surface" (the creepages of each column from the
+    wheelset motion, the wheel's material point on the rail surface of the just-touching wheel; the
+    default), "reference" (the reference point's creepages spread as a rigid motion: the planar
+    theories' assumption) or "wheel_surface" (CONTACT's conformal rigid slip: the wheel's velocity at
+    its own undeformed surface point of every element; the default of influence =
+    "halfspace_planar")."""
+    default = "wheel_surface" if model.influence == "halfspace_planar" else "surface"
+    creep = dict(model.options).get("creepage", default)
+    if creep not in CREEPAGES:
+        raise InputError(f"[model] creepage: must be one of {', '.join(CREEPAGES)}, got {creep!r}")
+    return creep
+
+
 # ----------------------------------------------------------------------------- wheel and rail
 def _element_sizes(scene, patches, merged, scale: float) -> tuple[float, float, list[str]]:
     """(dx, ds, warnings) of a strip over several patches: [geometry] element_size (square
@@ -62,7 +81,8 @@ def _element_sizes(scene, patches, merged, scale: float) -> tuple[float, float, 
     es = scene.geometry.element_size
     p, g = patches[0], scene.grid
     if es is not None:
-        dx = ds = float(es)
+        dx = float(es)
+        ds = float(getattr(scene.geometry, "element_size_s", None) or es)
     else:
         dx = (p.x_range[1] - p.x_range[0]) * g.scale / g.n
         ds = max(p.s_range[1] - p.s_range[0], 1e-3) * g.scale / g.n
@@ -136,13 +156,21 @@ class StripBuilder:
         scale = scale or g.scale
         size_warnings: list[str] = []
         target = patch or self.patch
+        # CONTACT's formulation (its kernel or its rigid slip): its grids put an element centre on the
+        # reference point
+        centred = scene.model.influence == "halfspace_planar" or creepage_option(scene.model) == "wheel_surface"
         if sizes is not None:
             grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, target, sizes=sizes, scale=scale,
-                                                       side=pl.pair.side)
+                                                       side=pl.pair.side, centred=centred)
+        elif (self.n_patches == 1 or patch is not None) and n is None \
+                and getattr(scene.geometry, "element_size_s", None) is not None:   # CONTACT's DX, DS
+            grid, h, approach0 = curved_grid_for_patch(
+                wheel, pl.pair.rail, target, sizes=(scene.geometry.element_size, scene.geometry.element_size_s),
+                scale=scale, side=pl.pair.side, centred=centred)
         elif self.n_patches == 1 or patch is not None:   # the grid of conformal.geometry (and of precompute)
             grid, h, approach0 = curved_grid_for_patch(
                 wheel, pl.pair.rail, target, element_size=None if n is not None else scene.geometry.element_size,
-                n=n or g.n, scale=scale, side=pl.pair.side)
+                n=n or g.n, scale=scale, side=pl.pair.side, centred=centred)
         else:
             patches = [pg.patch for pg in st.patches]
             dx, ds, size_warnings = _element_sizes(scene, patches, target, scale)
@@ -151,9 +179,7 @@ class StripBuilder:
         merged = self.patch
         m = pl.pair.mirror
         k = scene.kinematics
-        creep = scene.model.options.get("creepage", "surface")
-        if creep not in ("surface", "reference"):
-            raise InputError(f"[model] creepage: must be \"surface\" or \"reference\", got {creep!r}")
+        creep = creepage_option(scene.model)
         motion = wheelset_motion(scene)
         if motion is not None:
             c = curved_creepages(pl.pair, st.z, motion, grid, merged)
@@ -170,13 +196,27 @@ class StripBuilder:
                     side=pl.pair.side)
         if st.warnings or size_warnings or st.placement_warnings:
             info["warnings"] = list(st.warnings) + size_warnings + list(st.placement_warnings)
-        if approach is not None:
+        h_strip = h - approach0          # the signed distance along the local normals at the height st.z
+        if motion is not None and creep == "wheel_surface":
+            # CONTACT's D = 4 rigid slip: the wheel's velocity at its own surface point of each element
+            info["rigid_slip_extra"] = wheel_surface_slip(pl.pair, st.z, motion, grid, target.x_ref, h_strip,
+                                                          merged.penetration)
+        if getattr(load, "approach_along", None) is not None:
+            # [load] approach_along: from the height of [load] approach (below the first touch) the wheel
+            # moves that far along the load direction; the strip was found at a height st.z, so h is taken
+            # back to the reference height by the vertical motion's projection on the normals (first
+            # order, as the motion along the load direction itself; seed Eq. 45)
+            z_ref = pl.z_first + load.approach
+            h_strip = h_strip + (st.z - z_ref) * approach_weights(grid, 0.0)
+            info["z_ws_reference"] = z_ref
+            normal = dict(approach=float(load.approach_along if approach is None else approach))
+        elif approach is not None:
             normal = dict(approach=float(approach))
         else:
             normal = dict(normal_force=load.wheel_load) if load.wheel_load is not None else dict(approach=0.0)
         rail_points, wheel_points = scene_profiles(scene)   # whole profiles for the FE bodies
         profiles = dict(rail_points=rail_points, wheel_points=wheel_points)
-        return CurvedProblem(grid=grid, h=h - approach0, material=scene.material, friction=scene.friction,
+        return CurvedProblem(grid=grid, h=h_strip, material=scene.material, friction=scene.friction,
                              kinematics=kin, model=scene.model, xi_s=np.asarray(xi_s, float),
                              eta_s=np.asarray(eta_s, float), phi_s=np.asarray(phi_s, float),
                              load_angle=m * load.load_angle,     # the side frame (left wheel mirrored)
@@ -391,6 +431,10 @@ def _finish(scene, problem: CurvedProblem, result: Result, attempt: int, ext_war
     # ``approach`` means what [load] approach means: the wheelset's lowering below the height where
     # its first wheel touches; the largest overlap along the local normals is ``overlap_max``
     extra = dict(result.extra, z_ws=z_ws, grid_scale=scene.grid.scale, enlargements=attempt,
+                 # the lowering below the first touch from which the wheel moves along the load direction:
+                 # [load] approach = approach_reference with approach_along = approach_along_load gives
+                 # this solve back
+                 approach_reference=float(problem.info["z_ws_reference"] - problem.info["z_first_touch"]),
                  wheel_load=scene.load.wheel_load, overlap_max=result.approach,
                  strips=getattr(scene.grid, "strips", "coupled"))
     if ext_warn:
@@ -437,7 +481,8 @@ def _solve_separate(scene, builder: StripBuilder, coupled_problem: CurvedProblem
     """``[grid] strips = "separate"``: every contact patch of the coupled solution on a strip of
     its own, without elastic interaction between the strips (as CONTACT solves the patches of a
     wheel), each with ``[grid] n`` elements per axis over ``[grid] scale`` times its patch (its
-    own element size), extended where its contact reaches an end.  The strips share the wheelset
+    own element size; with ``[geometry] element_size`` (and ``element_size_s``) those elements,
+    CONTACT's DX and DS), extended where its contact reaches an end.  The strips share the wheelset
     height: with ``[load] wheel_load`` the common lowering dz along the load direction below the
     reference height is found by Brent's method on sum_k F_k(dz) = wheel_load (F_k: the force along
     the load direction, :func:`force_along_load`, with the tangential tractions, seed Eq. 46); with ``[load] approach`` the height is the scene's.  ``sizes`` = (dx, ds)
@@ -449,9 +494,13 @@ def _solve_separate(scene, builder: StripBuilder, coupled_problem: CurvedProblem
     parts = _contact_parts(coupled_problem, coupled, builder)
     g = scene.grid
     W = scene.load.wheel_load
-    dz0 = float(coupled.extra["approach_along_load"]) if coupled_problem.normal_force is not None else 0.0
+    dz0 = (float(coupled.extra["approach_along_load"]) if coupled_problem.normal_force is not None
+           else float(coupled_problem.approach or 0.0))
     # the coupled strip's contact regions are coarse: each strip spans 1.5 times its region
     scale = max(g.scale, 1.5)
+    geo = scene.geometry
+    if sizes is None and getattr(geo, "element_size", None) is not None:   # CONTACT's DX, DS on every strip
+        sizes = (float(geo.element_size), float(getattr(geo, "element_size_s", None) or geo.element_size))
     problems = [builder.problem(patch=p, n=g.n, scale=scale, approach=dz0, label=f":strip{k}", sizes=sizes)
                 for k, p in enumerate(parts)]
     warnings: list[str] = []

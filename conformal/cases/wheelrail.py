@@ -702,7 +702,13 @@ def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grid
     elif load.approach is None:
         raise InputError("[load] wheel_load: a wheel_rail scene needs wheel_load (N) or approach (mm)")
     else:
-        st, fns = state_at(pl.pair, pl.top, pl.z_first + load.approach, pl.roll, scene, grids=grids), None
+        lowering = load.approach
+        if getattr(load, "approach_along", None) is not None and lowering == 0.0:
+            # from the first touch: the patches where the wheel overlaps after the approach along the load
+            # direction are found at the height of its vertical part (conformal.cases.conformal.StripBuilder
+            # takes h back to the first touch)
+            lowering += load.approach_along * math.cos(load.load_angle)
+        st, fns = state_at(pl.pair, pl.top, pl.z_first + lowering, pl.roll, scene, grids=grids), None
     if warn:
         st = replace(st, placement_warnings=tuple(placement_warnings(scene, pl, st)))
     return pl, st, fns
@@ -897,6 +903,45 @@ def curved_creepages(pair: WheelRailPair, z: float, motion: WheelsetMotion, grid
     c = creepages(wheel.frame, motion.mirrored(pair.side), R + patch.penetration * nrm, nrm)
     m = pair.mirror
     return Creepages(xi=c.xi, eta=m * c.eta, phi=m * c.phi, velocity=c.velocity)
+
+
+def wheel_surface_slip(pair: WheelRailPair, z: float, motion: WheelsetMotion, grid, x_ref: float,
+                       h: np.ndarray, penetration: float) -> np.ndarray:
+    """Per-element change of the rigid slip (2, mx, ms; side frame, creepage units) for CONTACT's
+    conformal rigid slip (module 1, D = 4; its m_wr_rigslip): the wheel's velocity taken at its own
+    undeformed surface point of each element, R(x, s) - h(x, s) n(s) (h: the signed distance along
+    the local normal, < 0 in the overlap), the rail's at R(x, s), and both projected on their mean
+    direction in the (x, n) plane (the "mid-plane", equal materials: the average of the two
+    velocities relative to the moving contact frame) before the x components are subtracted;
+    instead of the x components of the velocities at the point of :func:`curved_creepages`,
+    R(s) + penetration n(s).  Both change the creepage by the order of the overlap over the wheel
+    radius, (x / R)^2 along x and (penetration + h) / R across."""
+    wheel = pair.wheel(z)
+    side_yz = np.c_[grid.y, grid.z] @ pair.rail.rotation.T + np.asarray(pair.rail.origin)
+    n_side = grid.normal @ pair.rail.rotation.T
+    mx, ms = grid.mx, grid.ms
+    R = np.empty((mx, ms, 3))
+    R[..., 0] = x_ref + grid.x[:, None]
+    R[..., 1:] = side_yz[None, :, :]
+    nrm = np.zeros((mx, ms, 3))
+    nrm[..., 1:] = n_side[None, :, :]
+    own = motion.mirrored(pair.side)
+    frame = wheel.frame
+    at_touch = creepages(frame, own, R + penetration * nrm, nrm)
+    p = R - np.asarray(h, float)[..., None] * nrm
+    at_wheel = creepages(frame, own, p, nrm)
+    # velocities relative to the contact frame that moves with the wheelset (conformal.geometry.kinematics)
+    omega = own.roll_rate * np.array([1.0, 0.0, 0.0]) + own.yaw_rate * frame.e_d + own.pitch_velocity * frame.a
+    v_w = np.cross(omega, p - frame.O)
+    v_r = -np.array([own.speed, own.lateral_velocity, own.vertical_velocity])
+    vwx, vwn = v_w[..., 0], np.einsum("...i,...i->...", v_w, nrm)
+    vrx, vrn = v_r[0] + 0.0 * vwx, np.einsum("...i,...i->...", np.broadcast_to(v_r, nrm.shape), nrm)
+    mx_, mn_ = 0.5 * (vrx + vwx), 0.5 * (vrn + vwn)
+    length = np.hypot(mx_, mn_) * np.sign(-mx_)          # rolling in +x: the mean points to -x
+    rail_x = -(vrx * mx_ + vrn * mn_) / length
+    wheel_x = -(vwx * mx_ + vwn * mn_) / length
+    xi = (rail_x - wheel_x) / at_wheel.velocity
+    return np.stack([xi - at_touch.xi, at_wheel.eta - at_touch.eta])
 
 
 def curved_problems_from_wheel_rail(scene: Scene):

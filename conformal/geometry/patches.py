@@ -313,10 +313,12 @@ def curved_distance(wheel: WheelSurface, rail: RailSurface, patch: Patch, x: np.
 
 def curved_grid_for_patch(wheel: WheelSurface, rail: RailSurface, patch: Patch, *,
                           element_size: float | None = None, n: int = 40, scale: float = 1.1,
-                          side: str = "right", margin: float = 5.0, sizes: tuple[float, float] | None = None
-                          ) -> tuple[CurvedGrid, np.ndarray, float]:
+                          side: str = "right", margin: float = 5.0, sizes: tuple[float, float] | None = None,
+                          centred: bool = False) -> tuple[CurvedGrid, np.ndarray, float]:
     """Curved potential contact grid (x, s) for the patch, h along the local normals (min 0) and
-    the approach.  Uniform elements in x and in s (``element_size``, ``sizes`` = (dx, ds), or n x n)."""
+    the approach.  Uniform elements in x and in s (``element_size``, ``sizes`` = (dx, ds), or n x n).
+    ``centred``: an element centred on the reference point (x_ref, s_ref), as CONTACT's grids; else
+    the grid is centred on the overlap region."""
     x0, x1 = (v - patch.x_ref for v in patch.x_range)
     s0, s1 = patch.s_range
     cx, cs = 0.5 * (x0 + x1), 0.5 * (s0 + s1)
@@ -332,7 +334,11 @@ def curved_grid_for_patch(wheel: WheelSurface, rail: RailSurface, patch: Patch, 
         mx = ms = n
         dx, ds = 2 * hx / n, 2 * hs / n
     xl = cx - 0.5 * mx * dx
-    s_lo = max(cs - 0.5 * ms * ds, 0.0)
+    s_start = cs - 0.5 * ms * ds
+    if centred:   # shift by less than an element so that the reference point is an element centre
+        xl = -(round(-xl / dx - 0.5) + 0.5) * dx
+        s_start = patch.s_ref - (round((patch.s_ref - s_start) / ds - 0.5) + 0.5) * ds
+    s_lo = max(s_start, 0.0)
     s_hi = min(s_lo + ms * ds, rail.curve.length)
     s_edges = np.linspace(s_lo, s_hi, ms + 1)
     sc = 0.5 * (s_edges[:-1] + s_edges[1:])

@@ -44,7 +44,7 @@ tests/test_conformal.py).
 
 Wheel-rail scenes (``[model] theory = "conformal"``): one curved strip on the rail covers every
 contact patch of the wheel (built by :mod:`conformal.cases.conformal`); ``[model]`` keys: influence
-("halfspace" | "fe", FE keys fe_* of conformal.influence.fe), maxout, max_mx / max_ms (strip
+("halfspace" | "halfspace_planar" | "fe", FE keys fe_* of conformal.influence.fe), maxout, max_mx / max_ms (strip
 size limits), creepage ("surface": from the wheelset motion at every point, or "reference": the
 reference point's creepages spread as a rigid motion, the planar assumption).
 
@@ -214,7 +214,8 @@ def column_creepages(grid: CurvedGrid, xi: float, eta: float, phi: float
 def influence_operator(grid: CurvedGrid, material: Material, model: ModelSpec, *, planar: bool = False,
                        cache=None, rail_points=None, wheel_points=None) -> tuple[CurvedInfluence, dict]:
     """The curved grid's influence operator: ``model.influence`` = "halfspace" (per curved grid,
-    frames rotated by the contact angles) or "fe" (finite elements of the real wheel and rail,
+    frames rotated by the contact angles), "halfspace_planar" (the same numbers without the turn
+    between element frames: CONTACT's conformal approach) or "fe" (finite elements of the real wheel and rail,
     cached; ``rail_points``, ``wheel_points``: the whole profiles the FE bodies are cut from).
     Returns (operator, info with the timings and the FE statistics)."""
     t0 = time.perf_counter()
@@ -234,8 +235,13 @@ def influence_operator(grid: CurvedGrid, material: Material, model: ModelSpec, *
                                "[grid] n / fe_* settings") from exc
         info = {"influence": "fe", "fe": stats}
     else:
-        kernel = curved_halfspace_kernel(grid.mx, grid.dx, grid.s - grid.s_ref, grid.ds, grid.delta, material)
-        info = {"influence": "halfspace"}
+        # "halfspace_planar": CONTACT's conformal approach (its D = 4 with C3 = 2): the planar half-space
+        # numbers on the developed (x, s) grid, every element in its own local frame but no turn between
+        # the frames of two elements (Vollebregt 2014; CONTACT user guide, digit C3)
+        turned = model.influence != "halfspace_planar"
+        kernel = curved_halfspace_kernel(grid.mx, grid.dx, grid.s - grid.s_ref, grid.ds, grid.delta, material,
+                                         angle_correction=turned)
+        info = {"influence": model.influence}
     op = CurvedInfluence.from_kernel(kernel)
     info["influence_s"] = time.perf_counter() - t0
     return op, info
@@ -348,6 +354,9 @@ def solve_stages(problem: CurvedProblem, op) -> Stages:
     sin_w = np.broadcast_to(np.sin(grid.delta - problem.load_angle), grid.shape)
     dS = np.broadcast_to(grid.area, grid.shape)
     slip = column_rigid_slip(grid, problem.xi_s, problem.eta_s, problem.phi_s, k.rolling == "steady")
+    extra_slip = problem.info.get("rigid_slip_extra")   # per element (conformal.cases.wheelrail.wheel_surface_slip)
+    if extra_slip is not None:
+        slip = slip + np.asarray(extra_slip, float)
 
     def normal_stage(extra_un, p_start, tang):
         if problem.normal_force is None:
@@ -442,7 +451,7 @@ def _result(problem: CurvedProblem, op, op_info: dict, stages: Stages) -> Result
     }
     extra.update(solution_extra(problem, stages, tr, dS))
     extra.update(op_info)
-    extra.update({k: v for k, v in problem.info.items() if k not in extra})
+    extra.update({k: v for k, v in problem.info.items() if k not in extra and k != "rigid_slip_extra"})
     warnings = list(problem.info.get("warnings", []))
     edge = _edge_warning(contact)
     if edge:
