@@ -5,6 +5,7 @@
     conformal precompute SCENE.toml --sweep shift=0:10:0.5 [--workers N] [--scheduler ADDRESS|local]
     conformal cache list|clear [--cache DIR]
     conformal sweep SCENE.toml [--shift START:STOP:STEP] [--out DIR]
+    conformal stresses SCENE.toml [--depth D] [--k K] [--vtu OUT.vtu] [--plot OUT.png] [--json OUT.json]
 
 Bad input ends with exit code 2 and one line on stderr naming the key and the problem.
 """
@@ -209,6 +210,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     from conformal.dynamics.cli import add_parsers as add_dynamics_parsers  # conformal simulate|stability
     add_dynamics_parsers(sub)
+
+    from conformal.stresses.run import add_parsers as add_stresses_parsers  # conformal stresses
+    add_stresses_parsers(sub)
     return p
 
 
