@@ -96,7 +96,7 @@ def plot_stress_field(sf, path: str | Path, title: str = "", dang_van_alpha: flo
             ax.set_xlim(Y.min() - pad, Y.max() + pad)
             ax.set_ylim(Z.max() + pad, Z.min() - pad)
             ax.set(xlabel="y, rail profile frame (mm)", ylabel="z, down (mm)")
-        ax.set_title(f"{name}, cross-section at x = {sf.points[0, x_i, 0, 0]:.2f} mm")
+        ax.set_title(f"{name}\ncross-section at x = {sf.points[0, x_i, 0, 0]:.2f} mm")
         fig.colorbar(m, ax=ax, label=f"{name} (N/mm²)")
     tau_dv, _ = dang_van(sf.sigma, dang_van_alpha, axis=1)
     ax4.plot(tau_dv.max(axis=1), sf.depths, "C3-", label="Dang Van τ_a + α σ_h")
