@@ -212,7 +212,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_dynamics_parsers(sub)
 
     from conformal.stresses.run import add_parsers as add_stresses_parsers  # conformal stresses
-    add_stresses_parsers(sub)
+    add_stresses_parsers(sub, check_output_path, PLOT_SUFFIXES)
     return p
 
 

@@ -126,12 +126,11 @@ def cmd_stresses(args) -> int:
     import sys
     import tempfile
 
-    from conformal.cli import PLOT_SUFFIXES, check_output_path
     from conformal.solve import solve_scene
 
-    check_output_path(args.json, "--json", (".json",))
-    check_output_path(args.plot, "--plot", PLOT_SUFFIXES)
-    check_output_path(args.vtu, "--vtu", (".vtu",))
+    args.check_output(args.json, "--json", (".json",))
+    args.check_output(args.plot, "--plot", args.plot_suffixes)
+    args.check_output(args.vtu, "--vtu", (".vtu",))
     scene, opts = read_scene_with_stresses(args.scene)
     if args.depth is not None:
         opts["depth"] = args.depth
@@ -177,8 +176,9 @@ def cmd_stresses(args) -> int:
     return code
 
 
-def add_parsers(sub) -> None:
-    """The ``stresses`` sub-command of :mod:`conformal.cli`."""
+def add_parsers(sub, check_output, plot_suffixes) -> None:
+    """The ``stresses`` sub-command of :mod:`conformal.cli`; ``check_output(path, option, suffixes)``
+    refuses an output path before any work (conformal.cli.check_output_path)."""
     st = sub.add_parser("stresses", help="solve a scene, then the subsurface stresses and fatigue indices (JSON)")
     st.add_argument("scene", help="scene file (TOML); optional [stresses] section (k, alpha_dv, tau_e, depth, "
                     "n_depths, body)")
@@ -188,4 +188,4 @@ def add_parsers(sub) -> None:
     st.add_argument("--json", metavar="OUT.json", help="also write the JSON to this file")
     st.add_argument("--vtu", metavar="OUT.vtu", help="the stress block of the most stressed patch for ParaView")
     st.add_argument("--plot", metavar="OUT.png", help="slices of von Mises and orthogonal shear, Dang Van per depth")
-    st.set_defaults(func=cmd_stresses)
+    st.set_defaults(func=cmd_stresses, check_output=check_output, plot_suffixes=tuple(plot_suffixes))
