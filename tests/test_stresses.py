@@ -356,3 +356,25 @@ def test_cli_bad_input(tmp_path, capsys, extra, args, msg):
     rc = main(["stresses", str(path)] + args)
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and msg in err[0]
+
+
+# ----------------------------------------------------------------------------- FE body
+@pytest.mark.slow
+def test_fe_flat_rail_gives_the_halfspace_stresses():
+    """A flat rail: the elements' tangent planes are the surface, the residual traction of the split
+    method vanishes (up to quadrature) and the FE rail's stresses are the half-space stresses."""
+    from conformal.solvers.conformal import CurvedTractionField
+    from conformal.stresses.bodies import rail_body_stresses
+
+    cg = _tilted_strip(0.0, mx=7, ms=5, dx=0.4, ds=0.4)
+    cg = type(cg)(**{**cg.__dict__, "rail_curve": np.c_[np.linspace(-5, 7, 121), np.zeros(121)],
+                     "rail_curve_s": np.linspace(0, 12, 121) - 5.0})
+    X, S = cg.mesh()
+    pn = 900.0 * np.clip(1 - (X / 1.2) ** 2 - ((S - cg.s_ref) / 0.9) ** 2, 0, None) ** 0.5
+    f = CurvedTractionField(PlanarGrid(7, 5, 0.4, 0.4, cg.xl, -1.0), pn=pn, px=0.3 * pn, py=0 * pn,
+                            status=(pn > 0).astype(int), curved=cg)
+    pts = np.array([[0.0, cg.s_ref, z] for z in (0.2, 0.5, 0.9)])
+    rail = np.c_[np.linspace(-40, 40, 801), np.zeros(801)]
+    bs = rail_body_stresses(f, pts, G=82000.0, nu=0.28, rail_points=rail)
+    assert np.abs(bs.sigma_c).max() < 1e-6 * np.abs(bs.sigma_hs).max()
+    assert np.allclose(bs.sigma_hs, stresses(f, pts, nu=0.28), atol=1e-9)

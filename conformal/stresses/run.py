@@ -10,6 +10,9 @@ The scene may carry a ``[stresses]`` section (read here, not by the scene loader
     depth = 2.0        # deepest plane (mm); default twice the smaller semi-axis of each patch
     n_depths = 40      # planes from the surface to depth
     body = 1           # 1: the rail (body 1), 2: the wheel
+    fe_body = true     # theory "conformal" with influence "fe": also the stresses inside the FE rail
+                       # (one FE solve with the final load) on the cross-section through the
+                       # half-space maximum (default: true for influence = "fe", else false)
 """
 from __future__ import annotations
 
@@ -26,7 +29,7 @@ from conformal.scene import scene_from_dict
 from conformal.stresses.fatigue import FatigueParameters, surface_index
 from conformal.stresses.field import N_DEPTHS, default_depths, stress_field
 
-_KEYS = {"k", "alpha_dv", "tau_e", "depth", "n_depths", "body"}
+_KEYS = {"k", "alpha_dv", "tau_e", "depth", "n_depths", "body", "fe_body"}
 
 
 def read_scene_with_stresses(path: str | Path):
@@ -82,6 +85,8 @@ def patch_stresses(result, scene, opts: dict) -> tuple[dict, list]:
         row.update(sf.summary(params))
         row["FI_surf"] = surface_index(p.FN, p.FX, p.FY, p.a, p.b, params.k)
         row["mu_eff"] = math.hypot(p.FX, p.FY) / p.FN
+        if _want_fe_body(scene, result, opts) and body == 1:
+            row["fe_body"] = fe_body_section(p, scene, sf, params)
         rows.append(row)
         fields.append(sf)
     if not rows:
@@ -100,6 +105,9 @@ def patch_stresses(result, scene, opts: dict) -> tuple[dict, list]:
     out["fatigue"] = {"k": params.k, "alpha_dv": params.alpha_dv, "tau_e": params.tau_e,
                       "FI_surf": max(r["FI_surf"] for r in rows),
                       "tau_dv_max": dv["tau_dv_max"], "tau_dv_depth": dv["depth"], "FI_sub": dv["FI_sub"]}
+    fe_rows = [r for r in rows if "fe_body" in r]
+    if fe_rows:
+        out["fe_body"] = max(fe_rows, key=lambda r: r["max_von_mises"])["fe_body"]
     out["frame"] = rows[0]["frame"]
     out["patches"] = rows
     warnings = list(result.warnings)
@@ -109,6 +117,52 @@ def patch_stresses(result, scene, opts: dict) -> tuple[dict, list]:
                             f"({r['depths']['max']:.3g} mm): give a larger --depth")
     out["warnings"] = list(dict.fromkeys(warnings))
     return _jsonable(out), fields
+
+
+def _want_fe_body(scene, result, opts) -> bool:
+    want = opts.get("fe_body", None)
+    if want is not None and not isinstance(want, bool):
+        raise InputError(f"[stresses] fe_body: must be true or false, got {want!r}")
+    fe = result.theory == "conformal" and scene.model.influence == "fe"
+    if want and not fe:
+        raise InputError("[stresses] fe_body: needs [model] theory = \"conformal\" with influence = \"fe\"")
+    return fe if want is None else want
+
+
+def _section_maxima(sf) -> dict:
+    out = {}
+    for key, vals, use_abs in (("max_von_mises", sf.von_mises, False), ("max_shear", sf.principal_shear, False),
+                               ("max_orthogonal_shear", sf.orthogonal_shear, True)):
+        v = np.abs(vals) if use_abs else vals
+        i = np.unravel_index(int(np.nanargmax(v)), v.shape)
+        out[key] = float(v[i])
+        out[key + "_depth"] = float(sf.depths[i[0]])
+        out[key + "_position"] = [float(c) for c in sf.points[i]]
+    return out
+
+
+def fe_body_section(result, scene, sf, params) -> dict:
+    """Stresses inside the FE rail (conformal.stresses.bodies) on the cross-section of the strip
+    through the half-space von Mises maximum, against the half-space stresses at the same points."""
+    from dataclasses import replace as _replace
+
+    from conformal.cases.conformal import scene_profiles
+    from conformal.influence.fe import settings_from_options
+    from conformal.stresses.bodies import rail_body_stresses
+    from conformal.stresses.field import StressField
+
+    vm = sf.von_mises
+    x_i = int(np.unravel_index(int(np.nanargmax(vm)), vm.shape)[1])
+    pts = sf.points[:, x_i:x_i + 1]
+    rail_pts, _ = scene_profiles(scene)
+    bs = rail_body_stresses(result.field, pts, G=scene.material.G1, nu=scene.material.nu1,
+                            settings=settings_from_options(scene.model.options), rail_points=rail_pts)
+    fe = StressField(bs.sigma, pts, sf.depths, sf.normal, sf.frame, 1)
+    hs = _replace(fe, sigma=bs.sigma_hs)
+    return {"section_x": float(pts[0, 0, 0, 0]), "fe": _section_maxima(fe), "halfspace": _section_maxima(hs),
+            "max_correction": float(np.abs(bs.sigma_c).max()), "stats": bs.stats,
+            "note": "sigma = half-space field of the elements on their tangent planes + FE correction of the "
+                    "real rail (split method, one FE solve with the final load)"}
 
 
 def surface_curve(result) -> np.ndarray | None:
