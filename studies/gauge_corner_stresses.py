@@ -15,8 +15,11 @@ of the real bodies; then the subsurface stresses of both bodies follow from the 
 Per case, influence model, body and frame: the maxima of von Mises, the principal shear
 (s1 - s3)/2 and the orthogonal shear sigma_xn with their depths and positions (rail-profile frame,
 mm), the surface fatigue index FI_surf (shakedown map, k = 300 N/mm²) and the Dang Van index
-(alpha = 1/3, tau_e = 300 N/mm²).  What this study does NOT give: stresses computed inside the FE
-bodies (the FE models enter through the tractions only; see the README, "Subsurface stresses").
+(alpha = 1/3, tau_e = 300 N/mm²).  Then the stresses inside the FE rail (conformal.stresses.bodies:
+half-space field of the elements on their tangent planes plus the FE correction of the real rail,
+one FE solve with the final load) on the cross-section through the half-space von Mises maximum,
+against the half-space stresses at the same points ("FE body, section" and "half-space, same
+section"; the wheel's FE body is not computed).
 
 Writes to --out (default studies/out/gauge_corner_stresses): gauge_corner_stresses.csv, .md, and
 <case>_<influence>_rail.png / _wheel.png (slices, von Mises and orthogonal shear, per-depth maxima).
@@ -101,6 +104,21 @@ def run_case(name, path, shift, influence, args):
                          "FI_surf": fi, "tau_dv": sm["dang_van"]["tau_dv_max"], "dv_depth": sm["dang_van"]["depth"],
                          "FI_sub": sm["dang_van"]["FI_sub"], "solve_s": t_solve, "stress_s": t_st,
                          "surface_check": surface_check(result, sf) if frame == "strip" else ""})
+    if not args.quick and not args.no_fe_body:
+        from conformal.stresses.run import fe_body_section
+
+        t1 = time.perf_counter()
+        sec = fe_body_section(result, scene, fields["rail"], PARAMS)
+        for frame, key in (("FE body, section", "fe"), ("half-space, same section", "halfspace")):
+            m = sec[key]
+            rows.append({**{k: rows[0][k] for k in ("case", "influence", "FN", "FX", "FY", "pmax", "a", "b", "FI_surf")},
+                         "body": "rail", "frame": frame, "max_von_mises": m["max_von_mises"],
+                         "vm_depth": m["max_von_mises_depth"], "vm_y": m["max_von_mises_position"][1],
+                         "vm_z": m["max_von_mises_position"][2], "max_shear": m["max_shear"],
+                         "shear_depth": m["max_shear_depth"], "max_orthogonal_shear": m["max_orthogonal_shear"],
+                         "orth_depth": m["max_orthogonal_shear_depth"], "tau_dv": float("nan"), "dv_depth": float("nan"),
+                         "FI_sub": float("nan"), "solve_s": t_solve, "stress_s": time.perf_counter() - t1,
+                         "surface_check": f"x = {sec['section_x']:.2f} mm, max |sigma_c| {sec['max_correction']:.1f}"})
     return result, rows, fields
 
 
@@ -130,7 +148,8 @@ def write_md(rows, path: Path) -> None:
         lines.append(f"| {r['case']} | {r['influence']} | {r['body']} | {r['frame']} | {r['FN']:.0f} | {r['pmax']:.0f} | "
                      f"{r['max_von_mises']:.0f} ({r['vm_depth']:.2f}) | {r['max_shear']:.0f} ({r['shear_depth']:.2f}) | "
                      f"{r['max_orthogonal_shear']:.0f} ({r['orth_depth']:.2f}) | {r['FI_surf']:.3f} | "
-                     f"{r['tau_dv']:.0f} ({r['dv_depth']:.2f}) | {r['FI_sub']:.0f} |")
+                     + (f"{r['tau_dv']:.0f} ({r['dv_depth']:.2f}) | {r['FI_sub']:.0f} |" if r["tau_dv"] == r["tau_dv"]
+                        else "- | - |"))
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
@@ -138,6 +157,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="6.2 mm only, coarse grid, half-space, no FE")
     ap.add_argument("--no-fe", action="store_true", help="half-space influence numbers only")
+    ap.add_argument("--no-fe-body", action="store_true", help="no FE rail stresses (conformal.stresses.bodies)")
     ap.add_argument("--out", help="output folder")
     args = ap.parse_args(argv)
     out = output_dir("gauge_corner_stresses", args)
