@@ -378,3 +378,33 @@ def test_fe_flat_rail_gives_the_halfspace_stresses():
     bs = rail_body_stresses(f, pts, G=82000.0, nu=0.28, rail_points=rail)
     assert np.abs(bs.sigma_c).max() < 1e-6 * np.abs(bs.sigma_hs).max()
     assert np.allclose(bs.sigma_hs, stresses(f, pts, nu=0.28), atol=1e-9)
+
+
+@pytest.mark.slow
+def test_gauge_corner_study_quick(tmp_path):
+    """studies/gauge_corner_stresses.py --quick (flange root at 6.2 mm, coarse strip, half-space):
+    the superposed field meets the traction condition sigma_nn = -p at the surface within 1 % of
+    pmax in both bodies (each element exactly on its own tangent plane), and FI_surf is the
+    shakedown formula of the row's forces and semi-axes."""
+    import csv
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "out"
+    r = subprocess.run([sys.executable, str(root / "studies" / "gauge_corner_stresses.py"), "--quick", "--out", str(out)],
+                       cwd=root, capture_output=True, text=True, timeout=300,
+                       env=dict(os.environ, OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg"))
+    assert r.returncode == 0, r.stderr[-2000:]
+    rows = list(csv.DictReader((out / "gauge_corner_stresses.csv").open()))
+    assert [(x["body"], x["frame"]) for x in rows] == [("rail", "strip"), ("rail", "tangent plane"),
+                                                       ("wheel", "strip"), ("wheel", "tangent plane")]
+    for x in rows:
+        if x["frame"] == "strip":
+            assert 0 <= float(x["surface_check"]) < 0.01
+        FN, FX, FY, a, b = (float(x[k]) for k in ("FN", "FX", "FY", "a", "b"))
+        assert float(x["FI_surf"]) == pytest.approx(math.hypot(FX, FY) / FN - 2 * math.pi * a * b * 300.0 / (3 * FN))
+        assert 0.5 * float(x["pmax"]) < float(x["max_von_mises"]) < float(x["pmax"])
+    assert (out / "flange_6.2_halfspace_rail.png").exists() and (out / "run.json").exists()
