@@ -22,7 +22,8 @@ against the half-space stresses at the same points ("FE body, section" and "half
 section"; the wheel's FE body is not computed).
 
 Writes to --out (default studies/out/gauge_corner_stresses): gauge_corner_stresses.csv, .md, and
-<case>_<influence>_rail.png / _wheel.png (slices, von Mises and orthogonal shear, per-depth maxima).
+<case>_<influence>_rail.png / _wheel.png (slices, von Mises and orthogonal shear, per-depth maxima),
+<case>_<influence>_fe_section.png (von Mises in the half-space and in the FE rail on the section).
 
     python studies/gauge_corner_stresses.py             # all cases, half-space and FE (minutes: FE)
     python studies/gauge_corner_stresses.py --no-fe     # half-space influence numbers only
@@ -108,7 +109,7 @@ def run_case(name, path, shift, influence, args):
         from conformal.stresses.run import fe_body_section
 
         t1 = time.perf_counter()
-        sec = fe_body_section(result, scene, fields["rail"], PARAMS)
+        sec = fe_body_section(result, scene, fields["rail"], PARAMS, figure=Path(args.out) / f"{name}_{influence}_fe_section.png")
         for frame, key in (("FE body, section", "fe"), ("half-space, same section", "halfspace")):
             m = sec[key]
             rows.append({**{k: rows[0][k] for k in ("case", "influence", "FN", "FX", "FY", "pmax", "a", "b", "FI_surf")},

@@ -119,3 +119,48 @@ def plot_stress_field(sf, path: str | Path, title: str = "", dang_van_alpha: flo
         if os.path.exists(tmp):
             os.unlink(tmp)
     return path
+
+
+def plot_section_comparison(points, sigma_hs, sigma_fe, path, title: str = "", surface=None) -> Path:
+    """von Mises on a cross-section (points (nd, nc, 3), rail-profile frame) of the half-space
+    and of the FE body, and their difference (N/mm²)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    from conformal.stresses.invariants import von_mises
+
+    Y, Z = points[..., 1], points[..., 2]
+    v_hs, v_fe = von_mises(sigma_hs), von_mises(sigma_fe)
+    fig = Figure(figsize=(13, 4.4), constrained_layout=True)
+    axes = fig.subplots(1, 3)
+    lim = (min(v_hs.min(), v_fe.min()), max(v_hs.max(), v_fe.max()))
+    d = v_fe - v_hs
+    for ax, val, name, kw in ((axes[0], v_hs, "half-space\n(elements on their tangent planes)", {"vmin": lim[0], "vmax": lim[1]}),
+                              (axes[1], v_fe, "FE rail\n(half-space + FE correction, P1)", {"vmin": lim[0], "vmax": lim[1]}),
+                              (axes[2], d, "\nFE rail - half-space", {"cmap": "RdBu_r", "vmin": -np.abs(d).max(),
+                                                                     "vmax": np.abs(d).max()})):
+        m = ax.pcolormesh(Y, Z, val, shading="gouraud", **kw)
+        if surface is not None:
+            ax.plot(surface[:, 0], surface[:, 1], "k-", lw=1.0)
+        ax.set_aspect("equal")
+        pad = 0.3 * float(np.ptp(Z) + np.ptp(Y)) / 2
+        ax.set_xlim(Y.min() - pad, Y.max() + pad)
+        ax.set_ylim(Z.max() + pad, Z.min() - pad)
+        ax.set(xlabel="y, rail profile frame (mm)", ylabel="z, down (mm)", title=f"von Mises, {name}")
+        fig.colorbar(m, ax=ax, label="N/mm²")
+    if title:
+        fig.suptitle(title)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=110)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path

@@ -141,15 +141,12 @@ def _section_maxima(sf) -> dict:
     return out
 
 
-def fe_body_section(result, scene, sf, params) -> dict:
-    """Stresses inside the FE rail (conformal.stresses.bodies) on the cross-section of the strip
-    through the half-space von Mises maximum, against the half-space stresses at the same points."""
-    from dataclasses import replace as _replace
-
+def fe_body_stress_section(result, scene, sf):
+    """(points (nd, 1, nc, 3), BodyStresses) inside the FE rail (conformal.stresses.bodies) on the
+    cross-section of the strip through the half-space von Mises maximum of ``sf``."""
     from conformal.cases.conformal import scene_profiles
     from conformal.influence.fe import settings_from_options
     from conformal.stresses.bodies import rail_body_stresses
-    from conformal.stresses.field import StressField
 
     vm = sf.von_mises
     x_i = int(np.unravel_index(int(np.nanargmax(vm)), vm.shape)[1])
@@ -157,8 +154,26 @@ def fe_body_section(result, scene, sf, params) -> dict:
     rail_pts, _ = scene_profiles(scene)
     bs = rail_body_stresses(result.field, pts, G=scene.material.G1, nu=scene.material.nu1,
                             settings=settings_from_options(scene.model.options), rail_points=rail_pts)
+    return pts, bs
+
+
+def fe_body_section(result, scene, sf, params=None, figure=None) -> dict:
+    """The maxima inside the FE rail on the cross-section through the half-space maximum
+    (:func:`fe_body_stress_section`), against the half-space stresses at the same points;
+    ``figure``: also write the comparison figure there (conformal.stresses.plots)."""
+    from dataclasses import replace as _replace
+
+    from conformal.stresses.field import StressField
+
+    pts, bs = fe_body_stress_section(result, scene, sf)
     fe = StressField(bs.sigma, pts, sf.depths, sf.normal, sf.frame, 1)
     hs = _replace(fe, sigma=bs.sigma_hs)
+    if figure is not None:
+        from conformal.stresses.plots import plot_section_comparison
+
+        plot_section_comparison(pts[:, 0], bs.sigma_hs[:, 0], bs.sigma[:, 0], figure,
+                                title=f"{scene.name}: stresses in the rail at x = {pts[0, 0, 0, 0]:.2f} mm",
+                                surface=surface_curve(result))
     return {"section_x": float(pts[0, 0, 0, 0]), "fe": _section_maxima(fe), "halfspace": _section_maxima(hs),
             "max_correction": float(np.abs(bs.sigma_c).max()), "stats": bs.stats,
             "note": "sigma = half-space field of the elements on their tangent planes + FE correction of the "
