@@ -164,3 +164,49 @@ def plot_section_comparison(points, sigma_hs, sigma_fe, path, title: str = "", s
         if os.path.exists(tmp):
             os.unlink(tmp)
     return path
+
+
+def plot_section_3d(result, points, values, path, *, title: str = "", label: str = "von Mises (N/mm²)",
+                    window: tuple[int, int] = (1300, 950)) -> Path:
+    """Off-screen pyvista PNG: the rail around a conformal strip (grey), the contact patch coloured
+    by its pressure and a cross-section of the rail head (points (nd, nc, 3), rail-profile frame)
+    coloured by ``values`` (nd, nc), with axes in mm."""
+    from conformal.plots import _offscreen_plotter, conformal_meshes, strip_mesh
+
+    meshes = conformal_meshes(result)
+    P = np.asarray(points, float)
+    x0 = float(P[..., 0].mean())
+    section = strip_mesh(P)
+    section.point_data[label] = np.asarray(values, float).T.reshape(-1)
+    pl = _offscreen_plotter(window)
+    # the rail and the patch ahead of the section (x >= x0): the cut face is in view
+    rail = meshes["rail"].clip(normal=(-1.0, 0.0, 0.0), origin=(x0, 0.0, 0.0))
+    pl.add_mesh(rail, color="lightgrey", opacity=0.45)
+    strip = meshes["strip"].threshold(1e-9, scalars="pn").clip(normal=(-1.0, 0.0, 0.0), origin=(x0, 0.0, 0.0))
+    bar = {"vertical": True, "height": 0.6, "width": 0.05, "title_font_size": 14, "label_font_size": 12}
+    pl.add_mesh(strip, scalars="pn", cmap="inferno",
+                scalar_bar_args={"title": "pressure pn (N/mm²)", "position_x": 0.06, "position_y": 0.2, **bar})
+    pl.add_mesh(section, scalars=label, cmap="viridis",
+                scalar_bar_args={"title": label, "position_x": 0.88, "position_y": 0.2, **bar})
+    pl.show_bounds(mesh=section, xtitle="x (mm)", ytitle="y (mm)", ztitle="z, down (mm)", font_size=12,
+                   location="outer")
+    if title:
+        pl.add_text(title, font_size=11)
+    c = P.reshape(-1, 3).mean(axis=0)
+    span = float(np.ptp(P[..., 1]) + np.ptp(P[..., 2]))
+    pl.camera.focal_point = tuple(c)
+    pl.camera.position = tuple(c + span * np.array([-2.2, -0.5, -0.9]))
+    pl.camera.up = (0.0, 0.0, -1.0)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(suffix=".png", dir=path.parent)
+    os.close(fd)
+    try:
+        pl.screenshot(tmp)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    finally:
+        pl.close()
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path

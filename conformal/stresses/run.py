@@ -160,7 +160,8 @@ def fe_body_stress_section(result, scene, sf):
 def fe_body_section(result, scene, sf, params=None, figure=None) -> dict:
     """The maxima inside the FE rail on the cross-section through the half-space maximum
     (:func:`fe_body_stress_section`), against the half-space stresses at the same points;
-    ``figure``: also write the comparison figure there (conformal.stresses.plots)."""
+    ``figure``: also write the comparison figure there and its 3-D view (pyvista) beside it as
+    ``<stem>_3d.png`` (conformal.stresses.plots)."""
     from dataclasses import replace as _replace
 
     from conformal.stresses.field import StressField
@@ -171,9 +172,17 @@ def fe_body_section(result, scene, sf, params=None, figure=None) -> dict:
     if figure is not None:
         from conformal.stresses.plots import plot_section_comparison
 
+        from pathlib import Path as _Path
+
+        from conformal.stresses.invariants import von_mises
+        from conformal.stresses.plots import plot_section_3d
+
         plot_section_comparison(pts[:, 0], bs.sigma_hs[:, 0], bs.sigma[:, 0], figure,
                                 title=f"{scene.name}: stresses in the rail at x = {pts[0, 0, 0, 0]:.2f} mm",
                                 surface=surface_curve(result))
+        fig3d = _Path(figure).with_name(_Path(figure).stem + "_3d.png")   # the same section in 3-D (pyvista)
+        plot_section_3d(result, pts[:, 0], von_mises(bs.sigma[:, 0]), fig3d,
+                        title=f"{scene.name}: von Mises in the FE rail, section x = {pts[0, 0, 0, 0]:.2f} mm")
     return {"section_x": float(pts[0, 0, 0, 0]), "fe": _section_maxima(fe), "halfspace": _section_maxima(hs),
             "max_correction": float(np.abs(bs.sigma_c).max()), "stats": bs.stats,
             "note": "sigma = half-space field of the elements on their tangent planes + FE correction of the "
