@@ -27,6 +27,7 @@ Writes to --out (default studies/out/gauge_corner_stresses): gauge_corner_stress
 
     python studies/gauge_corner_stresses.py             # all cases, half-space and FE (minutes: FE)
     python studies/gauge_corner_stresses.py --no-fe     # half-space influence numbers only
+    python studies/gauge_corner_stresses.py --no-fe --n 24   # coarser strips (the committed outputs)
     python studies/gauge_corner_stresses.py --quick --out DIR   # 6.2 mm, coarse grid, half-space (seconds)
 """
 from __future__ import annotations
@@ -79,6 +80,8 @@ def run_case(name, path, shift, influence, args):
         over["geometry"] = {"lateral_shift": shift}
     if args.quick:
         over["grid"] = {"n": 16}
+    elif args.n:
+        over["grid"] = {"n": args.n}
     scene = scene.with_(**{f"{s}__{k}": v for s, kv in over.items() for k, v in kv.items()})
     t0 = time.perf_counter()
     result = solve_scene(scene)
@@ -159,6 +162,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="6.2 mm only, coarse grid, half-space, no FE")
     ap.add_argument("--no-fe", action="store_true", help="half-space influence numbers only")
     ap.add_argument("--no-fe-body", action="store_true", help="no FE rail stresses (conformal.stresses.bodies)")
+    ap.add_argument("--n", type=int, help="[grid] n of every scene (default: the scenes' 40 and 30)")
     ap.add_argument("--out", help="output folder")
     args = ap.parse_args(argv)
     out = output_dir("gauge_corner_stresses", args)
