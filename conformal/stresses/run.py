@@ -26,7 +26,7 @@ import numpy as np
 from conformal.errors import InputError
 from conformal.result import _jsonable
 from conformal.scene import scene_from_dict
-from conformal.stresses.fatigue import FatigueParameters, surface_index
+from conformal.stresses.fatigue import ALPHA_DV, K_SHEAR, TAU_E, FatigueParameters, surface_index
 from conformal.stresses.field import N_DEPTHS, default_depths, stress_field
 
 _KEYS = {"k", "alpha_dv", "tau_e", "depth", "n_depths", "body", "fe_body"}
@@ -61,8 +61,8 @@ def _number(opts: dict, key: str, default):
 
 def patch_stresses(result, scene, opts: dict) -> tuple[dict, list]:
     """The JSON summary of the stresses of every patch of ``result`` and the StressFields."""
-    params = FatigueParameters(k=_number(opts, "k", 300.0), alpha_dv=_number(opts, "alpha_dv", 1.0 / 3.0),
-                               tau_e=_number(opts, "tau_e", 300.0))
+    params = FatigueParameters(k=_number(opts, "k", K_SHEAR), alpha_dv=_number(opts, "alpha_dv", ALPHA_DV),
+                               tau_e=_number(opts, "tau_e", TAU_E))
     body = opts.get("body", 1)
     if body not in (1, 2):
         raise InputError(f"[stresses] body: must be 1 or 2, got {body!r}")
