@@ -336,6 +336,8 @@ def test_result_methods_and_cli(tmp_path, capsys):
     assert out["max_shear_depth"] == pytest.approx(0.96, abs=0.15)
     assert out["fatigue"]["k"] == 250.0
     assert out["fatigue"]["FI_surf"] == pytest.approx(surface_index(r.FN, r.FX, r.FY, r.a, r.b, 250.0), rel=1e-9)
+    area = r.field.n_contact * r.field.grid.area
+    assert out["fatigue"]["FI_surf_equivalent"] == pytest.approx(-2 * area * 250.0 / (3 * r.FN), rel=1e-9)
     sf = r.stress_field(depth=2.4, n_depths=25, nu=0.3)
     assert sf.summary()["max_von_mises"] == pytest.approx(out["max_von_mises"], rel=1e-9)
     s = r.stresses([0.0, 0.0, 0.96], nu=0.3)
@@ -408,3 +410,13 @@ def test_gauge_corner_study_quick(tmp_path):
         assert float(x["FI_surf"]) == pytest.approx(math.hypot(FX, FY) / FN - 2 * math.pi * a * b * 300.0 / (3 * FN))
         assert 0.5 * float(x["pmax"]) < float(x["max_von_mises"]) < float(x["pmax"])
     assert (out / "flange_6.2_halfspace_rail.png").exists() and (out / "run.json").exists()
+
+
+def test_surface_index_of_the_equivalent_ellipse():
+    """pi a b = area: the two forms agree on an ellipse."""
+    from conformal.stresses.fatigue import surface_index_area
+
+    FN, a, b = 2e4, 4.0, 2.5
+    assert surface_index_area(FN, 100.0, 0.0, math.pi * a * b, 300.0) == pytest.approx(
+        surface_index(FN, 100.0, 0.0, a, b, 300.0), rel=1e-12)
+    assert math.isnan(surface_index_area(0.0, 1.0, 0.0, 1.0, 300.0))

@@ -62,6 +62,14 @@ def surface_index(FN: float, FX: float, FY: float, a: float, b: float, k: float)
     return math.hypot(FX, FY) / FN - 2.0 * math.pi * a * b * k / (3.0 * FN)
 
 
+def surface_index_area(FN: float, FX: float, FY: float, area: float, k: float) -> float:
+    """FI_surf of the ellipse with the patch's contact area (pi a b = area): mu_eff - 2 area k / (3 FN);
+    for a non-elliptic patch (or one strip over several regions) the extents a, b overstate pi a b."""
+    if not (FN > 0 and area > 0):
+        return float("nan")
+    return math.hypot(FX, FY) / FN - 2.0 * area * k / (3.0 * FN)
+
+
 def dang_van(sigma: np.ndarray, alpha_dv: float, axis: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Dang Van equivalent stress of rolling passes.
 

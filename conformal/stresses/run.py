@@ -26,7 +26,8 @@ import numpy as np
 from conformal.errors import InputError
 from conformal.result import _jsonable
 from conformal.scene import scene_from_dict
-from conformal.stresses.fatigue import ALPHA_DV, K_SHEAR, TAU_E, FatigueParameters, surface_index
+from conformal.stresses.fatigue import (ALPHA_DV, K_SHEAR, TAU_E, FatigueParameters, surface_index,
+                                       surface_index_area)
 from conformal.stresses.field import N_DEPTHS, default_depths, stress_field
 
 _KEYS = {"k", "alpha_dv", "tau_e", "depth", "n_depths", "body", "fe_body"}
@@ -59,6 +60,11 @@ def _number(opts: dict, key: str, default):
     return float(v)
 
 
+def _finite_max(values) -> float:
+    vals = [v for v in values if math.isfinite(v)]
+    return max(vals) if vals else float("nan")
+
+
 def patch_stresses(result, scene, opts: dict) -> tuple[dict, list]:
     """The JSON summary of the stresses of every patch of ``result`` and the StressFields."""
     params = FatigueParameters(k=_number(opts, "k", K_SHEAR), alpha_dv=_number(opts, "alpha_dv", ALPHA_DV),
@@ -84,6 +90,9 @@ def patch_stresses(result, scene, opts: dict) -> tuple[dict, list]:
         row = {"patch": k, "FN": p.FN, "FX": p.FX, "FY": p.FY, "a": p.a, "b": p.b, "pmax": p.pmax}
         row.update(sf.summary(params))
         row["FI_surf"] = surface_index(p.FN, p.FX, p.FY, p.a, p.b, params.k)
+        area = float(p.field.n_contact * np.mean(p.field.grid.area))
+        row["contact_area"] = area
+        row["FI_surf_equivalent"] = surface_index_area(p.FN, p.FX, p.FY, area, params.k)
         row["mu_eff"] = math.hypot(p.FX, p.FY) / p.FN
         if _want_fe_body(scene, result, opts) and body == 1:
             row["fe_body"] = fe_body_section(p, scene, sf, params)
@@ -103,7 +112,8 @@ def patch_stresses(result, scene, opts: dict) -> tuple[dict, list]:
         out[key + "_patch"] = best["patch"]
     dv = max(rows, key=lambda r: r["dang_van"]["tau_dv_max"])["dang_van"]
     out["fatigue"] = {"k": params.k, "alpha_dv": params.alpha_dv, "tau_e": params.tau_e,
-                      "FI_surf": max(r["FI_surf"] for r in rows),
+                      "FI_surf": _finite_max(r["FI_surf"] for r in rows),
+                      "FI_surf_equivalent": _finite_max(r["FI_surf_equivalent"] for r in rows),
                       "tau_dv_max": dv["tau_dv_max"], "tau_dv_depth": dv["depth"], "FI_sub": dv["FI_sub"]}
     fe_rows = [r for r in rows if "fe_body" in r]
     if fe_rows:
@@ -112,6 +122,12 @@ def patch_stresses(result, scene, opts: dict) -> tuple[dict, list]:
     out["patches"] = rows
     warnings = list(result.warnings)
     for r in rows:
+        if not math.isfinite(r["FI_surf"]):
+            warnings.append(f"patch {r['patch']}: FI_surf needs the semi-axes a and b of a 3-D patch")
+        elif abs(math.pi * r["a"] * r["b"] - r["contact_area"]) > 0.1 * r["contact_area"]:
+            warnings.append(f"patch {r['patch']}: the contact area {r['contact_area']:.3g} mm² differs from pi a b = "
+                            f"{math.pi * r['a'] * r['b']:.3g} mm² of the extents: the patch is not elliptic; "
+                            "FI_surf_equivalent uses the ellipse of equal area")
         if r["max_von_mises_depth"] >= r["depths"]["max"] * 0.999:
             warnings.append(f"patch {r['patch']}: the von Mises maximum lies at the deepest plane "
                             f"({r['depths']['max']:.3g} mm): give a larger --depth")
