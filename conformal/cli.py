@@ -6,6 +6,8 @@
     conformal cache list|clear [--cache DIR]
     conformal sweep SCENE.toml [--shift START:STOP:STEP] [--out DIR] [--solve [--workers N]]
     conformal --version
+    conformal inp DECK.inp [--out DIR]
+    conformal stresses SCENE.toml [--depth D] [--k K] [--vtu OUT.vtu] [--plot OUT.png] [--json OUT.json]
 
 Bad input ends with exit code 2 and one line on stderr naming the key and the problem; a solve that
 did not converge writes its JSON with "converged": false and ends with exit code 3 (unless
@@ -270,6 +272,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     from conformal.contact_inp.cli import add_parsers as add_inp_parsers  # conformal inp FILE.inp
     add_inp_parsers(sub)
+
+    from conformal.stresses.run import add_parsers as add_stresses_parsers  # conformal stresses
+    add_stresses_parsers(sub, check_output_path, PLOT_SUFFIXES)
     return p
 
 

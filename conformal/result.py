@@ -11,6 +11,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from conformal.errors import InputError
 from conformal.grid import PlanarGrid
 
 # element status flags in TractionField.status
@@ -187,6 +188,60 @@ class Result:
         from conformal.plots import plot3d
 
         return plot3d(self, plotter, scalar=scalar)
+
+    def _stress_source(self, patch: int | None):
+        """The traction field for the stresses: this result's, or a patch's (default: the most loaded)."""
+        if patch is None and self.field is not None:
+            return self
+        if not self.patches:
+            if patch not in (None, 0):
+                raise InputError(f"patch: this result has no patches, got patch={patch!r}")
+            return self
+        if patch is None:
+            patch = int(np.argmax([p.FN for p in self.patches]))
+        if not (isinstance(patch, int) and 0 <= patch < len(self.patches)):
+            raise InputError(f"patch: must be an index in [0, {len(self.patches) - 1}], got {patch!r}")
+        return self.patches[patch]
+
+    def stresses(self, points, *, nu: float = 0.28, body: int = 1, patch: int | None = None) -> np.ndarray:
+        """Half-space stress tensors (N/mm², tension positive) at ``points`` (..., 3) in mm, from
+        the solved tractions (superposed closed-form fields of the loaded elements; see
+        :func:`conformal.stresses.halfspace.stresses` for the frames).  ``nu``: Poisson's ratio of
+        the body (default steel's 0.28); ``body`` 1 (the rail) or 2; ``patch`` of a multi-patch
+        result (default: the most loaded).  Returns (..., 3, 3).
+
+        Examples
+        --------
+        >>> import conformal
+        >>> r = conformal.solve({"geometry": {"kind": "hertz", "a": 2.0, "b": 2.0},
+        ...                      "load": {"normal_force": 1e4}, "grid": {"n": 21},
+        ...                      "model": {"theory": "exact"}})
+        >>> s = r.stresses([0.0, 0.0, 0.96], nu=0.3)      # 0.48 a below the centre
+        >>> bool(abs(0.5 * (s[0, 0] - s[2, 2]) / r.pmax - 0.31) < 0.01)
+        True
+        """
+        from conformal.stresses.halfspace import stresses
+
+        src = self._stress_source(patch)
+        if src.field is None:
+            raise InputError(f"stresses: the {self.theory!r} result has no traction field (use a theory with a grid)")
+        return stresses(src.field, points, nu=nu, body=body)
+
+    def stress_field(self, depths=None, *, depth: float | None = None, n_depths: int = 40, nu: float = 0.28,
+                     body: int = 1, patch: int | None = None):
+        """Half-space stresses on depth planes below the patch (FFT per plane), as a
+        :class:`conformal.stresses.field.StressField` (``summary()`` gives the maxima and the Dang
+        Van index).  ``depths`` (mm), else ``n_depths`` from 0 to ``depth`` (default twice the
+        smaller semi-axis).  Planar results: planes below the element centres; conformal strips:
+        lines along the normals of the element centres (rail-profile frame)."""
+        from conformal.stresses.field import default_depths, stress_field
+
+        src = self._stress_source(patch)
+        if src.field is None:
+            raise InputError(f"stresses: the {self.theory!r} result has no traction field (use a theory with a grid)")
+        if depths is None:
+            depths = default_depths(src.a, src.b, depth, n_depths)
+        return stress_field(src.field, depths, nu=nu, body=body)
 
     def summary(self) -> dict[str, Any]:
         """The JSON summary printed by ``conformal solve`` (public field names: add, never rename)."""

@@ -1,0 +1,1 @@
+"""Subsurface stresses and rolling-contact-fatigue indices (issue 24)."""

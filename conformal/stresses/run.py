@@ -1,0 +1,285 @@
+"""``conformal stresses SCENE.toml``: solve a scene, then the half-space subsurface stresses of
+every contact patch (body 1, the rail), their maxima and the fatigue indices (issue 24, item 4).
+
+The scene may carry a ``[stresses]`` section (read here, not by the scene loader):
+
+    [stresses]
+    k = 300.0          # yield stress in shear (N/mm²), shakedown map (FI_surf)
+    alpha_dv = 0.333   # Dang Van hydrostatic sensitivity
+    tau_e = 300.0      # shear endurance limit (N/mm²)
+    depth = 2.0        # deepest plane (mm); default twice the smaller semi-axis of each patch
+    n_depths = 40      # planes from the surface to depth
+    body = 1           # 1: the rail (body 1), 2: the wheel
+    fe_body = true     # theory "conformal" with influence "fe": also the stresses inside the FE rail
+                       # (one FE solve with the final load) on the cross-section through the
+                       # half-space maximum (default: true for influence = "fe", else false)
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from conformal.errors import InputError
+from conformal.result import _jsonable
+from conformal.scene import scene_from_dict
+from conformal.stresses.fatigue import (ALPHA_DV, K_SHEAR, TAU_E, FatigueParameters, surface_index,
+                                       surface_index_area)
+from conformal.stresses.field import N_DEPTHS, default_depths, stress_field
+
+_KEYS = {"k", "alpha_dv", "tau_e", "depth", "n_depths", "body", "fe_body"}
+
+
+def read_scene_with_stresses(path: str | Path):
+    """(scene, options) of a TOML scene with an optional ``[stresses]`` section."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"scene file not found: {path}")
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: not a valid TOML file ({exc})") from None
+    opts = data.pop("stresses", {})
+    if not isinstance(opts, dict):
+        raise InputError(f"[stresses] must be a table, got stresses = {opts!r}")
+    bad = sorted(set(opts) - _KEYS)
+    if bad:
+        raise InputError(f"[stresses] {bad[0]}: unknown key (known: {', '.join(sorted(_KEYS))})")
+    return scene_from_dict(data, base_dir=path.parent, name=path.stem), dict(opts)
+
+
+def _number(opts: dict, key: str, default):
+    v = opts.get(key, default)
+    if v is None:
+        return None
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise InputError(f"[stresses] {key}: must be a number, got {v!r}")
+    return float(v)
+
+
+def _finite_max(values) -> float:
+    vals = [v for v in values if math.isfinite(v)]
+    return max(vals) if vals else float("nan")
+
+
+def patch_stresses(result, scene, opts: dict) -> tuple[dict, list]:
+    """The JSON summary of the stresses of every patch of ``result`` and the StressFields."""
+    params = FatigueParameters(k=_number(opts, "k", K_SHEAR), alpha_dv=_number(opts, "alpha_dv", ALPHA_DV),
+                               tau_e=_number(opts, "tau_e", TAU_E))
+    body = opts.get("body", 1)
+    if body not in (1, 2):
+        raise InputError(f"[stresses] body: must be 1 or 2, got {body!r}")
+    n_depths = opts.get("n_depths", N_DEPTHS)
+    if isinstance(n_depths, bool) or not isinstance(n_depths, int):
+        raise InputError(f"[stresses] n_depths: must be an integer, got {n_depths!r}")
+    depth = _number(opts, "depth", None)
+    nu = scene.material.nu1 if body == 1 else scene.material.nu2
+    patches = [p for p in (result.patches or (result,)) if p.field is not None]
+    if not patches:
+        raise InputError(f"stresses: the {result.theory!r} result has no traction field; use a theory with a grid "
+                         "(exact, conformal, fastsim, ...)")
+    fields, rows = [], []
+    for k, p in enumerate(patches):
+        if not p.FN > 0:
+            continue
+        depths = default_depths(p.a, p.b, depth, n_depths)
+        sf = stress_field(p.field, depths, nu=nu, body=body)
+        row = {"patch": k, "FN": p.FN, "FX": p.FX, "FY": p.FY, "a": p.a, "b": p.b, "pmax": p.pmax}
+        row.update(sf.summary(params))
+        row["FI_surf"] = surface_index(p.FN, p.FX, p.FY, p.a, p.b, params.k)
+        area = float(p.field.n_contact * np.mean(p.field.grid.area))
+        row["contact_area"] = area
+        row["FI_surf_equivalent"] = surface_index_area(p.FN, p.FX, p.FY, area, params.k)
+        row["mu_eff"] = math.hypot(p.FX, p.FY) / p.FN
+        if _want_fe_body(scene, result, opts) and body == 1:
+            row["fe_body"] = fe_body_section(p, scene, sf, params)
+        rows.append(row)
+        fields.append(sf)
+    if not rows:
+        raise InputError("stresses: no patch carries a normal force")
+    out: dict[str, Any] = {"scene": scene.name, "theory": result.theory, "FN": result.FN, "FX": result.FX,
+                           "FY": result.FY, "nu": nu, "body": body, "units": {"stress": "N/mm²", "length": "mm"},
+                           "model": "half-space (superposed closed-form rectangle fields, FFT per depth plane)"}
+    for key in ("max_von_mises", "max_shear", "max_orthogonal_shear", "max_principal"):
+        best = max(rows, key=lambda r: r[key])
+        out[key] = best[key]
+        if key + "_depth" in best:
+            out[key + "_depth"] = best[key + "_depth"]
+        out[key + "_position"] = best[key + "_position"]
+        out[key + "_patch"] = best["patch"]
+    dv = max(rows, key=lambda r: r["dang_van"]["tau_dv_max"])["dang_van"]
+    out["fatigue"] = {"k": params.k, "alpha_dv": params.alpha_dv, "tau_e": params.tau_e,
+                      "FI_surf": _finite_max(r["FI_surf"] for r in rows),
+                      "FI_surf_equivalent": _finite_max(r["FI_surf_equivalent"] for r in rows),
+                      "tau_dv_max": dv["tau_dv_max"], "tau_dv_depth": dv["depth"], "FI_sub": dv["FI_sub"]}
+    fe_rows = [r for r in rows if "fe_body" in r]
+    if fe_rows:
+        out["fe_body"] = max(fe_rows, key=lambda r: r["max_von_mises"])["fe_body"]
+    out["frame"] = rows[0]["frame"]
+    out["patches"] = rows
+    warnings = list(result.warnings)
+    for r in rows:
+        if not math.isfinite(r["FI_surf"]):
+            warnings.append(f"patch {r['patch']}: FI_surf needs the semi-axes a and b of a 3-D patch")
+        elif abs(math.pi * r["a"] * r["b"] - r["contact_area"]) > 0.1 * r["contact_area"]:
+            warnings.append(f"patch {r['patch']}: the contact area {r['contact_area']:.3g} mm² differs from pi a b = "
+                            f"{math.pi * r['a'] * r['b']:.3g} mm² of the extents: the patch is not elliptic; "
+                            "FI_surf_equivalent uses the ellipse of equal area")
+        if r["max_von_mises_depth"] >= r["depths"]["max"] * 0.999:
+            warnings.append(f"patch {r['patch']}: the von Mises maximum lies at the deepest plane "
+                            f"({r['depths']['max']:.3g} mm): give a larger --depth")
+    out["warnings"] = list(dict.fromkeys(warnings))
+    return _jsonable(out), fields
+
+
+def _want_fe_body(scene, result, opts) -> bool:
+    want = opts.get("fe_body", None)
+    if want is not None and not isinstance(want, bool):
+        raise InputError(f"[stresses] fe_body: must be true or false, got {want!r}")
+    fe = result.theory == "conformal" and scene.model.influence == "fe"
+    if want and not fe:
+        raise InputError("[stresses] fe_body: needs [model] theory = \"conformal\" with influence = \"fe\"")
+    return fe if want is None else want
+
+
+def _section_maxima(sf) -> dict:
+    out = {}
+    for key, vals, use_abs in (("max_von_mises", sf.von_mises, False), ("max_shear", sf.principal_shear, False),
+                               ("max_orthogonal_shear", sf.orthogonal_shear, True)):
+        v = np.abs(vals) if use_abs else vals
+        i = np.unravel_index(int(np.nanargmax(v)), v.shape)
+        out[key] = float(v[i])
+        out[key + "_depth"] = float(sf.depths[i[0]])
+        out[key + "_position"] = [float(c) for c in sf.points[i]]
+    return out
+
+
+def fe_body_stress_section(result, scene, sf):
+    """(points (nd, 1, nc, 3), BodyStresses) inside the FE rail (conformal.stresses.bodies) on the
+    cross-section of the strip through the half-space von Mises maximum of ``sf``."""
+    from conformal.cases.conformal import scene_profiles
+    from conformal.influence.fe import settings_from_options
+    from conformal.stresses.bodies import rail_body_stresses
+
+    vm = sf.von_mises
+    x_i = int(np.unravel_index(int(np.nanargmax(vm)), vm.shape)[1])
+    pts = sf.points[:, x_i:x_i + 1]
+    rail_pts, _ = scene_profiles(scene)
+    bs = rail_body_stresses(result.field, pts, G=scene.material.G1, nu=scene.material.nu1,
+                            settings=settings_from_options(scene.model.options), rail_points=rail_pts)
+    return pts, bs
+
+
+def fe_body_section(result, scene, sf, params=None, figure=None) -> dict:
+    """The maxima inside the FE rail on the cross-section through the half-space maximum
+    (:func:`fe_body_stress_section`), against the half-space stresses at the same points;
+    ``figure``: also write the comparison figure there and its 3-D view (pyvista) beside it as
+    ``<stem>_3d.png`` (conformal.stresses.plots)."""
+    from dataclasses import replace as _replace
+
+    from conformal.stresses.field import StressField
+
+    pts, bs = fe_body_stress_section(result, scene, sf)
+    fe = StressField(bs.sigma, pts, sf.depths, sf.normal, sf.frame, 1)
+    hs = _replace(fe, sigma=bs.sigma_hs)
+    if figure is not None:
+        from conformal.stresses.plots import plot_section_comparison
+
+        from pathlib import Path as _Path
+
+        from conformal.stresses.invariants import von_mises
+        from conformal.stresses.plots import plot_section_3d
+
+        plot_section_comparison(pts[:, 0], bs.sigma_hs[:, 0], bs.sigma[:, 0], figure,
+                                title=f"{scene.name}: stresses in the rail at x = {pts[0, 0, 0, 0]:.2f} mm",
+                                surface=surface_curve(result))
+        fig3d = _Path(figure).with_name(_Path(figure).stem + "_3d.png")   # the same section in 3-D (pyvista)
+        plot_section_3d(result, pts[:, 0], von_mises(bs.sigma[:, 0]), fig3d,
+                        title=f"{scene.name}: von Mises in the FE rail, section x = {pts[0, 0, 0, 0]:.2f} mm")
+    return {"section_x": float(pts[0, 0, 0, 0]), "fe": _section_maxima(fe), "halfspace": _section_maxima(hs),
+            "max_correction": float(np.abs(bs.sigma_c).max()), "stats": bs.stats,
+            "note": "sigma = half-space field of the elements on their tangent planes + FE correction of the "
+                    "real rail (split method, one FE solve with the final load)"}
+
+
+def surface_curve(result) -> np.ndarray | None:
+    """The rail profile (y, z) around a conformal strip, for the cross-section figure."""
+    f = result.field if result.field is not None else (result.patches[0].field if result.patches else None)
+    g = getattr(f, "curved", None)
+    return None if g is None else np.asarray(g.rail_curve, float)
+
+
+# ----------------------------------------------------------------------------- the command
+def cmd_stresses(args) -> int:
+    """``conformal stresses SCENE.toml [--depth D] [--k K] [--vtu OUT.vtu] [--plot OUT.png] [--json OUT.json]``."""
+    import json
+    import os
+    import sys
+    import tempfile
+
+    from conformal.solve import solve_scene
+
+    args.check_output(args.json, "--json", (".json",))
+    args.check_output(args.plot, "--plot", args.plot_suffixes)
+    args.check_output(args.vtu, "--vtu", (".vtu",))
+    scene, opts = read_scene_with_stresses(args.scene)
+    if args.depth is not None:
+        opts["depth"] = args.depth
+    if args.k is not None:
+        opts["k"] = args.k
+    if args.body is not None:
+        opts["body"] = args.body
+    result = solve_scene(scene)
+    summary, fields = patch_stresses(result, scene, opts)
+    for w in summary["warnings"]:
+        print(f"conformal: warning: {w}", file=sys.stderr)
+    text = json.dumps(summary, indent=2)
+    print(text)
+    if args.json:
+        p = Path(args.json)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(suffix=".json", dir=p.parent)
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text + "\n")
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, p)
+    best = int(np.argmax([r["max_von_mises"] for r in summary["patches"]]))
+    code = 0
+    if args.vtu:
+        from conformal.stresses.plots import write_stress_vtu
+
+        try:
+            write_stress_vtu(fields[best], args.vtu)
+        except (OSError, ValueError, RuntimeError) as exc:
+            print(f"conformal: error: --vtu: {exc} (the JSON summary was written)", file=sys.stderr)
+            code = 1
+    if args.plot:
+        from conformal.stresses.plots import plot_stress_field
+
+        try:
+            plot_stress_field(fields[best], args.plot, title=f"{scene.name}: half-space stresses in body "
+                              f"{summary['body']} (patch {summary['patches'][best]['patch']})",
+                              dang_van_alpha=summary["fatigue"]["alpha_dv"], surface=surface_curve(result))
+        except Exception as exc:  # noqa: BLE001 - any plotting failure: the JSON is already out
+            print(f"conformal: error: --plot: {type(exc).__name__}: {exc} (the JSON summary was written)",
+                  file=sys.stderr)
+            code = 1
+    return code
+
+
+def add_parsers(sub, check_output, plot_suffixes) -> None:
+    """The ``stresses`` sub-command of :mod:`conformal.cli`; ``check_output(path, option, suffixes)``
+    refuses an output path before any work (conformal.cli.check_output_path)."""
+    st = sub.add_parser("stresses", help="solve a scene, then the subsurface stresses and fatigue indices (JSON)")
+    st.add_argument("scene", help="scene file (TOML); optional [stresses] section (k, alpha_dv, tau_e, depth, "
+                    "n_depths, body)")
+    st.add_argument("--depth", type=float, help="deepest plane in mm (default: twice the smaller semi-axis)")
+    st.add_argument("--k", type=float, help="yield stress in shear, N/mm² (FI_surf; default 300)")
+    st.add_argument("--body", type=int, choices=(1, 2), help="1: rail (body 1, default), 2: wheel")
+    st.add_argument("--json", metavar="OUT.json", help="also write the JSON to this file")
+    st.add_argument("--vtu", metavar="OUT.vtu", help="the stress block of the most stressed patch for ParaView")
+    st.add_argument("--plot", metavar="OUT.png", help="slices of von Mises and orthogonal shear, Dang Van per depth")
+    st.set_defaults(func=cmd_stresses, check_output=check_output, plot_suffixes=tuple(plot_suffixes))
