@@ -19,6 +19,7 @@ from importlib import resources
 from pathlib import Path
 
 from conformal.errors import ConformalError, InputError
+from conformal.files import write_text
 
 #: file types ``--plot`` can write (matplotlib's raster and vector formats)
 PLOT_SUFFIXES = (".png", ".jpg", ".jpeg", ".pdf", ".svg", ".eps", ".ps", ".tif", ".tiff", ".webp")
@@ -51,9 +52,8 @@ def check_output_path(path: str | None, option: str, suffixes: tuple[str, ...] |
 def _write_json(summary: dict, path: str | None) -> None:
     text = json.dumps(summary, indent=2)
     print(text)
-    if path:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        Path(path).write_text(text + "\n", encoding="utf-8")
+    if path:   # atomic: a failed write (full disk) leaves no empty or cut file and exits 2
+        write_text(path, text + "\n")
 
 
 def _solve_and_report(scene, json_path: str | None, plot_path: str | None, vtu_path: str | None = None,
@@ -223,6 +223,10 @@ def cmd_precompute(args) -> int:
     sweep = parse_sweep(args.sweep)
     scene = load_scene(args.scene)
     cache = Cache(args.cache)
+    if cache.folder.exists() and not cache.folder.is_dir():
+        raise InputError(f"--cache: {cache.folder} is a file, not a cache folder")
+    if not args.dry_run:
+        check_output_path(str(cache.folder / "entry.npz"), "--cache")
     rep = precompute(scene, sweep, cache=cache, workers=args.workers, scheduler=args.scheduler,
                      progress=not args.no_progress, dry_run=args.dry_run)
     for v, why in rep.positions_failed:
@@ -237,9 +241,14 @@ def cmd_cache(args) -> int:
     from conformal.influence.cache import Cache
 
     cache = Cache(args.cache)
+    if cache.folder.exists() and not cache.folder.is_dir():
+        raise InputError(f"--cache: {cache.folder} is a file, not a cache folder")
     if args.action == "clear":
-        n = cache.clear()
+        n, left = cache.clear()
         print(f"removed {n} files from {cache.folder}")
+        if left:   # only files it can identify as its own entries are removed
+            print(f"conformal: left {len(left)} .npz files that are not readable entries of this cache "
+                  f"(e.g. {left[0].name})", file=sys.stderr)
         return 0
     entries = cache.entries()
     total = sum(e.size for e in entries)

@@ -5,6 +5,8 @@ from pathlib import Path
 
 import numpy as np
 
+from conformal.files import save_figure
+
 
 class _Unregistered:
     """Stands in for pyplot where a figure is closed: our figures are never registered with it."""
@@ -34,8 +36,7 @@ def plot_history(history: dict, out: str | Path, title: str = "") -> list[Path]:
 
     def save(fig, plt, name):
         fig.tight_layout()
-        p = out / name
-        fig.savefig(p, dpi=110)
+        p = save_figure(fig, out / name, dpi=110)
         plt.close(fig)
         paths.append(p)
 
@@ -111,8 +112,6 @@ def plot_damping(speeds, zeta, freq, out: str | Path, critical: float | None = N
     for a in ax:
         a.grid(alpha=0.3)
     fig.tight_layout()
-    p = Path(out)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p, dpi=110)
+    p = save_figure(fig, out, dpi=110)
     plt.close(fig)
     return p

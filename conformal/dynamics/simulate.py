@@ -30,6 +30,7 @@ from scipy import integrate
 from conformal.dynamics.model import SIDES, WheelsetModel, build_model, equilibrium
 from conformal.dynamics.scene import VehicleScene
 from conformal.errors import ConvergenceError
+from conformal.files import open_atomic, write_text
 
 PER_WHEEL = ("xi", "eta", "phi", "a", "b", "FN", "FX", "FY", "FZ", "y_contact")
 COLUMNS = ("t", "y", "yaw") + tuple(f"{s}_{q}" for s in SIDES for q in PER_WHEEL) \
@@ -187,10 +188,10 @@ def write_outputs(result: SimulationResult, out: str | Path) -> list[Path]:
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     h = result.history
-    with open(out / "history.csv", "w", newline="", encoding="utf-8") as fh:
+    with open_atomic(out / "history.csv", "w", newline="", encoding="utf-8") as fh:   # whole rows or none
         w = csv.writer(fh)
         w.writerow(COLUMNS)
         for i in range(len(h["t"])):
             w.writerow([f"{h[c][i]:.9g}" for c in COLUMNS])
-    (out / "summary.json").write_text(json.dumps(result.summary, indent=2) + "\n", encoding="utf-8")
+    write_text(out / "summary.json", json.dumps(result.summary, indent=2) + "\n")
     return [out / "history.csv", out / "summary.json"]

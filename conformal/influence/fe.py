@@ -702,9 +702,11 @@ def body_key(body: BodyModel, patch: StripPatch, G: float, nu: float, settings: 
 
 
 def cached_body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
-                          settings: FESettings = FESettings(), *, cache=None) -> BodyInfluence:
+                          settings: FESettings = FESettings(), *, cache=None,
+                          strict_cache: bool = False) -> BodyInfluence:
     """:func:`body_influence` through the NPZ cache (``cache``: a Cache, a folder, None = default,
-    False = no cache)."""
+    False = no cache).  ``strict_cache``: a failed cache write raises CacheWriteError (else it
+    is warned about and the numbers are returned uncached)."""
     from conformal.influence.cache import Cache
 
     if cache is False:
@@ -720,7 +722,7 @@ def cached_body_influence(body: BodyModel, patch: StripPatch, G: float, nu: floa
                      f"dx={patch.dx:.4g} G={G:g} nu={nu:g} {settings.method} P{settings.mesh.order}")
         return {"kernel": r.kernel}, stats
 
-    arrays, hit = c.get_or_compute(inputs, compute)
+    arrays, hit = c.get_or_compute(inputs, compute, strict=strict_cache)
     if not hit:
         return result["r"]
     meta = c.meta(c.key(inputs)) or {}
