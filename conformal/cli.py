@@ -12,41 +12,16 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 from importlib import resources
 from pathlib import Path
 
 from conformal.errors import ConformalError, InputError
-from conformal.files import write_text
+from conformal.files import check_output_path, write_text
 
 #: file types ``--plot`` can write (matplotlib's raster and vector formats)
 PLOT_SUFFIXES = (".png", ".jpg", ".jpeg", ".pdf", ".svg", ".eps", ".ps", ".tif", ".tiff", ".webp")
-
-
-def check_output_path(path: str | None, option: str, suffixes: tuple[str, ...] | None = None) -> None:
-    """Refuse an output path before any work is done: a wrong file type, a folder, or a folder
-    that cannot be created or written (InputError naming the option)."""
-    if not path:
-        return
-    p = Path(path)
-    if suffixes is not None and p.suffix.lower() not in suffixes:
-        raise InputError(f"{option}: cannot write {p.suffix or 'a file without extension'!r} files "
-                         f"({p.name}); use one of {', '.join(suffixes)}")
-    if p.is_dir():
-        raise InputError(f"{option}: {p} is a folder, not a file")
-    if p.exists() and not os.access(p, os.W_OK):
-        raise InputError(f"{option}: {p} is not writable")
-    parent = p.parent
-    while not parent.exists():            # the first existing folder must be writable
-        if parent == parent.parent:
-            break
-        parent = parent.parent
-    if not parent.is_dir():
-        raise InputError(f"{option}: cannot create a folder for {p}: {parent} is a file")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(f"{option}: cannot write into {parent}")
 
 
 def _write_json(summary: dict, path: str | None) -> None:

@@ -28,7 +28,10 @@ import secrets
 from pathlib import Path
 from typing import IO, Iterator
 
-__all__ = ["atomic_path", "open_atomic", "write_text", "write_bytes", "save_npz_atomic", "save_figure", "read_npz", "is_temporary"]
+from conformal.errors import InputError
+
+__all__ = ["atomic_path", "open_atomic", "write_text", "write_bytes", "save_npz_atomic", "save_figure", "read_npz", "is_temporary",
+           "check_output_path"]
 
 _TEMP = re.compile(r"^\..+\.[0-9a-f]{8}\.tmp(\.[A-Za-z0-9]+)?$")
 
@@ -138,3 +141,27 @@ def read_npz(path: str | os.PathLike) -> dict:
             NotImplementedError) as exc:
         raise ValueError(f"{Path(path).name} is not a complete NPZ file (truncated or damaged: "
                          f"{type(exc).__name__}: {exc})") from None
+
+
+def check_output_path(path: str | None, option: str, suffixes: tuple[str, ...] | None = None) -> None:
+    """Refuse an output path before any work is done: a wrong file type, a folder, or a folder
+    that cannot be created or written (InputError naming the option)."""
+    if not path:
+        return
+    p = Path(path)
+    if suffixes is not None and p.suffix.lower() not in suffixes:
+        raise InputError(f"{option}: cannot write {p.suffix or 'a file without extension'!r} files "
+                         f"({p.name}); use one of {', '.join(suffixes)}")
+    if p.is_dir():
+        raise InputError(f"{option}: {p} is a folder, not a file")
+    if p.exists() and not os.access(p, os.W_OK):
+        raise InputError(f"{option}: {p} is not writable")
+    parent = p.parent
+    while not parent.exists():            # the first existing folder must be writable
+        if parent == parent.parent:
+            break
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError(f"{option}: cannot create a folder for {p}: {parent} is a file")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"{option}: cannot write into {parent}")
