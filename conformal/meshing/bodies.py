@@ -38,6 +38,17 @@ import numpy as np
 from conformal.errors import InputError
 
 BODY_KINDS = ("block", "rail", "wheel")
+#: decimals (mm) kept of profile coordinates and patch edges.  The FE numbers are cached under a key
+#: of these rounded values, so the body is built from exactly them: gmsh's mesh changes with the
+#: last bits of its input (a wheel body of 5 246 nodes got 5 232 .. 5 256 when its points moved by
+#: 1e-14 mm), so bits below the key's digits (round-off of the wheelset placement) could give one
+#: cache key different meshes and numbers (issue 22: 15 732, 15 744 and 15 750 unknowns).
+KEY_DECIMALS = 12
+
+
+def _keyed(values) -> np.ndarray:
+    """``values`` rounded to KEY_DECIMALS (and -0.0 made 0.0, which a key would write differently)."""
+    return np.round(np.asarray(values, dtype=float), KEY_DECIMALS) + 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,8 +65,8 @@ class Profile2D:
     s: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
-        y = np.asarray(self.y, dtype=float)
-        z = np.asarray(self.z, dtype=float)
+        y = _keyed(self.y)                         # exactly the numbers key() records
+        z = _keyed(self.z)
         if y.ndim != 1 or y.shape != z.shape or y.size < 2:
             raise InputError(f"profile {self.name}: need matching 1-D arrays y, z with >= 2 points")
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
@@ -173,7 +184,7 @@ class BodyModel:
     def key(self) -> dict:
         """Everything that defines the body, for cache keys."""
         return {"kind": self.kind, "axle_z": self.axle_z,
-                "y": self.profile.y.round(12).tolist(), "z": self.profile.z.round(12).tolist()}
+                "y": self.profile.y.round(KEY_DECIMALS).tolist(), "z": self.profile.z.round(KEY_DECIMALS).tolist()}
 
 
 @dataclass(frozen=True)
@@ -193,9 +204,10 @@ class StripPatch:
             raise InputError(f"[grid] mx: need at least one element, got {self.mx}")
         if not (self.dx > 0 and math.isfinite(self.dx)):
             raise InputError(f"[grid] dx: must be > 0, got {self.dx}")
-        e = np.asarray(self.s_edges, dtype=float)
+        e = _keyed(self.s_edges)                   # exactly the numbers key() records
         if e.ndim != 1 or e.size < 2 or not np.all(np.diff(e) > 0):
             raise InputError("[grid] s_edges: need >= 2 increasing arc-length positions")
+        object.__setattr__(self, "s_edges", tuple(float(v) for v in e))
 
     @classmethod
     def uniform(cls, mx: int, dx: float, ms: int, ds: float, s_centre: float) -> "StripPatch":
@@ -239,7 +251,7 @@ class StripPatch:
         return max(self.mx * self.dx, float(self.edges[-1] - self.edges[0]))
 
     def key(self) -> dict:
-        return {"mx": self.mx, "dx": self.dx, "s_edges": [round(v, 12) for v in self.s_edges]}
+        return {"mx": self.mx, "dx": self.dx, "s_edges": [round(v, KEY_DECIMALS) for v in self.s_edges]}
 
 
 @dataclass(frozen=True)
