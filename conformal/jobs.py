@@ -50,6 +50,8 @@ def parse_sweep(text: str) -> Sweep:
             if len(parts) != 3:
                 raise ValueError
             a, b, h = parts
+            if not all(math.isfinite(v) for v in parts):
+                raise InputError(f"--sweep: start, stop and step must be finite numbers, got {spec!r}")
             if h == 0 or (b - a) / h < 0:
                 raise InputError(f"--sweep: step {h:g} does not lead from {a:g} to {b:g}")
             n = int(math.floor((b - a) / h + 1e-9)) + 1

@@ -42,6 +42,8 @@ def parse_range(text: str) -> list[float]:
         parts = [float(p) for p in text.split(":")]
     except ValueError:
         raise InputError(f"--shift: expected start:stop:step in mm, got {text!r}") from None
+    if not all(math.isfinite(v) for v in parts):
+        raise InputError(f"--shift: expected finite numbers in mm, got {text!r}")
     if len(parts) == 1:
         return parts
     if len(parts) != 3 or parts[2] <= 0 or parts[1] < parts[0]:
