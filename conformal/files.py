@@ -10,6 +10,8 @@ e.g. a shared influence cache, could not read).
 
 Temporary names are ``.<name>.<8 hex>.tmp`` (:func:`is_temporary`), or ``.<name>.<8 hex>.tmp<suffix>``
 for writers that pick the format from the name (matplotlib, meshio, pyvista: ``keep_suffix``).
+:func:`check_output_path` refuses an output path before the work that fills it;
+:func:`read_npz` turns a truncated NPZ file into one ValueError (not zipfile's BadZipFile).
 
 >>> import tempfile, pathlib
 >>> p = pathlib.Path(tempfile.mkdtemp()) / "a.txt"
@@ -30,8 +32,8 @@ from typing import IO, Iterator
 
 from conformal.errors import InputError
 
-__all__ = ["atomic_path", "open_atomic", "write_text", "write_bytes", "save_npz_atomic", "save_figure", "read_npz", "is_temporary",
-           "check_output_path"]
+__all__ = ["atomic_path", "open_atomic", "write_text", "write_bytes", "save_npz_atomic", "save_figure",
+           "read_npz", "is_temporary", "check_output_path"]
 
 _TEMP = re.compile(r"^\..+\.[0-9a-f]{8}\.tmp(\.[A-Za-z0-9]+)?$")
 

@@ -404,7 +404,8 @@ KERNEL_SCRIPT = textwrap.dedent("""\
     from conformal.influence.fe import body_influence
     from conformal.jobs import parse_sweep
     from conformal.scene import scene_from_dict
-    items, _ = plan(scene_from_dict(tomllib.loads(SWEEP_SCENE), sys.argv[1]), parse_sweep("shift=0,3"), cache=sys.argv[3] + ".cache")
+    items, _ = plan(scene_from_dict(tomllib.loads(SWEEP_SCENE), sys.argv[1]), parse_sweep("shift=0,3"),
+                    cache=sys.argv[3] + ".cache")
     it = items[int(sys.argv[2])]
     r = body_influence(it.body, it.patch, it.G, it.nu, it.settings)
     np.save(sys.argv[3], r.kernel)

@@ -69,7 +69,8 @@ def plan(scene, sweep: Sweep, settings=None, cache=None,
                     continue
                 seen.add(key)
                 label = f"{sweep.key}={v:g} patch {k} {kind} ({patch.n_columns}x{patch.ms})"
-                items.append(Item(label, body, patch, G, nu, settings, key, c.load(key, body_key(body, patch, G, nu, settings), repair=repair) is not None))
+                cached = c.load(key, body_key(body, patch, G, nu, settings), repair=repair) is not None
+                items.append(Item(label, body, patch, G, nu, settings, key, cached))
     return items, failed
 
 
