@@ -365,8 +365,8 @@ def _small_items(folder: Path):
 
 
 def _below_the_key(values, ulps: int) -> np.ndarray:
-    """``values`` moved by a few units in the last place, where that leaves them the same to the
-    cache key's 12 decimals (round-off of the placement that the key cannot see)."""
+    """``values`` moved by a few units in the last place, where that leaves them the same to 12
+    decimals (round-off of the placement that a key of rounded values cannot see)."""
     a0 = np.asarray(values, dtype=float)
     a = a0.copy()
     for _ in range(ulps):
@@ -376,8 +376,9 @@ def _below_the_key(values, ulps: int) -> np.ndarray:
 
 def test_one_cache_key_gives_one_mesh(tmp_path):
     """Before: a body whose points moved by round-off below the key's 12 decimals kept its cache key
-    but got another mesh (gmsh's mesh changes with the last bits of its input): 1 648 nodes became
-    1 645 .. 1 650 on this rail, so one key held different numbers."""
+    but got another mesh (gmsh's mesh changes with the last bits of its input: 1 648 nodes became
+    1 645 .. 1 650 on this rail), so one key held different numbers.  Now the key records every
+    bit: such a body gets a key of its own, and the same bits give the same key and mesh."""
     from dataclasses import replace
 
     from conformal.influence.fe import body_key
@@ -387,13 +388,15 @@ def test_one_cache_key_gives_one_mesh(tmp_path):
     item = _small_items(tmp_path)[0]
     b, p = item.body, item.patch
     m0 = mesh_body(b, p, item.settings.mesh)
-    for ulps in (1, 2):
-        nb = replace(b, profile=Profile2D(_below_the_key(b.profile.y, ulps), _below_the_key(b.profile.z, ulps),
-                                          b.profile.name))
-        npatch = StripPatch(p.mx, p.dx, tuple(_below_the_key(p.s_edges, ulps).tolist()))
-        assert Cache.key(body_key(nb, npatch, item.G, item.nu, item.settings)) == item.key
-        m = mesh_body(nb, npatch, item.settings.mesh)
-        assert m.n_nodes == m0.n_nodes and np.array_equal(m.points, m0.points) and np.array_equal(m.tets, m0.tets)
+    same = replace(b, profile=Profile2D(b.profile.y.copy(), b.profile.z.copy(), b.profile.name))
+    assert Cache.key(body_key(same, StripPatch(p.mx, p.dx, tuple(p.s_edges)), item.G, item.nu,
+                              item.settings)) == item.key
+    m = mesh_body(same, p, item.settings.mesh)
+    assert np.array_equal(m.points, m0.points) and np.array_equal(m.tets, m0.tets)
+    nb = replace(b, profile=Profile2D(_below_the_key(b.profile.y, 1), _below_the_key(b.profile.z, 1), b.profile.name))
+    npatch = StripPatch(p.mx, p.dx, tuple(_below_the_key(p.s_edges, 1).tolist()))
+    assert Cache.key(body_key(nb, npatch, item.G, item.nu, item.settings)) != item.key
+    assert Cache.key(body_key(b, npatch, item.G, item.nu, item.settings)) != item.key
 
 
 KERNEL_SCRIPT = textwrap.dedent("""\

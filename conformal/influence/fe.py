@@ -94,8 +94,8 @@ from conformal.influence.fe_halfspace3d import _gauss_rectangle_stress, rectangl
 from conformal.meshing.bodies import BodyModel, StripPatch
 from conformal.meshing.gmsh_body import BodyMesh, MeshSpec, mesh_body, surface_frame, surface_point
 
-FE_VERSION = "5"   # 5: bodies built from the profile points and edges the key records (rounded to
-#                    1e-12 mm, meshing.bodies.KEY_DECIMALS): one key, one mesh (issue 22);
+FE_VERSION = "5"   # 5: keys of every bit of the profile points and patch edges (were rounded to
+#                    12 decimals, under which gmsh's mesh still changed): one key, one mesh (issue 22);
 #                  4: bodies swept piece from piece (no boolean fragment): other tetrahedra, numbers
 #                    moved by the mesh only (51 x 39, 0.4 mm: at most 2.8e-5 / 4.5e-5 of the self
 #                    term on the rail / wheel);

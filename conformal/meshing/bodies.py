@@ -38,17 +38,6 @@ import numpy as np
 from conformal.errors import InputError
 
 BODY_KINDS = ("block", "rail", "wheel")
-#: decimals (mm) kept of profile coordinates and patch edges.  The FE numbers are cached under a key
-#: of these rounded values, so the body is built from exactly them: gmsh's mesh changes with the
-#: last bits of its input (a wheel body of 5 246 nodes got 5 232 .. 5 256 when its points moved by
-#: 1e-14 mm), so bits below the key's digits (round-off of the wheelset placement) could give one
-#: cache key different meshes and numbers (issue 22: 15 732, 15 744 and 15 750 unknowns).
-KEY_DECIMALS = 12
-
-
-def _keyed(values) -> np.ndarray:
-    """``values`` rounded to KEY_DECIMALS (and -0.0 made 0.0, which a key would write differently)."""
-    return np.round(np.asarray(values, dtype=float), KEY_DECIMALS) + 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,8 +54,8 @@ class Profile2D:
     s: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
-        y = _keyed(self.y)                         # exactly the numbers key() records
-        z = _keyed(self.z)
+        y = np.asarray(self.y, dtype=float)
+        z = np.asarray(self.z, dtype=float)
         if y.ndim != 1 or y.shape != z.shape or y.size < 2:
             raise InputError(f"profile {self.name}: need matching 1-D arrays y, z with >= 2 points")
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
@@ -183,8 +172,12 @@ class BodyModel:
 
     def key(self) -> dict:
         """Everything that defines the body, for cache keys."""
+        # every bit (not rounded): gmsh's mesh changes with the last bits of its input (a rail body
+        # of 1 648 nodes got 1 645 .. 1 650 when its points moved by one unit in the last place), so
+        # a key rounded to 12 decimals held different meshes and numbers (issue 22: 15 732, 15 744
+        # and 15 750 unknowns under one key); -0.0 is written as 0.0
         return {"kind": self.kind, "axle_z": self.axle_z,
-                "y": self.profile.y.round(KEY_DECIMALS).tolist(), "z": self.profile.z.round(KEY_DECIMALS).tolist()}
+                "y": (self.profile.y + 0.0).tolist(), "z": (self.profile.z + 0.0).tolist()}
 
 
 @dataclass(frozen=True)
@@ -204,10 +197,9 @@ class StripPatch:
             raise InputError(f"[grid] mx: need at least one element, got {self.mx}")
         if not (self.dx > 0 and math.isfinite(self.dx)):
             raise InputError(f"[grid] dx: must be > 0, got {self.dx}")
-        e = _keyed(self.s_edges)                   # exactly the numbers key() records
+        e = np.asarray(self.s_edges, dtype=float)
         if e.ndim != 1 or e.size < 2 or not np.all(np.diff(e) > 0):
             raise InputError("[grid] s_edges: need >= 2 increasing arc-length positions")
-        object.__setattr__(self, "s_edges", tuple(float(v) for v in e))
 
     @classmethod
     def uniform(cls, mx: int, dx: float, ms: int, ds: float, s_centre: float) -> "StripPatch":
@@ -251,7 +243,7 @@ class StripPatch:
         return max(self.mx * self.dx, float(self.edges[-1] - self.edges[0]))
 
     def key(self) -> dict:
-        return {"mx": self.mx, "dx": self.dx, "s_edges": [round(v, KEY_DECIMALS) for v in self.s_edges]}
+        return {"mx": self.mx, "dx": self.dx, "s_edges": [float(v) + 0.0 for v in self.s_edges]}   # every bit
 
 
 @dataclass(frozen=True)
