@@ -17,48 +17,23 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 from importlib import resources
 from pathlib import Path
 
 from conformal.errors import ConformalError, InputError
+from conformal.files import check_output_path, write_text
 
 #: file types ``--plot`` can write (matplotlib's raster and vector formats)
 PLOT_SUFFIXES = (".png", ".jpg", ".jpeg", ".pdf", ".svg", ".eps", ".ps", ".tif", ".tiff", ".webp")
 
 
-def check_output_path(path: str | None, option: str, suffixes: tuple[str, ...] | None = None) -> None:
-    """Refuse an output path before any work is done: a wrong file type, a folder, or a folder
-    that cannot be created or written (InputError naming the option)."""
-    if not path:
-        return
-    p = Path(path)
-    if suffixes is not None and p.suffix.lower() not in suffixes:
-        raise InputError(f"{option}: cannot write {p.suffix or 'a file without extension'!r} files "
-                         f"({p.name}); use one of {', '.join(suffixes)}")
-    if p.is_dir():
-        raise InputError(f"{option}: {p} is a folder, not a file")
-    if p.exists() and not os.access(p, os.W_OK):
-        raise InputError(f"{option}: {p} is not writable")
-    parent = p.parent
-    while not parent.exists():            # the first existing folder must be writable
-        if parent == parent.parent:
-            break
-        parent = parent.parent
-    if not parent.is_dir():
-        raise InputError(f"{option}: cannot create a folder for {p}: {parent} is a file")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(f"{option}: cannot write into {parent}")
-
-
 def _write_json(summary: dict, path: str | None) -> None:
     text = json.dumps(summary, indent=2)
     print(text)
-    if path:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        Path(path).write_text(text + "\n", encoding="utf-8")
+    if path:   # atomic: a failed write (full disk) leaves no empty or cut file and exits 2
+        write_text(path, text + "\n")
 
 
 #: exit status of a solve that did not converge (its JSON and plots are written; --allow-unconverged: 0)
@@ -289,6 +264,10 @@ def cmd_precompute(args) -> int:
     sweep = parse_sweep(args.sweep)
     scene = load_scene(args.scene)
     cache = Cache(args.cache)
+    if cache.folder.exists() and not cache.folder.is_dir():
+        raise InputError(f"--cache: {cache.folder} is a file, not a cache folder")
+    if not args.dry_run:
+        check_output_path(str(cache.folder / "entry.npz"), "--cache")
     rep = precompute(scene, sweep, cache=cache, workers=args.workers, scheduler=args.scheduler,
                      progress=not args.no_progress, dry_run=args.dry_run)
     for v, why in rep.positions_failed:
@@ -303,9 +282,14 @@ def cmd_cache(args) -> int:
     from conformal.influence.cache import Cache
 
     cache = Cache(args.cache)
+    if cache.folder.exists() and not cache.folder.is_dir():
+        raise InputError(f"--cache: {cache.folder} is a file, not a cache folder")
     if args.action == "clear":
-        n = cache.clear()
+        n, left = cache.clear()
         print(f"removed {n} files from {cache.folder}")
+        if left:   # only files it can identify as its own entries are removed
+            print(f"conformal: left {len(left)} .npz files that are not readable entries of this cache "
+                  f"(e.g. {left[0].name})", file=sys.stderr)
         return 0
     entries = cache.entries()
     total = sum(e.size for e in entries)

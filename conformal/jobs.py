@@ -50,6 +50,8 @@ def parse_sweep(text: str) -> Sweep:
             if len(parts) != 3:
                 raise ValueError
             a, b, h = parts
+            if not all(math.isfinite(v) for v in parts):
+                raise InputError(f"--sweep: start, stop and step must be finite numbers, got {spec!r}")
             if h == 0 or (b - a) / h < 0:
                 raise InputError(f"--sweep: step {h:g} does not lead from {a:g} to {b:g}")
             n = int(math.floor((b - a) / h + 1e-9)) + 1
@@ -106,13 +108,15 @@ class JobReport:
 
 def compute_item(item: Item, cache_folder: str) -> dict:
     """Worker: compute one body into the cache (BLAS single-threaded: the workers share the cores);
-    returns its statistics (not the kernel)."""
+    returns its statistics (not the kernel).  An entry that cannot be written fails the item
+    (CacheWriteError): computing it was the job."""
     from conformal._threads import single_threaded_blas
     from conformal.influence.fe import cached_body_influence
 
     t0 = time.perf_counter()
     with single_threaded_blas():
-        r = cached_body_influence(item.body, item.patch, item.G, item.nu, item.settings, cache=cache_folder)
+        r = cached_body_influence(item.body, item.patch, item.G, item.nu, item.settings, cache=cache_folder,
+                                  strict_cache=True)
     return {"label": item.label, "wall_s": time.perf_counter() - t0, "dofs": r.stats.get("dofs"),
             "cache_hit": bool(r.stats.get("cache_hit", False))}
 

@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from conformal.files import atomic_path, save_figure
+
 # the element status flags of conformal.result.TractionField (tests/test_plots3d.py checks they agree)
 EXTERIOR, ADHESION, SLIP = 0, 1, 2
 
@@ -238,10 +240,7 @@ def _save(plt, fig, path: str | Path, dpi: int, tight: bool = True) -> Path:
     """Lay out (``tight``: matplotlib's tight layout) and write the figure (its folder made)."""
     if tight:
         fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
-    return path
+    return save_figure(fig, path, dpi=dpi)
 
 
 @contextlib.contextmanager
@@ -303,8 +302,8 @@ def export_vtu(path: str | Path, points: np.ndarray, cell_data: dict[str, np.nda
     data = {k: [np.asarray(v, dtype=float).reshape((nx - 1) * (ns - 1), *np.shape(v)[2:])]
             for k, v in cell_data.items()}
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    meshio.write(path, meshio.Mesh(points.reshape(-1, 3), [("quad", quads)], cell_data=data))
+    with atomic_path(path, keep_suffix=True) as tmp:
+        meshio.write(tmp, meshio.Mesh(points.reshape(-1, 3), [("quad", quads)], cell_data=data))
     return path
 
 
@@ -333,9 +332,11 @@ def plot_surfaces_3d(path: str | Path, contact: "object", *, bodies: list | None
         plotter.add_text(title, font_size=10)
     plotter.view_isometric()
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    plotter.screenshot(str(path))
-    plotter.close()
+    try:
+        with atomic_path(path, keep_suffix=True) as tmp:
+            plotter.screenshot(str(tmp))
+    finally:
+        plotter.close()
     return path
 
 

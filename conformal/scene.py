@@ -776,9 +776,29 @@ def available_memory() -> float | None:
         return None
 
 
+def grid_bytes(mx: int, my: int, theory: str) -> float:
+    """An estimate of the memory (bytes) an mx x my grid needs with ``theory``."""
+    n = float(mx) * float(my)
+    need = n * _BYTES_PER_ELEMENT.get(theory, 900)
+    if theory == "conformal":        # (2mx-1) x ms x ms x 3 x 3 kernel and its FFT along x
+        need += 2.0 * float(mx) * float(my) ** 2 * 9 * 16
+    return need
+
+
+def check_grid_memory(mx: int, my: int, theory: str, key: str, hint: str = "use a coarser grid") -> None:
+    """Refuse (InputError naming ``key``) an mx x my grid whose estimated memory with ``theory``
+    (:func:`grid_bytes`) exceeds 80 % of the memory available, before anything is allocated."""
+    need = grid_bytes(mx, my, theory)
+    avail = available_memory()
+    if avail is not None and need > 0.8 * avail:
+        raise InputError(f"{key}: a {mx} x {my} grid needs about {need / 2**30:.3g} GiB with theory "
+                         f"{theory!r}, more than the {avail / 2**30:.3g} GiB available; {hint}")
+
+
 def grid_memory(scene: "Scene") -> tuple[int, int, float]:
     """(mx, my, bytes): an estimate of the memory the scene's grid needs with its theory, before
-    anything is allocated.  Wheel-rail grids sized by ``element_size`` are not known here: (0, 0, 0)."""
+    anything is allocated.  Wheel-rail grids sized by ``element_size`` are not known here: (0, 0, 0)
+    (they are checked where their size becomes known: conformal.geometry.patches)."""
     g, theory = scene.grid, scene.model.theory
     if g.explicit:
         mx, my = int(g.mx), int(g.my)
@@ -786,12 +806,7 @@ def grid_memory(scene: "Scene") -> tuple[int, int, float]:
         return 0, 0, 0.0
     else:
         mx = my = int(g.n)
-    n = float(mx) * float(my)
-    per = _BYTES_PER_ELEMENT.get(theory, 900)
-    need = n * per
-    if theory == "conformal":        # (2mx-1) x ms x ms x 3 x 3 kernel and its FFT along x
-        need += 2.0 * mx * float(my) ** 2 * 9 * 16
-    return mx, my, need
+    return mx, my, grid_bytes(mx, my, theory)
 
 
 def validate(scene: "Scene") -> "Scene":
@@ -832,13 +847,9 @@ def validate(scene: "Scene") -> "Scene":
             raise InputError(f"[geometry] yaw: the wheelset yaw must lie within +-{MAX_YAW:g} rad, got {geo.yaw:g}")
         if abs(geo.rail_cant) > MAX_CANT:
             raise InputError(f"[geometry] rail_cant: must lie within +-{MAX_CANT:g} rad, got {geo.rail_cant:g}")
-    mx, my, need = grid_memory(scene)
-    avail = available_memory()
-    if avail is not None and need > 0.8 * avail:
-        key = "mx" if scene.grid.explicit else "n"
-        raise InputError(f"[grid] {key}: a {mx} x {my} grid needs about {need / 2**30:.3g} GiB with theory "
-                         f"{scene.model.theory!r}, more than the {avail / 2**30:.3g} GiB available; use a "
-                         "coarser grid")
+    mx, my, _ = grid_memory(scene)
+    if mx:
+        check_grid_memory(mx, my, scene.model.theory, "[grid] mx" if scene.grid.explicit else "[grid] n")
     return scene
 
 

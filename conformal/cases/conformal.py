@@ -161,21 +161,21 @@ class StripBuilder:
         centred = scene.model.influence == "halfspace_planar" or creepage_option(scene.model) == "wheel_surface"
         if sizes is not None:
             grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, target, sizes=sizes, scale=scale,
-                                                       side=pl.pair.side, centred=centred)
+                                                       side=pl.pair.side, centred=centred, theory=scene.model.theory)
         elif (self.n_patches == 1 or patch is not None) and n is None \
                 and getattr(scene.geometry, "element_size_s", None) is not None:   # CONTACT's DX, DS
             grid, h, approach0 = curved_grid_for_patch(
                 wheel, pl.pair.rail, target, sizes=(scene.geometry.element_size, scene.geometry.element_size_s),
-                scale=scale, side=pl.pair.side, centred=centred)
+                scale=scale, side=pl.pair.side, centred=centred, theory=scene.model.theory)
         elif self.n_patches == 1 or patch is not None:   # the grid of conformal.geometry (and of precompute)
             grid, h, approach0 = curved_grid_for_patch(
                 wheel, pl.pair.rail, target, element_size=None if n is not None else scene.geometry.element_size,
-                n=n or g.n, scale=scale, side=pl.pair.side, centred=centred)
+                n=n or g.n, scale=scale, side=pl.pair.side, centred=centred, theory=scene.model.theory)
         else:
             patches = [pg.patch for pg in st.patches]
             dx, ds, size_warnings = _element_sizes(scene, patches, target, scale)
             grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, target, sizes=(dx, ds), scale=scale,
-                                                       side=pl.pair.side)
+                                                       side=pl.pair.side, theory=scene.model.theory)
         merged = self.patch
         m = pl.pair.mirror
         k = scene.kinematics

@@ -41,9 +41,11 @@ def _solver_grids(scene, per_patch) -> list[tuple]:
 
 
 def plan(scene, sweep: Sweep, settings=None, cache=None,
-         on_position: Callable[[float, Exception], None] | None = None) -> tuple[list[Item], list]:
+         on_position: Callable[[float, Exception], None] | None = None, *, repair: bool = True
+         ) -> tuple[list[Item], list]:
     """The FE items of a sweep: (items, failed positions).  Grids: those the solver of
-    [model] theory will use (:func:`_solver_grids`)."""
+    [model] theory will use (:func:`_solver_grids`).  ``repair``: move unusable cache entries
+    aside (False: only report them; a dry run changes nothing)."""
     settings = settings or settings_from_options(scene.model.options)
     c = cache if isinstance(cache, Cache) else Cache(cache)
     m = scene.material
@@ -67,7 +69,8 @@ def plan(scene, sweep: Sweep, settings=None, cache=None,
                     continue
                 seen.add(key)
                 label = f"{sweep.key}={v:g} patch {k} {kind} ({patch.n_columns}x{patch.ms})"
-                items.append(Item(label, body, patch, G, nu, settings, key, c.load(key, body_key(body, patch, G, nu, settings)) is not None))
+                cached = c.load(key, body_key(body, patch, G, nu, settings), repair=repair) is not None
+                items.append(Item(label, body, patch, G, nu, settings, key, cached))
     return items, failed
 
 
@@ -75,7 +78,7 @@ def precompute(scene, sweep: Sweep, *, cache=None, workers: int | None = None, s
                progress: bool = True, dry_run: bool = False) -> JobReport:
     """Plan and run a precomputation job (see the module docstring)."""
     c = cache if isinstance(cache, Cache) else Cache(cache)
-    items, failed = plan(scene, sweep, cache=c)
+    items, failed = plan(scene, sweep, cache=c, repair=not dry_run)
     if workers is None:
         workers = max(1, (os.cpu_count() or 2) // 2)
     if dry_run:

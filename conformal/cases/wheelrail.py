@@ -175,8 +175,8 @@ def placement_warnings(scene: Scene, pl: "Placement", st: PairState) -> list[str
 def _grid_options(scene: Scene) -> dict:
     geo, g = scene.geometry, scene.grid
     if g.explicit:
-        return dict(explicit=(g.mx, g.my, g.dx, g.dy, g.xl, g.yl))
-    return dict(element_size=geo.element_size, n=g.n, scale=g.scale)
+        return dict(explicit=(g.mx, g.my, g.dx, g.dy, g.xl, g.yl), theory=scene.model.theory)
+    return dict(element_size=geo.element_size, n=g.n, scale=g.scale, theory=scene.model.theory)
 
 
 def state_at(pair: WheelRailPair, top: RailTop, z: float, roll: float, scene: Scene, *,
@@ -954,7 +954,7 @@ def curved_problems_from_wheel_rail(scene: Scene):
     geo, g, k = scene.geometry, scene.grid, scene.kinematics
     for i, pg in enumerate(st.patches):
         grid, h, approach = curved_grid_for_patch(wheel, pl.pair.rail, pg.patch, element_size=geo.element_size,
-                                                  n=g.n, scale=g.scale, side=pl.pair.side)
+                                                  n=g.n, scale=g.scale, side=pl.pair.side, theory=scene.model.theory)
         info = patch_info(pl.pair, st, pg, i)
         motion = wheelset_motion(scene)
         if motion is not None:

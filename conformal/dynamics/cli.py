@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from conformal.errors import InputError
+from conformal.files import check_output_path
 
 
 def _default_out(scene_path: str) -> Path:
@@ -23,7 +24,7 @@ def cmd_simulate(args) -> int:
     from conformal.dynamics.model import build_model
     from conformal.dynamics.plots import plot_history
     from conformal.dynamics.scene import load_vehicle_scene
-    from conformal.dynamics.simulate import simulate, write_outputs
+    from conformal.dynamics.simulate import check_history_memory, simulate, write_outputs
 
     scene = load_vehicle_scene(args.scene)
     if args.speed is not None:
@@ -31,6 +32,8 @@ def cmd_simulate(args) -> int:
             raise InputError(f"--speed: must be > 0 m/s, got {args.speed}")
         scene = scene.with_speed(args.speed)
     out = Path(args.out) if args.out else _default_out(args.scene)
+    check_output_path(str(out / "history.csv"), "--out")       # before the run, not after it
+    check_history_memory(scene.simulation.t_end, scene.simulation.output_step)   # before the table is built
     model = build_model(scene)
     result = simulate(scene, progress=True, model=model)
     err = interpolation_error(model.table, n_points=12)
@@ -46,10 +49,16 @@ def cmd_simulate(args) -> int:
 def cmd_stability(args) -> int:
     from conformal.dynamics.plots import plot_damping
     from conformal.dynamics.scene import load_vehicle_scene
-    from conformal.dynamics.stability import (damping_curve, linear_critical_speed, linear_inputs,
-                                              nonlinear_critical_speed)
+    from conformal.dynamics.stability import (MAX_SPEED, check_bisection, damping_curve, linear_critical_speed,
+                                              linear_inputs, nonlinear_critical_speed)
 
     scene = load_vehicle_scene(args.scene)
+    if not 0 < args.v_max <= MAX_SPEED:      # the linear scan takes one eigenproblem per m/s
+        raise InputError(f"--v-max: must lie in (0, {MAX_SPEED:g}] m/s, got {args.v_max}")
+    out = Path(args.out) if args.out else _default_out(args.scene)
+    check_output_path(str(out / "stability.png"), "--out")
+    if args.method == "nonlinear":
+        check_bisection(0.5 * args.v_max, args.v_max, args.tol)
     lin = linear_inputs(scene)
     vc = linear_critical_speed(lin, v_max=args.v_max)
     report = {"method": args.method, "critical_speed": vc, "linear_critical_speed": vc}
@@ -66,7 +75,6 @@ def cmd_stability(args) -> int:
         report["creep_model"] = scene.contact.creep_model
     speeds = np.linspace(1.0, args.v_max, 300)
     sp, zeta, freq = damping_curve(lin, speeds)
-    out = Path(args.out) if args.out else _default_out(args.scene)
     png = plot_damping(sp, zeta, freq, out / "stability.png", critical=vc, nonlinear=nl, title=scene.name)
     report["plot"] = str(png)
     print(json.dumps(report, indent=2))

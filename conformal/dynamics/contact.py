@@ -182,6 +182,23 @@ def search_row(geom: ContactGeometry, curves, y: float) -> tuple[np.ndarray, boo
     return row, best[1] is not None
 
 
+#: most rows of a contact table (one contact search each; the default 0.1 mm over +-14 mm has 281)
+MAX_TABLE_ROWS = 20_001
+
+
+def check_table_size(step: float, y_range: float) -> int:
+    """Rows of a table of ``step`` over -y_range..y_range (mm); InputError naming the key when a
+    value is not a positive finite number or the table would have more than MAX_TABLE_ROWS rows."""
+    if not (math.isfinite(step) and step > 0 and math.isfinite(y_range) and y_range > 0):
+        raise InputError(f"[contact] table_step, table_range: must be finite and > 0, got {step}, {y_range}")
+    rows = 2.0 * y_range / step + 1.0
+    if rows > MAX_TABLE_ROWS:
+        raise InputError(f"[contact] table_step: {step:g} mm over +-{y_range:g} mm (table_range) is {rows:.3g} "
+                         f"rows of contact searches, more than {MAX_TABLE_ROWS}; use table_step >= "
+                         f"{2.0 * y_range / (MAX_TABLE_ROWS - 1):.2g} mm")
+    return int(round(2 * y_range / step)) + 1
+
+
 def build_table(geom: ContactGeometry, step: float = 0.1, y_range: float = 14.0) -> ContactTable:
     """Search the contacts on a uniform grid -y_range..y_range (mm) and assemble the table.
 
@@ -194,11 +211,9 @@ def build_table(geom: ContactGeometry, step: float = 0.1, y_range: float = 14.0)
     """
     import time
 
-    if not (step > 0 and y_range > 0):
-        raise InputError(f"[contact] table_step, table_range: must be > 0, got {step}, {y_range}")
+    n = check_table_size(step, y_range)
     t0 = time.perf_counter()
     curves = _curves(geom)
-    n = int(round(2 * y_range / step)) + 1
     ys = -y_range + step * np.arange(n)
     data = np.empty((n, 2, NC))
     valid = np.zeros(n, bool)

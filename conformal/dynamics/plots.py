@@ -5,6 +5,8 @@ from pathlib import Path
 
 import numpy as np
 
+from conformal.files import save_figure
+
 
 class _Unregistered:
     """Stands in for pyplot where a figure is closed: our figures are never registered with it."""
@@ -91,8 +93,7 @@ def plot_history(history: dict, out: str | Path, title: str = "") -> list[Path]:
     paths = []
     for name, fig in history_figures(history, title).items():
         fig.tight_layout()
-        p = out / name
-        fig.savefig(p, dpi=110)
+        p = save_figure(fig, out / name, dpi=110)
         _Unregistered.close(fig)
         paths.append(p)
     return paths
@@ -132,8 +133,7 @@ def plot_damping(speeds, zeta, freq, out: str | Path, critical: float | None = N
     same vehicle (the seed's wheelset: SEED_CRITICAL_SPEED), drawn only where given."""
     fig = damping_figure(speeds, zeta, freq, critical, nonlinear, reference, title)
     fig.tight_layout()
-    p = Path(out)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p, dpi=110)
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
+    p = save_figure(fig, out, dpi=110)
     _Unregistered.close(fig)
     return p

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from conformal.dynamics.contact import check_table_size
 from conformal.errors import InputError
 from conformal.materials import Material
 
@@ -303,6 +304,7 @@ def scene_from_dict(data: dict, base_dir: str | Path = ".", name: str = "scene")
         contact = replace(contact, table=str(Path(base_dir) / contact.table))
     if contact.table_step > 1.0:
         raise c.error("table_step", f"must be <= 1 mm (the table is interpolated), got {contact.table_step!r}")
+    check_table_size(contact.table_step, contact.table_range)
 
     m = _Sec("material", data["material"], {"G", "E", "nu"})
     nu = m.number("nu")

@@ -29,13 +29,38 @@ from scipy import integrate
 
 from conformal.dynamics.model import SIDES, WheelsetModel, build_model, equilibrium
 from conformal.dynamics.scene import VehicleScene
-from conformal.errors import ConvergenceError
+from conformal.errors import ConvergenceError, InputError
+from conformal.files import open_atomic, write_text
 
 PER_WHEEL = ("xi", "eta", "phi", "a", "b", "FN", "FX", "FY", "FZ", "y_contact")
 COLUMNS = ("t", "y", "yaw") + tuple(f"{s}_{q}" for s in SIDES for q in PER_WHEEL) \
     + ("z", "roll", "right_FN_flange", "left_FN_flange")
 SOLVERS = {"RK45": integrate.RK45, "RK23": integrate.RK23, "DOP853": integrate.DOP853,
            "Radau": integrate.Radau, "BDF": integrate.BDF, "LSODA": integrate.LSODA}
+
+
+def history_rows(t_end: float, output_step: float) -> int:
+    """Rows of a run's history: one per output_step from 0 to t_end."""
+    return int(math.floor(t_end / output_step + 1e-9)) + 1
+
+
+def history_bytes(t_end: float, output_step: float, n_state: int = 8) -> float:
+    """Memory (bytes) of a run's history: the states and the output columns, 8 bytes each per row."""
+    return float(t_end / output_step + 1.0) * 8.0 * (n_state + len(COLUMNS))
+
+
+def check_history_memory(t_end: float, output_step: float, n_state: int = 8) -> None:
+    """Refuse ([simulation] t_end, InputError) a run whose history would take more than half of the
+    memory available, before anything is allocated."""
+    from conformal.scene import available_memory
+
+    need = history_bytes(t_end, output_step, n_state)
+    avail = available_memory()
+    if avail is not None and need > 0.5 * avail:
+        raise InputError(f"[simulation] t_end: {t_end:g} s at output_step = {output_step:g} s is "
+                         f"{t_end / output_step + 1:.3g} output rows (about {need / 2**30:.3g} GiB "
+                         f"of history), more than half of the {avail / 2**30:.3g} GiB available; shorten "
+                         "t_end or raise output_step")
 
 
 @dataclass(frozen=True, eq=False)
@@ -76,7 +101,8 @@ def integrate_model(model: WheelsetModel, X0: np.ndarray, t_end: float, *, metho
     scale = np.array([1e-3, 1e-4, 1e-4, 1e-3, 1e-2, 1e-3, 1e-3, 1e-2])
     solver = SOLVERS[method](model.rhs, 0.0, np.asarray(X0, float), t_end, rtol=rtol, atol=atol * scale / 1e-3,
                              max_step=max_step)
-    n_out = int(math.floor(t_end / output_step + 1e-9)) + 1
+    check_history_memory(t_end, output_step, X0.size)
+    n_out = history_rows(t_end, output_step)
     times = output_step * np.arange(n_out)
     states = np.empty((n_out, X0.size))
     states[0] = X0
@@ -149,16 +175,20 @@ def simulate(scene: VehicleScene, *, progress: bool = False, table_step: float |
     1.0
     """
     t0 = time.perf_counter()
-    model = model or build_model(scene, table_step=table_step, table_range=table_range)
     sim = scene.simulation
+    check_history_memory(sim.t_end, sim.output_step)
+    model = model or build_model(scene, table_step=table_step, table_range=table_range)
     X0 = equilibrium(model, sim.initial_lateral / 1000.0, sim.initial_yaw)
     t_setup = time.perf_counter() - t0
     t1, c1 = time.perf_counter(), time.process_time()
     times, states, steps, nfev = integrate_model(model, X0, sim.t_end, method=sim.method, rtol=sim.rtol,
                                                  atol=sim.atol, output_step=sim.output_step, progress=progress)
     t_int, cpu_int = time.perf_counter() - t1, time.process_time() - c1
-    rows = [model.outputs(t, X) for t, X in zip(times, states)]
-    hist = {c: np.array([r[c] for r in rows]) for c in COLUMNS}
+    hist = {c: np.empty(len(times)) for c in COLUMNS}      # filled row by row: no list of dicts
+    for i, (t, X) in enumerate(zip(times, states)):
+        r = model.outputs(t, X)
+        for c in COLUMNS:
+            hist[c][i] = r[c]
     wall = time.perf_counter() - t0
     irr = scene.track.irregularity
     t_exc = (irr.start + irr.wavelength / 1000.0) / model.V if (irr.amplitude and model.V > 0) else 0.0
@@ -187,10 +217,10 @@ def write_outputs(result: SimulationResult, out: str | Path) -> list[Path]:
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     h = result.history
-    with open(out / "history.csv", "w", newline="", encoding="utf-8") as fh:
+    with open_atomic(out / "history.csv", "w", newline="", encoding="utf-8") as fh:   # whole rows or none
         w = csv.writer(fh)
         w.writerow(COLUMNS)
         for i in range(len(h["t"])):
             w.writerow([f"{h[c][i]:.9g}" for c in COLUMNS])
-    (out / "summary.json").write_text(json.dumps(result.summary, indent=2) + "\n", encoding="utf-8")
+    write_text(out / "summary.json", json.dumps(result.summary, indent=2) + "\n")
     return [out / "history.csv", out / "summary.json"]

@@ -238,10 +238,29 @@ def nonlinear_decays(scene: VehicleScene, V: float, t_end: float | None = None) 
     return bool(rate > 0), rate
 
 
+#: the largest speed (m/s) a stability scan considers (the linear scan solves one eigenproblem per m/s)
+MAX_SPEED = 1000.0
+#: most time-domain runs of the nonlinear bisection (each is a simulation of seconds)
+MAX_BISECTIONS = 20
+
+
+def check_bisection(lo: float, hi: float, tol: float) -> int:
+    """The number of halvings that bring [lo, hi] below ``tol`` (m/s); InputError naming --tol when
+    tol is not > 0 or needs more than MAX_BISECTIONS time-domain runs."""
+    if not (math.isfinite(tol) and tol > 0):
+        raise InputError(f"--tol: the bisection tolerance must be > 0 m/s, got {tol}")
+    n = max(0, math.ceil(math.log2(max(hi - lo, tol) / tol)))
+    if n > MAX_BISECTIONS:
+        raise InputError(f"--tol: {tol:g} m/s on [{lo:g}, {hi:g}] m/s needs {n} time-domain runs, more than "
+                         f"{MAX_BISECTIONS}; use --tol >= {(hi - lo) / 2 ** MAX_BISECTIONS:.2g}")
+    return n
+
+
 def nonlinear_critical_speed(scene: VehicleScene, lo: float, hi: float, tol: float = 0.5,
                              t_end: float | None = None, log=None) -> tuple[float | None, list]:
     """Bisection for the lowest speed where the disturbance no longer decays; (speed or None if it
     decays at hi, the list of (speed, decays, rate) tried)."""
+    n_max = check_bisection(lo, hi, tol)
     tried = []
 
     def run(V):
@@ -255,7 +274,9 @@ def nonlinear_critical_speed(scene: VehicleScene, lo: float, hi: float, tol: flo
         return None, tried
     if not run(lo):
         return lo, tried
-    while hi - lo > tol:
+    for _ in range(n_max):                 # hi - lo halves each time: below tol after n_max runs
+        if hi - lo <= tol:
+            break
         mid = 0.5 * (lo + hi)
         if run(mid):
             lo = mid

@@ -37,6 +37,7 @@ from conformal.errors import InputError
 from conformal.fe_contact.bodies import ContactMesh, quadratic_pair
 from conformal.fe_contact.solver import (ContactBody, ContactModel, FEContactSettings, FEContactSolution,
                                          recovered_pressure, solve_contact)
+from conformal.files import atomic_path
 from conformal.result import Result
 
 _MESH_KEYS = {"fec_n": "n", "fec_h": "h", "fec_growth": "growth", "fec_h_max": "h_max",
@@ -190,13 +191,16 @@ def write_vtu(run: FEContactRun, path) -> list:
     pr[new[sol.nodes]] = recovered_pressure(sol)
     gap[new[sol.nodes]] = sol.gap
     act[new[sol.nodes]] = sol.active
-    meshio.Mesh(P1[used], [("triangle", new[m1.free_tris])],
-                point_data={"pressure": p, "pressure_recovered": pr, "gap": gap, "contact": act}).write(str(path))
+    mesh1 = meshio.Mesh(P1[used], [("triangle", new[m1.free_tris])],
+                point_data={"pressure": p, "pressure_recovered": pr, "gap": gap, "contact": act})
+    with atomic_path(path, keep_suffix=True) as tmp:
+        mesh1.write(str(tmp))
     m2 = run.body2.mesh
     P2 = run.body2.points
     used2 = np.unique(m2.free_tris)
     new2 = -np.ones(len(P2), dtype=np.int64)
     new2[used2] = np.arange(used2.size)
     p2 = path.with_name(path.stem + "_body2.vtu")
-    meshio.Mesh(P2[used2], [("triangle", new2[m2.free_tris])]).write(str(p2))
+    with atomic_path(p2, keep_suffix=True) as tmp:
+        meshio.Mesh(P2[used2], [("triangle", new2[m2.free_tris])]).write(str(tmp))
     return [path, p2]

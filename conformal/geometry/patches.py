@@ -29,6 +29,7 @@ from conformal.errors import ConvergenceError, InputError, NoContactError
 from conformal.geometry.search import ContactPoint, RailTop, newton_contact, wheel_locus
 from conformal.geometry.surfaces import RailSurface, WheelSurface
 from conformal.grid import CurvedGrid, PlanarGrid
+from conformal.scene import check_grid_memory
 
 D_COMB = 8.0        # mm, lobes closer than this along the rail profile form one patch (CONTACT's D_SEP)
 REF_EXPONENT = 2.0  # interpenetration weight exponent of the reference point (pen²)
@@ -261,15 +262,30 @@ def _wheel_start(wheel: WheelSurface, patch: Patch, Q: np.ndarray):
     return patch.wheel_s + d[0], patch.wheel_theta + d[1]
 
 
+def _check_size(mx: int, my: int, theory: str, by_element_size: bool, by_sizes: bool = False) -> None:
+    """The memory check of a grid whose size is known only now (scene.check_grid_memory), naming
+    the key that sized it."""
+    if by_element_size:
+        key, hint = "[geometry] element_size", "use larger elements"
+    elif by_sizes:
+        key, hint = "[model] max_mx / max_ms", "use fewer elements"
+    else:
+        key, hint = "[grid] n", "use a coarser grid"
+    check_grid_memory(mx, my, theory, key, hint)
+
+
 def planar_grid_for_patch(wheel: WheelSurface, rail: RailSurface, patch: Patch, *,
                           element_size: float | None = None, n: int = 40, scale: float = 1.1,
-                          explicit: tuple | None = None) -> tuple[PlanarGrid, np.ndarray, float]:
+                          explicit: tuple | None = None, theory: str = "exact"
+                          ) -> tuple[PlanarGrid, np.ndarray, float]:
     """Planar potential contact grid on the patch's tangent plane, the undeformed distance h on it
     (min 0) and the approach (largest overlap on the grid).
 
     The grid covers the overlap region (x_range, eta_range) times ``scale``: with square elements
     of ``element_size`` mm (CONTACT's DX = DS), or n x n elements; ``explicit`` = (mx, my, dx, dy,
-    xl, yl) fixes it (xl, yl relative to the reference point, None = centred)."""
+    xl, yl) fixes it (xl, yl relative to the reference point, None = centred).  A grid too large
+    for the memory with ``theory`` is refused before it is allocated (InputError naming the key that
+    sized it)."""
     if explicit is not None:
         mx, my, dx, dy, xl, yl = explicit
         grid = PlanarGrid(mx, my, dx, dy, -0.5 * mx * dx if xl is None else xl,
@@ -289,6 +305,7 @@ def planar_grid_for_patch(wheel: WheelSurface, rail: RailSurface, patch: Patch, 
             hy = max(hy, 1e-3)
             mx = my = n
             dx, dy = 2 * hx / n, 2 * hy / n
+        _check_size(mx, my, theory, element_size is not None)
         grid = PlanarGrid(mx, my, dx, dy, cx - 0.5 * mx * dx, cy - 0.5 * my * dy)
     X, Y = grid.mesh()
     d = planar_distance(wheel, rail, patch, X, Y)
@@ -314,11 +331,12 @@ def curved_distance(wheel: WheelSurface, rail: RailSurface, patch: Patch, x: np.
 def curved_grid_for_patch(wheel: WheelSurface, rail: RailSurface, patch: Patch, *,
                           element_size: float | None = None, n: int = 40, scale: float = 1.1,
                           side: str = "right", margin: float = 5.0, sizes: tuple[float, float] | None = None,
-                          centred: bool = False) -> tuple[CurvedGrid, np.ndarray, float]:
+                          centred: bool = False, theory: str = "conformal") -> tuple[CurvedGrid, np.ndarray, float]:
     """Curved potential contact grid (x, s) for the patch, h along the local normals (min 0) and
     the approach.  Uniform elements in x and in s (``element_size``, ``sizes`` = (dx, ds), or n x n).
     ``centred``: an element centred on the reference point (x_ref, s_ref), as CONTACT's grids; else
-    the grid is centred on the overlap region."""
+    the grid is centred on the overlap region.  A grid too large for the memory with ``theory`` is
+    refused before it is allocated."""
     x0, x1 = (v - patch.x_ref for v in patch.x_range)
     s0, s1 = patch.s_range
     cx, cs = 0.5 * (x0 + x1), 0.5 * (s0 + s1)
@@ -333,6 +351,7 @@ def curved_grid_for_patch(wheel: WheelSurface, rail: RailSurface, patch: Patch, 
     else:
         mx = ms = n
         dx, ds = 2 * hx / n, 2 * hs / n
+    _check_size(mx, ms, theory, element_size is not None, sizes is not None and element_size is None)
     xl = cx - 0.5 * mx * dx
     s_start = cs - 0.5 * ms * ds
     if centred:   # shift by less than an element so that the reference point is an element centre

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from conformal.errors import ConformalError, InputError
+from conformal.files import open_atomic, save_figure
 from conformal.geometry.search import RailTop, touch_height
 from conformal.geometry.wheelrail import build_pair, wheelset_roll
 from conformal.scene import WheelRailGeometry
@@ -41,6 +42,8 @@ def parse_range(text: str) -> list[float]:
         parts = [float(p) for p in text.split(":")]
     except ValueError:
         raise InputError(f"--shift: expected start:stop:step in mm, got {text!r}") from None
+    if not all(math.isfinite(v) for v in parts):
+        raise InputError(f"--shift: expected finite numbers in mm, got {text!r}")
     if len(parts) == 1:
         return parts
     if len(parts) != 3 or parts[2] <= 0 or parts[1] < parts[0]:
@@ -115,9 +118,7 @@ def jump_warnings(rows: list[dict], max_rate: float = 2.0) -> list[str]:
 
 
 def write_csv(rows: list[dict], path: str | Path) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="", encoding="utf-8") as fh:
+    with open_atomic(path, "w", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
         for r in rows:
@@ -156,5 +157,4 @@ def plot(rows: list[dict], path: str | Path, title: str = "") -> None:
     if title:
         fig.suptitle(title)
     fig.tight_layout()
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)

@@ -5,9 +5,18 @@ arrays, placement, grid, mesh parameters, material, element order, method, and t
 code's version ``FE_VERSION``).  Each file ``<key>.npz`` holds the arrays and a ``__meta__`` JSON
 text: the key inputs themselves, the key, a SHA-256 of every array's bytes, the creation time and
 the statistics of the computation.  On load the key, the inputs and the checksums are verified;
-a corrupt, truncated or foreign file is reported with a warning, removed and recomputed, never
-used.  Files are written to a temporary name in the same folder and renamed (atomic on POSIX and
-Windows), so an interrupted job leaves no half-written entry.
+a corrupt, truncated or foreign file is reported with a warning, never used, moved aside to
+``<key>.npz.corrupt`` (for inspection) and recomputed; a file that cannot be opened (another
+user's file without read permission) is reported and left where it is.  A check that must not
+change anything (``precompute --dry-run``) only reports.  Files are written to a temporary name
+in the same folder and renamed (:mod:`conformal.files`: atomic, mode 0666 less the umask, so a
+cache shared by a group of users or Dask workers is readable by all of them), so an interrupted
+job leaves no half-written entry.
+
+``cache clear`` removes only what it can identify as its own: files named ``<64 hex>.npz`` whose
+metadata names this format and that key, entries it moved aside, and its own temporary files
+older than an hour (a younger one may belong to a job that is writing it now).  Anything else in
+the folder (another program's ``results.npz``, an entry it cannot read) is left and counted.
 
 Folder: ``$CONFORMAL_CACHE`` when set, else the per-user cache folder
 (``$XDG_CACHE_HOME/conformal`` or ``~/.cache/conformal`` on Linux, ``~/Library/Caches/conformal``
@@ -26,11 +35,10 @@ import hashlib
 import json
 import math
 import os
+import re
 import sys
-import tempfile
 import time
 import warnings
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -38,15 +46,24 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from conformal.errors import ConformalError
+from conformal.files import is_temporary, read_npz, save_npz_atomic
 
 ENV = "CONFORMAL_CACHE"
 SUFFIX = ".npz"
 META = "__meta__"
 FORMAT = "conformal-influence-cache/1"
+CORRUPT = ".corrupt"
+_NAME = re.compile(r"^[0-9a-f]{64}\.npz$")
+#: a temporary file younger than this may be written right now by a running job
+TEMP_AGE_S = 3600.0
 
 
 class CacheWarning(UserWarning):
     """A cache file was unusable (corrupt or foreign) and is recomputed."""
+
+
+class CacheWriteError(ConformalError):
+    """A computed entry could not be written to the cache (full disk, no permission)."""
 
 
 def default_dir() -> Path:
@@ -131,68 +148,79 @@ class Cache:
         meta = {"format": FORMAT, "key": key, "inputs": json.loads(canonical_json(inputs)),
                 "checksums": _array_digest(arrays), "created": time.time(),
                 "stats": json.loads(json.dumps(dict(stats or {}), default=str))}
-        self.folder.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{key[:16]}.", suffix=".tmp", dir=self.folder)
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                np.savez(fh, **arrays, **{META: np.array(json.dumps(meta))})
-                fh.flush()
-                os.fsync(fh.fileno())
-            os.replace(tmp, self.path(key))
-        except BaseException:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-            raise
+        save_npz_atomic(self.path(key), **arrays, **{META: np.array(json.dumps(meta))})
         return self.path(key)
 
-    def _read(self, path: Path) -> tuple[dict, dict]:
-        with np.load(path, allow_pickle=False) as z:
-            if META not in z.files:
-                raise ValueError("no metadata")
-            meta = json.loads(str(z[META]))
-            arrays = {k: z[k] for k in z.files if k != META}
-        return meta, arrays
+    @staticmethod
+    def _read(path: Path) -> tuple[dict, dict]:
+        """(metadata, arrays) of a cache file; ValueError if it is not a complete cache file,
+        OSError if it cannot be opened."""
+        z = read_npz(path)
+        if META not in z:
+            raise ValueError("no metadata")
+        try:
+            meta = json.loads(str(z.pop(META)))
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"unreadable metadata ({exc})") from None
+        if not isinstance(meta, dict):
+            raise ValueError("unreadable metadata")
+        return meta, z
 
-    def load(self, key: str, inputs: Mapping[str, Any] | None = None) -> dict[str, np.ndarray] | None:
-        """The arrays stored under ``key``, or None when absent or unusable (warned, removed)."""
+    def load(self, key: str, inputs: Mapping[str, Any] | None = None, *, repair: bool = True
+             ) -> dict[str, np.ndarray] | None:
+        """The arrays stored under ``key``, or None when absent or unusable (warned).
+
+        An unusable file (truncated, corrupt, foreign) is moved aside to ``<key>.npz.corrupt``
+        when ``repair`` (else left as it is); a file that cannot be opened is always left.
+        """
         path = self.path(key)
         if not path.is_file():
             return None
         try:
             meta, arrays = self._read(path)
-        except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError, json.JSONDecodeError) as exc:
-            return self._reject(path, f"cannot be read ({type(exc).__name__}: {exc})")
+        except OSError as exc:
+            warnings.warn(f"influence cache: {path} cannot be opened ({exc.strerror or exc}); "
+                          "computing without it (the file is left as it is)", CacheWarning, stacklevel=2)
+            return None
+        except ValueError as exc:
+            return self._reject(path, f"cannot be read ({exc})", repair)
         if meta.get("format") != FORMAT or meta.get("key") != key:
-            return self._reject(path, "belongs to another key or format")
+            return self._reject(path, "belongs to another key or format", repair)
         if inputs is not None and meta.get("inputs") != json.loads(canonical_json(inputs)):
-            return self._reject(path, "was computed for different inputs")
+            return self._reject(path, "was computed for different inputs", repair)
         if meta.get("checksums") != _array_digest(arrays):
-            return self._reject(path, "fails its checksum (corrupt)")
+            return self._reject(path, "fails its checksum (corrupt)", repair)
         return arrays
 
     def meta(self, key: str) -> dict | None:
+        """The metadata of the entry ``key`` (None when missing or unreadable)."""
         try:
             return self._read(self.path(key))[0]
-        except Exception:
+        except (OSError, ValueError):
             return None
 
-    def _reject(self, path: Path, why: str) -> None:
-        warnings.warn(f"influence cache: {path.name} {why}; recomputing", CacheWarning, stacklevel=3)
+    def _reject(self, path: Path, why: str, repair: bool) -> None:
+        if not repair:
+            warnings.warn(f"influence cache: {path.name} {why}", CacheWarning, stacklevel=3)
+            return None
+        aside = path.with_name(path.name + CORRUPT)
         try:
-            path.unlink()
-        except OSError:
-            pass
+            os.replace(path, aside)
+            where = f"moved to {aside.name}"
+        except OSError as exc:
+            where = f"left in place ({exc.strerror or exc})"
+        warnings.warn(f"influence cache: {path.name} {why}; {where}; recomputing", CacheWarning, stacklevel=3)
         return None
 
     def get_or_compute(self, inputs: Mapping[str, Any],
-                       compute: Callable[[], tuple[Mapping[str, np.ndarray], Mapping[str, Any]]]
-                       ) -> tuple[dict[str, np.ndarray], bool]:
+                       compute: Callable[[], tuple[Mapping[str, np.ndarray], Mapping[str, Any]]],
+                       *, strict: bool = False) -> tuple[dict[str, np.ndarray], bool]:
         """Cached arrays for ``inputs``, computing and storing them when missing.
 
         ``compute()`` returns (arrays, stats).  Returns (arrays, hit).  Nothing is written when
-        compute raises.
+        compute raises.  A failed write (full disk, no permission) is warned about and the arrays
+        are returned uncached, or, when ``strict`` (a job whose purpose is to fill the cache),
+        raises :class:`CacheWriteError`.
         """
         key = self.key(inputs)
         arrays = self.load(key, inputs)
@@ -203,34 +231,70 @@ class Cache:
         try:
             self.store(key, inputs, arrays, stats)
         except OSError as exc:
-            warnings.warn(f"influence cache: cannot write {self.path(key)} ({exc}); continuing "
-                          "without caching", CacheWarning, stacklevel=2)
+            text = f"influence cache: cannot write {self.path(key)} ({exc.strerror or exc})"
+            if strict:
+                raise CacheWriteError(text) from None
+            warnings.warn(text + "; continuing without caching", CacheWarning, stacklevel=2)
         return arrays, False
 
     # ------------------------------------------------------------------ maintenance
+    def _own(self, p: Path) -> bool:
+        """Whether ``p`` is an entry of this cache: its name is a key and its metadata names this
+        format and that key."""
+        if not _NAME.match(p.name):
+            return False
+        try:
+            meta = self._read(p)[0]
+        except (OSError, ValueError):
+            return False
+        return meta.get("format") == FORMAT and meta.get("key") == p.stem
+
     def entries(self) -> list[Entry]:
-        """Every cache file in the folder, newest first."""
+        """Every file of the folder named like a cache entry (``<64 hex>.npz``), newest first
+        (``ok`` False: it cannot be read or is not a valid entry)."""
         if not self.folder.is_dir():
             return []
         out = []
         for p in self.folder.glob(f"*{SUFFIX}"):
+            if not _NAME.match(p.name):
+                continue
             meta = self.meta(p.stem)
-            ok = meta is not None and meta.get("key") == p.stem
+            ok = meta is not None and meta.get("format") == FORMAT and meta.get("key") == p.stem
             summary = str(meta.get("stats", {}).get("summary", "")) if ok else "unreadable"
             st = p.stat()
             out.append(Entry(p.stem, p, st.st_size, float(meta.get("created", st.st_mtime)) if ok else st.st_mtime,
                              summary, ok))
         return sorted(out, key=lambda e: -e.created)
 
-    def clear(self) -> int:
-        """Remove every cache file (and leftover temporary files); returns the number removed."""
+    def clear(self) -> tuple[int, list[Path]]:
+        """Remove the cache's own files (see the module docstring): its valid entries, the entries it
+        moved aside and its temporary files older than ``TEMP_AGE_S``.  Returns (number removed,
+        files left: not identifiable as this cache's own, e.g. another program's NPZ files or
+        entries that cannot be read)."""
         if not self.folder.is_dir():
-            return 0
-        n = 0
-        for p in list(self.folder.glob(f"*{SUFFIX}")) + list(self.folder.glob(".*.tmp")):
+            return 0, []
+        n, left = 0, []
+        now = time.time()
+        for p in sorted(self.folder.iterdir()):
+            if not p.is_file():
+                continue
+            if p.name.endswith(CORRUPT) and _NAME.match(p.name[:-len(CORRUPT)]):
+                own = True
+            elif is_temporary(p.name) and _NAME.match(p.name[1:].split(".npz.", 1)[0] + SUFFIX):
+                if now - p.stat().st_mtime < TEMP_AGE_S:
+                    continue                       # may be written by a running job: not ours to judge
+                own = True
+            else:
+                own = self._own(p)
+            if not own:
+                if p.suffix == SUFFIX:
+                    left.append(p)
+                continue
             try:
                 p.unlink()
                 n += 1
+            except FileNotFoundError:
+                pass                               # removed by another process meanwhile
             except OSError as exc:
-                raise ConformalError(f"cannot remove {p}: {exc}") from None
-        return n
+                raise ConformalError(f"cannot remove {p}: {exc.strerror or exc}") from None
+        return n, left

@@ -65,13 +65,13 @@ The project's own format:
 from __future__ import annotations
 
 import io
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from conformal.errors import InputError
+from conformal.files import write_text
 from conformal.influence.curved import CurvedInfluence
 
 FORMAT = "conformal-influence"
@@ -399,10 +399,7 @@ def write_influence_file(target, kernel: np.ndarray, *, dx: float, s_edges, comm
     if hasattr(target, "write"):
         target.write(text)
         return
-    path = Path(target)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text, encoding="ascii")
-    os.replace(tmp, path)
+    write_text(target, text, encoding="ascii")
 
 
 def read_influence_file(source) -> InfluenceFile:

@@ -99,7 +99,9 @@ from conformal.influence.fe_halfspace3d import _gauss_rectangle_stress, rectangl
 from conformal.meshing.bodies import BodyModel, StripPatch
 from conformal.meshing.gmsh_body import BodyMesh, MeshSpec, mesh_body, surface_frame, surface_point
 
-FE_VERSION = "5"   # 5: profiles that end inside the body's disc continued straight (closure "extend"),
+FE_VERSION = "6"   # 6: keys of every bit of the profile points and patch edges (were rounded to
+#                    12 decimals, under which gmsh's mesh still changed): one key, one mesh (issue 22);
+#                  5: profiles that end inside the body's disc continued straight (closure "extend"),
 #                    wheel bodies limited to 0.75 of the radius, default body size 16
 #                    (studies/fe_far_field_limit.py);
 #                  4: bodies swept piece from piece (no boolean fragment): other tetrahedra, numbers
@@ -717,9 +719,11 @@ def body_key(body: BodyModel, patch: StripPatch, G: float, nu: float, settings: 
 
 
 def cached_body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
-                          settings: FESettings = FESettings(), *, cache=None) -> BodyInfluence:
+                          settings: FESettings = FESettings(), *, cache=None,
+                          strict_cache: bool = False) -> BodyInfluence:
     """:func:`body_influence` through the NPZ cache (``cache``: a Cache, a folder, None = default,
-    False = no cache)."""
+    False = no cache).  ``strict_cache``: a failed cache write raises CacheWriteError (else it
+    is warned about and the numbers are returned uncached)."""
     from conformal.influence.cache import Cache
 
     if cache is False:
@@ -735,7 +739,7 @@ def cached_body_influence(body: BodyModel, patch: StripPatch, G: float, nu: floa
                      f"dx={patch.dx:.4g} G={G:g} nu={nu:g} {settings.method} P{settings.mesh.order}")
         return {"kernel": r.kernel}, stats
 
-    arrays, hit = c.get_or_compute(inputs, compute)
+    arrays, hit = c.get_or_compute(inputs, compute, strict=strict_cache)
     if not hit:
         return result["r"]
     meta = c.meta(c.key(inputs)) or {}

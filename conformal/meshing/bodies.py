@@ -178,8 +178,12 @@ class BodyModel:
 
     def key(self) -> dict:
         """Everything that defines the body, for cache keys."""
+        # every bit (not rounded): gmsh's mesh changes with the last bits of its input (a rail body
+        # of 1 648 nodes got 1 645 .. 1 650 when its points moved by one unit in the last place), so
+        # a key rounded to 12 decimals held different meshes and numbers (issue 22: 15 732, 15 744
+        # and 15 750 unknowns under one key); -0.0 is written as 0.0
         return {"kind": self.kind, "axle_z": self.axle_z,
-                "y": self.profile.y.round(12).tolist(), "z": self.profile.z.round(12).tolist()}
+                "y": (self.profile.y + 0.0).tolist(), "z": (self.profile.z + 0.0).tolist()}
 
 
 @dataclass(frozen=True)
@@ -245,7 +249,7 @@ class StripPatch:
         return max(self.mx * self.dx, float(self.edges[-1] - self.edges[0]))
 
     def key(self) -> dict:
-        return {"mx": self.mx, "dx": self.dx, "s_edges": [round(v, 12) for v in self.s_edges]}
+        return {"mx": self.mx, "dx": self.dx, "s_edges": [float(v) + 0.0 for v in self.s_edges]}   # every bit
 
 
 @dataclass(frozen=True)

@@ -121,7 +121,10 @@ class BodyMesh:
 
     def write(self, path) -> None:
         """Write the mesh with meshio (format from the suffix, e.g. .vtu, .msh, .xdmf)."""
-        self.to_meshio().write(str(path))
+        from conformal.files import atomic_path
+
+        with atomic_path(path, keep_suffix=True) as tmp:
+            self.to_meshio().write(str(tmp))
 
 
 # ----------------------------------------------------------------------------- coordinates

@@ -43,8 +43,9 @@ from pathlib import Path
 import numpy as np
 
 from conformal.errors import ConformalError, InputError
+from conformal.files import read_npz, save_npz_atomic
 from conformal.tables.spec import N_OUT, TableSpec, creepages_of_node, saturation_scales
-from conformal.tables.table import CreepTable, save_npz_atomic, save_table
+from conformal.tables.table import CreepTable, save_table
 
 #: code version of the node values (bump when the node solve changes)
 TABLE_VERSION = "1"
@@ -207,12 +208,12 @@ def read_chunk(folder: Path, chunk: Chunk) -> dict | None:
     if not path.is_file():
         return None
     try:
-        with np.load(path, allow_pickle=False) as z:
-            ok = (str(z["digest"]) == chunk.spec.digest() and int(z["start"]) == chunk.start
-                  and int(z["stop"]) == chunk.stop and z["values"].shape == (chunk.stop - chunk.start, N_OUT)
-                  and np.all(np.isfinite(z["values"])))
-            return {"values": z["values"], "converged": z["converged"], "wall_s": float(z["wall_s"])} if ok else None
-    except (OSError, ValueError, KeyError, EOFError):
+        z = read_npz(path)
+        ok = (str(z["digest"]) == chunk.spec.digest() and int(z["start"]) == chunk.start
+              and int(z["stop"]) == chunk.stop and z["values"].shape == (chunk.stop - chunk.start, N_OUT)
+              and np.all(np.isfinite(z["values"])))
+        return {"values": z["values"], "converged": z["converged"], "wall_s": float(z["wall_s"])} if ok else None
+    except (OSError, ValueError, KeyError, TypeError):   # unreadable, truncated or foreign: solved again
         return None
 
 
@@ -412,11 +413,11 @@ def add_patch(table_path: str | Path | None, box: tuple, q, out: str | Path, *, 
         path = _chunk_path(folder, task.index)
         if path.is_file():
             try:
-                with np.load(path, allow_pickle=False) as z:
-                    if str(z["digest"]) == key and np.all(np.isfinite(z["values"])):
-                        done[task.index] = {"values": z["values"], "converged": z["converged"],
-                                            "wall_s": float(z["wall_s"])}
-            except (OSError, ValueError, KeyError, EOFError):
+                z = read_npz(path)
+                if str(z["digest"]) == key and np.all(np.isfinite(z["values"])):
+                    done[task.index] = {"values": z["values"], "converged": z["converged"],
+                                        "wall_s": float(z["wall_s"])}
+            except (OSError, ValueError, KeyError, TypeError):   # unreadable or truncated: solved again
                 pass
     todo = [task for task in plan if task.index not in done]
     solved: dict[int, dict] = {}

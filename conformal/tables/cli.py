@@ -43,10 +43,12 @@ def add_parsers(sub) -> None:
 
 
 def cmd_build(args) -> int:
+    from conformal.files import check_output_path
     from conformal.tables.build import build_table
     from conformal.tables.spec import load_spec
 
     spec = load_spec(args.spec)
+    check_output_path(args.out, "--out", (".npz",))        # before the build, not after it
     rep = build_table(spec, args.out, workers=args.workers, scheduler=args.scheduler,
                       progress=not args.no_progress)
     for label, why in rep.failed:
@@ -69,6 +71,7 @@ def _ranges(text: str, n: int, what: str) -> list[float]:
 
 def cmd_refine(args) -> int:
     from conformal.errors import InputError
+    from conformal.files import check_output_path
     from conformal.tables.build import add_patch, midpoints
     from conformal.tables.table import load_table
 
@@ -79,6 +82,7 @@ def cmd_refine(args) -> int:
     q = midpoints(load_table(args.table).spec, q_lo, q_hi)
     if q.size == 0:
         raise InputError(f"--q: no q cell midpoint in [{q_lo:g}, {q_hi:g}]")
+    check_output_path(args.out, "--out", (".npz",))
     rep = add_patch(args.table, tuple(int(v) for v in box), q, args.out, workers=args.workers,
                     scheduler=args.scheduler, progress=not args.no_progress)
     for label, why in rep.failed:

@@ -67,6 +67,11 @@ SATURATION = 3.0
 #: number of outputs per node (fx, fy, mz of Eq. T2)
 N_OUT = 3
 AXES = ("ln_ratio", "nu", "s", "theta", "q")
+#: most nodes of a table (each is an exact solve; the node values alone take 24 bytes each, the plan
+#: of a build one task per ``chunk`` nodes): the shipped table has 486 720
+MAX_NODES = 10_000_000
+#: most elements across the short axis of an exact solve's box (its memory and time grow as grid_n^4)
+MAX_GRID_N = 400
 
 
 @dataclass(frozen=True)
@@ -138,8 +143,13 @@ class TableSpec:
         for lo, hi, n in (("ratio_min", "ratio_max", "n_ratio"), ("nu_min", "nu_max", "n_nu")):
             if (getattr(self, lo) == getattr(self, hi)) != (getattr(self, n) == 1):
                 bad(n, f"must be 1 exactly when {lo} = {hi}")
-        if self.grid_n < 4:
-            bad("grid_n", f"must be >= 4, got {self.grid_n}")
+        if not 4 <= self.grid_n <= MAX_GRID_N:
+            bad("grid_n", f"must lie in 4 .. {MAX_GRID_N}, got {self.grid_n}")
+        n = math.prod(self.shape)
+        if n > MAX_NODES:
+            raise InputError(f"SPEC [table] n_ratio x n_nu x n_rho x n_theta x n_spin: "
+                             f"{' x '.join(str(k) for k in self.shape)} = {n:.3g} nodes, more than "
+                             f"{MAX_NODES:,}; use fewer nodes")
         if not 0 < self.tol < 0.1:
             bad("tol", f"must lie in (0, 0.1), got {self.tol}")
 

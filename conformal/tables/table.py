@@ -42,7 +42,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
 import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -51,6 +50,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from conformal.errors import ConformalError, InputError
+from conformal.files import read_npz, save_npz_atomic
 from conformal.tables.spec import N_OUT, TableSpec, polar, saturation_scales
 
 #: format version of the NPZ file
@@ -171,22 +171,6 @@ def _patch_arrays(patches: tuple) -> dict:
     return out
 
 
-def save_npz_atomic(path: str | Path, *, compressed: bool = False, **arrays) -> Path:
-    """Write ``arrays`` to the NPZ ``path`` atomically: a temporary file in the same folder, then
-    a rename (tables, their build chunks and patch slices)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "wb") as f:
-            (np.savez_compressed if compressed else np.savez)(f, **arrays)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return path
-
-
 def save_table(table: CreepTable, path: str | Path) -> Path:
     """Write ``table`` to ``path`` atomically (:func:`save_npz_atomic`)."""
     meta_text = _meta_text(table.meta)
@@ -226,9 +210,8 @@ def load_table(path: str | Path | None = None) -> CreepTable:
         return cached[1]
     _require_npz(path)
     try:
-        with np.load(path, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-    except (OSError, ValueError, EOFError) as exc:
+        data = read_npz(path)
+    except (OSError, ValueError) as exc:
         raise InputError(f"creep table: cannot read {path}: {exc}") from None
     missing = {"values", "c11", "c22", "c23", "meta", "content_hash", "format"} - set(data)
     if missing:

@@ -44,6 +44,7 @@ from typing import Callable, Iterable
 import numpy as np
 
 from conformal.errors import ConvergenceError, InputError
+from conformal.files import write_text
 from conformal.grid import PlanarGrid
 from conformal.influence.halfspace import HalfSpaceInfluence
 from conformal.solvers.krylov import gmres as krylov_gmres
@@ -285,9 +286,7 @@ def set_convergence_header(lines: list[str], path: Path = C33_FILE) -> None:
     head = [ln for ln in text if ln.startswith("#") and not ln.startswith(CONVERGENCE_PREFIX)]
     body = [ln for ln in text if not ln.startswith("#")]
     new = head + [f"# {ln}" for ln in lines] + body
-    tmp = Path(path).with_suffix(".tmp")
-    tmp.write_text("\n".join(new) + "\n", encoding="utf-8")
-    tmp.replace(path)
+    write_text(path, "\n".join(new) + "\n")
 
 
 def write_tables(rows: Iterable[tuple[str, float, float, ExactCoefficients]], header: list[str],
@@ -296,14 +295,11 @@ def write_tables(rows: Iterable[tuple[str, float, float, ExactCoefficients]], he
     rows = list(rows)
     kept = _convergence_lines(c33_path)  # the convergence study's header lines survive a rewrite
     comments = "".join(f"# {h}\n" for h in header) + "".join(kept)
-    with open(c33_path, "w", encoding="utf-8") as f:
-        f.write(comments + "branch,g,nu,C33\n")
-        for branch, g, nu, c in rows:
-            f.write(f"{branch},{g:g},{nu:g},{c.C33:.4g}\n")
-    with open(full_path, "w", encoding="utf-8") as f:
-        f.write(comments + "branch,g,nu,C11,C22,C23,C33\n")
-        for branch, g, nu, c in rows:
-            f.write(f"{branch},{g:g},{nu:g},{c.C11:.4g},{c.C22:.4g},{c.C23:.4g},{c.C33:.4g}\n")
+    write_text(c33_path, comments + "branch,g,nu,C33\n"
+               + "".join(f"{branch},{g:g},{nu:g},{c.C33:.4g}\n" for branch, g, nu, c in rows))
+    write_text(full_path, comments + "branch,g,nu,C11,C22,C23,C33\n"
+               + "".join(f"{branch},{g:g},{nu:g},{c.C11:.4g},{c.C22:.4g},{c.C23:.4g},{c.C33:.4g}\n"
+                         for branch, g, nu, c in rows))
 
 
 # ----------------------------------------------------------------------------- grid convergence
