@@ -283,10 +283,7 @@ def write_contact_file(target, kernel: np.ndarray, *, dx: float, dy: float, G: f
     if hasattr(target, "write"):
         target.write(text)
         return
-    path = Path(target)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text, encoding="ascii")
-    os.replace(tmp, path)
+    write_text(target, text, encoding="ascii")
 
 
 def _numbers(line: str, name: str, lineno: int) -> list[float]:
