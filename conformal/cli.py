@@ -167,7 +167,7 @@ def _sweep_solve(scene, args) -> int:
     out = Path(args.out)
     check_output_path(str(out / "sweep_solved.csv"), "--out")
     table = solve_sweep(scene, parse_shifts(args.shift), workers=args.workers, progress=True)
-    table.to_csv(out / "sweep_solved.csv")
+    write_text(out / "sweep_solved.csv", table.to_csv())
     table.to_json(out / "sweep_solved.json")
     for r in table.rows():
         vals = "  ".join(f"{k}={r[k]:.5g}" if isinstance(r[k], float) else f"{k}={r[k]}"

@@ -42,8 +42,6 @@ SLOW = {"spence35.inp", "catt_to_cart.inp", "tractcurv.inp", "tractcurve_plast.i
 #: cases where the project differs from CONTACT: (what differs, the warning the case carries or
 #: None); the test checks that each one still differs (a fix shows up as a failure: remove it)
 KNOWN = {
-    # mu = 1e-4, aluminium on steel, FX = 0 prescribed: the steady solver does not converge
-    ("bentall.inp", 2): ("xi", "tangential problem: not converged"),
     # one transient step of dq = 2 dx from zero tractions (P = 2, T = 2), FX prescribed: xi -0.04434
     # against -0.04500, adhesion 485 against 466 elements (FN, FX, pmax agree)
     ("testbank.inp", 17): ("xi", None),

@@ -20,7 +20,6 @@ import csv
 import io
 import json
 import math
-import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Sequence
@@ -28,6 +27,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from conformal.errors import ConformalError, InputError
+from conformal.files import save_figure, write_text
 
 #: totals per position: (column, unit, description)
 TOTALS = (
@@ -124,13 +124,13 @@ class SweepTable:
             w.writerow(row + [self.errors[i] or ""])
         text = buf.getvalue()
         if path is not None:
-            _write_atomic(Path(path), text)
+            write_text(path, text)
         return text
 
     def to_json(self, path: str | Path | None = None) -> str:
         text = json.dumps(self.to_dict(), indent=1)
         if path is not None:
-            _write_atomic(Path(path), text + "\n")
+            write_text(path, text + "\n")
         return text
 
     def segments(self, values: np.ndarray) -> list[slice]:
@@ -188,17 +188,7 @@ class SweepTable:
         fig.suptitle(title or f"{self.scene}: {self.theory} ({self.influence}) against lateral shift; "
                      "lines break at contact jumps")
         fig.tight_layout()
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(path).with_name(Path(path).name + ".tmp" + Path(path).suffix)
-        fig.savefig(tmp, dpi=110)
-        os.replace(tmp, path)
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
+        save_figure(fig, path, dpi=110)
 
 
 def parse_shifts(shift: str | float | Sequence[float]) -> list[float]:

@@ -7,11 +7,11 @@
 """
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from conformal.files import atomic_path, save_figure
 
 _COMPONENTS = (("sigma_xx", 0, 0), ("sigma_yy", 1, 1), ("sigma_zz", 2, 2), ("sigma_xy", 0, 1),
                ("sigma_xz", 0, 2), ("sigma_yz", 1, 2))
@@ -38,16 +38,8 @@ def write_stress_vtu(sf, path: str | Path) -> Path:
                 depth=np.broadcast_to(sf.depths[:, None, None], (nd, n1, n2)).ravel().copy())
     cells = [("hexahedron", _hexahedra(nd, n1, n2))] if min(nd, n1, n2) > 1 else [("vertex", np.arange(len(pts))[:, None])]
     mesh = meshio.Mesh(pts, cells, point_data=data)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(suffix=".vtu", dir=path.parent)
-    os.close(fd)
-    try:
+    with atomic_path(path, keep_suffix=True) as tmp:
         meshio.write(tmp, mesh)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
     return path
 
 
@@ -107,18 +99,7 @@ def plot_stress_field(sf, path: str | Path, title: str = "", dang_van_alpha: flo
     ax4.legend(fontsize=7)
     if title:
         fig.suptitle(title)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=110)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return path
+    return save_figure(fig, path, dpi=110)
 
 
 def plot_section_comparison(points, sigma_hs, sigma_fe, path, title: str = "", surface=None) -> Path:
@@ -152,18 +133,7 @@ def plot_section_comparison(points, sigma_hs, sigma_fe, path, title: str = "", s
         fig.colorbar(m, ax=ax, label="N/mm²")
     if title:
         fig.suptitle(title)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=110)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return path
+    return save_figure(fig, path, dpi=110)
 
 
 def plot_section_3d(result, points, values, path, *, title: str = "", label: str = "von Mises (N/mm²)",
@@ -198,15 +168,9 @@ def plot_section_3d(result, points, values, path, *, title: str = "", label: str
     pl.camera.position = tuple(c + span * np.array([-2.2, -0.5, -0.9]))
     pl.camera.up = (0.0, 0.0, -1.0)
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(suffix=".png", dir=path.parent)
-    os.close(fd)
     try:
-        pl.screenshot(tmp)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
+        with atomic_path(path, keep_suffix=True) as tmp:
+            pl.screenshot(tmp)
     finally:
         pl.close()
-        if os.path.exists(tmp):
-            os.unlink(tmp)
     return path

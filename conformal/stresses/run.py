@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from conformal.errors import InputError
+from conformal.files import write_text
 from conformal.result import _jsonable
 from conformal.scene import scene_from_dict
 from conformal.stresses.fatigue import (ALPHA_DV, K_SHEAR, TAU_E, FatigueParameters, surface_index,
@@ -216,9 +217,7 @@ def surface_curve(result) -> np.ndarray | None:
 def cmd_stresses(args) -> int:
     """``conformal stresses SCENE.toml [--depth D] [--k K] [--vtu OUT.vtu] [--plot OUT.png] [--json OUT.json]``."""
     import json
-    import os
     import sys
-    import tempfile
 
     from conformal.solve import solve_scene
 
@@ -239,13 +238,7 @@ def cmd_stresses(args) -> int:
     text = json.dumps(summary, indent=2)
     print(text)
     if args.json:
-        p = Path(args.json)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(suffix=".json", dir=p.parent)
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text + "\n")
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, p)
+        write_text(args.json, text + "\n")
     best = int(np.argmax([r["max_von_mises"] for r in summary["patches"]]))
     code = 0
     if args.vtu:
