@@ -462,7 +462,7 @@ def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
 
 #: writers that create or overwrite a file in place; conformal/files.py wraps them
 RAW_WRITERS = re.compile(r"""open\([^)]*["'][wax]b?\+?["']|\.write_text\(|\.write_bytes\(|np\.savez|np\.save\(|"""
-                         r"""\.savefig\(|meshio\.write\(|\)\.write\(str\(|\.screenshot\(str\(|\.to_csv\(|"""
+                         r"""\.savefig\(|meshio\.write\(|\)\.write\(str\(|\.screenshot\(str\(|\.to_csv\([^)]|"""
                          r"""tofile\(|mkstemp\(""")
 
 
