@@ -110,7 +110,7 @@ def main(argv=None) -> int:
         for rec in report:
             f.write(",".join(str(rec[k]) if isinstance(rec[k], str) else f"{rec[k]:.6g}" for k in keys) + "\n")
     finest = {k: max(abs(rec[f"{k}_err_finest_pct"]) for rec in report) for k in ("C11", "C22", "C23")}
-    print(f"largest deviation from Kalker's table, extrapolated: " + ", ".join(f"{k} {v:.2f} %" for k, v in worst.items()))
+    print("largest deviation from Kalker's table, extrapolated: " + ", ".join(f"{k} {v:.2f} %" for k, v in worst.items()))
     print(f"largest deviation from Kalker's table, finest grid n = {ns[-1]}: "
           + ", ".join(f"{k} {v:.2f} %" for k, v in finest.items()))
     if not args.quick:

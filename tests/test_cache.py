@@ -2,8 +2,6 @@
 the ``conformal cache`` command."""
 from __future__ import annotations
 
-import json
-import warnings
 import zipfile
 
 import numpy as np

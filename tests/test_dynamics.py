@@ -5,7 +5,6 @@ Short simulated times and coarse contact tables keep this file fast.  References
 """
 from __future__ import annotations
 
-import copy
 import json
 import math
 import subprocess
@@ -19,11 +18,10 @@ import pytest
 from conformal.dynamics.contact import C, interpolation_error, normal_force
 from conformal.dynamics.model import build_model, equilibrium
 from conformal.dynamics.scene import EXAMPLE, load_vehicle_scene, scene_from_dict
-from conformal.dynamics.simulate import COLUMNS, integrate_model, simulate
+from conformal.dynamics.simulate import integrate_model, simulate
 from conformal.dynamics.stability import (hunting_mode, linear_critical_speed, linear_inputs,
                                           linear_onset_time_domain)
 from conformal.errors import InputError
-from conformal.materials import Material
 from conformal.theories.hertz import hertz_from_curvatures
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -62,7 +60,7 @@ def test_each_wheel_carries_W_at_rest():
     # independent: the static overlap is Hertz's approach under FN = W / n_z (curvatures of the search)
     row = m.table.data[int(round(-m.table.y0 / m.table.step)), 0]
     assert row[C["Kh"]] > 0
-    from conformal.geometry.search import find_contacts, touch_height
+    from conformal.geometry.search import touch_height
     from conformal.geometry.placement import make_pair
     from conformal.dynamics import contact as dc
     wc, rc, fbp = dc._curves(m.table.geometry)

@@ -1,5 +1,4 @@
 """Empirical creep-force laws: Kalker 1968 (seed Eqs. 18, 20) and Johnson-Vermeulen 1964."""
-import json
 import math
 from pathlib import Path
 

@@ -6,7 +6,6 @@ against the tabulated closed forms of Love 1929 and Kalker 1990) and the closed 
 """
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -18,7 +17,7 @@ import conformal
 from conformal.errors import InputError
 from conformal.influence import fe
 from conformal.influence.fe import FESettings, FESolveError, body_influence, settings_from_options
-from conformal.influence.fe_halfspace3d import (_displacement_local, _point_displacement_local, _point_stress_local,
+from conformal.influence.fe_halfspace3d import (_point_displacement_local, _point_stress_local,
                                                 _stress_from, point_displacement, rectangle_displacement,
                                                 rectangle_stress)
 from conformal.influence.halfspace import single_body_influence

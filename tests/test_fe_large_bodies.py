@@ -17,7 +17,7 @@ from conformal.influence.fe import FESettings, body_influence
 from conformal.materials import Material
 from conformal.meshing.bodies import BodyModel, Profile2D, StripPatch
 from conformal.meshing.gmsh_body import MeshSpec
-from conformal.scene import Load, load_scene
+from conformal.scene import load_scene
 from conformal.solve import solve_scene
 from conformal.theories.hertz import hertz_from_curvatures
 

@@ -1,6 +1,5 @@
 """Kalker's linear theory (seed Eq. 13) against the coefficient table and CONTACT's exact
 results at small creepage."""
-import json
 import math
 from pathlib import Path
 

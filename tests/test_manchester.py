@@ -2,7 +2,6 @@
 
 The full table (every shift, both wheels, 0.2 mm elements) is studies/manchester_a22.py.
 """
-import json
 from dataclasses import replace
 from pathlib import Path
 

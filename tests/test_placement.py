@@ -1,5 +1,4 @@
 """Track and wheelset placement against CONTACT's Manchester benchmark set-up (reference A5)."""
-import json
 import math
 from pathlib import Path
 

@@ -2,7 +2,6 @@
 tests/reference/contact_cases.json (computed there from Johnson's and Kalker's formulas) and
 against their own integrals (the traction must integrate to the force)."""
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest

@@ -20,7 +20,6 @@ import pytest
 from conformal.grid import PlanarGrid
 from conformal.result import TractionField
 from conformal.stresses.fatigue import FatigueParameters, dang_van, surface_index
-from conformal.stresses.field import stress_field
 from conformal.stresses.halfspace import curved_planes, planar_planes, stresses
 from conformal.stresses.invariants import principal_shear, von_mises
 

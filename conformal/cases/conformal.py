@@ -21,8 +21,8 @@ from typing import Any
 import numpy as np
 from scipy.optimize import brentq
 
-from conformal.cases.wheelrail import (curved_creepages, loaded_state, patch_info, wheel_surface_slip,
-                                       wheelset_motion)
+from conformal.cases.wheelrail import (curved_creepages, loaded_state, patch_info, secant_on_hertz_growth,
+                                       wheel_surface_slip, wheelset_motion)
 from conformal.errors import ConvergenceError, InputError
 from conformal.geometry.patches import Patch, curved_grid_for_patch
 from conformal.geometry.wheelrail import profile_curves
@@ -564,25 +564,9 @@ def _common_lowering(fz, dz0: float, W: float, tol: float = 1e-5) -> float:
     """The lowering dz with fz(dz) = 0 (fz = FZ(dz) - W, increasing): secant steps on
     (FZ/W)^(2/3), nearly linear in dz for Hertz-like growth, until |fz| <= tol W; Brent's method on
     the bracket found if the secant steps do not settle in 8 solves."""
-    def g(dz):
-        return math.copysign(abs(fz(dz) / W + 1.0) ** (2.0 / 3.0), fz(dz) + W) - 1.0
-
-    x0, x1 = dz0, dz0 * 1.02 + 1e-6
-    g0, g1 = g(x0), g(x1)
-    pts = [(x0, g0), (x1, g1)]
-    for _ in range(8):
-        if abs(fz(x1)) <= tol * W:
-            return x1
-        if g1 == g0:
-            break
-        x0, g0, x1 = x1, g1, x1 - g1 * (x1 - x0) / (g1 - g0)
-        g1 = g(x1)
-        pts.append((x1, g1))
-    neg = [x for x, v in pts if v < 0]
-    pos = [x for x, v in pts if v > 0]
-    if not (neg and pos):
-        raise ConvergenceError("[grid] strips: could not find the common wheelset height of the separate strips")
-    return brentq(fz, max(neg), min(pos), xtol=1e-12, rtol=1e-10)
+    return secant_on_hertz_growth(fz, W, dz0, dz0 * 1.02 + 1e-6, tol=tol, maxit=8, xtol=1e-12, rtol=1e-10,
+                                  message="[grid] strips: could not find the common wheelset height of the "
+                                          "separate strips")
 
 
 def _part_summary(r: Result, k: int) -> dict:

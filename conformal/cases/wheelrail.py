@@ -373,30 +373,13 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
     def f(dz: float) -> float:
         return sum(fn * wk for fn, wk in zip(fns_at(dz), w)) - W
 
-    def g(dz: float) -> float:
-        v = f(dz) / W + 1.0
-        return math.copysign(abs(v) ** (2.0 / 3.0), v) - 1.0
-
     main = max(range(len(pgs)), key=lambda k: pgs[k].approach)
     a_m, c_m = pgs[main].approach, c[main]
     F0 = f(0.0) + W
     x0 = 0.0
     x1 = (a_m * ((W / F0) ** (2.0 / 3.0) - 1.0) / c_m) if F0 > 0 else a_m / c_m
-    g0, g1 = g(x0), g(x1)
-    pts = [(x0, g0), (x1, g1)]
-    for _ in range(12):
-        if abs(f(x1)) <= 1e-7 * W:
-            return x1, fns_at(x1)
-        if g1 == g0:
-            break
-        x0, g0, x1 = x1, g1, x1 - g1 * (x1 - x0) / (g1 - g0)
-        g1 = g(x1)
-        pts.append((x1, g1))
-    neg = [x for x, v in pts if v < 0]
-    pos = [x for x, v in pts if v > 0]
-    if not (neg and pos):
-        raise ConvergenceError("[load] wheel_load: the linearised vertical balance did not settle")
-    x = brentq(f, max(neg), min(pos), xtol=1e-10, rtol=1e-12)
+    x = secant_on_hertz_growth(f, W, x0, x1, tol=1e-7, maxit=12, xtol=1e-10, rtol=1e-12,
+                               message="[load] wheel_load: the linearised vertical balance did not settle")
     return x, fns_at(x)
 
 
@@ -951,7 +934,7 @@ def curved_problems_from_wheel_rail(scene: Scene):
     pl, st, _ = loaded_state(scene)
     wheel = pl.pair.wheel(st.z)
     out = []
-    geo, g, k = scene.geometry, scene.grid, scene.kinematics
+    geo, g = scene.geometry, scene.grid
     for i, pg in enumerate(st.patches):
         grid, h, approach = curved_grid_for_patch(wheel, pl.pair.rail, pg.patch, element_size=geo.element_size,
                                                   n=g.n, scale=g.scale, side=pl.pair.side, theory=scene.model.theory)
@@ -962,3 +945,30 @@ def curved_problems_from_wheel_rail(scene: Scene):
             info.update(xi_s=c.xi, eta_s=c.eta, phi_s=c.phi, rolling_velocity_s=c.velocity)
         out.append((grid, h, approach, info))
     return out
+
+
+def secant_on_hertz_growth(f, W: float, x0: float, x1: float, *, tol: float, maxit: int, xtol: float,
+                           rtol: float, message: str) -> float:
+    """The lowering dz with f(dz) = 0, f = F(dz) - W increasing (a total force against its target W):
+    secant steps on (F/W)^(2/3) - 1, nearly linear in dz for Hertz-like growth, from x0, x1 until
+    |f| <= tol W; Brent's method on the bracket the steps found if they do not settle in ``maxit``
+    steps; ConvergenceError(``message``) without a bracket."""
+    def g(dz: float) -> float:
+        v = f(dz) / W + 1.0
+        return math.copysign(abs(v) ** (2.0 / 3.0), v) - 1.0
+
+    g0, g1 = g(x0), g(x1)
+    pts = [(x0, g0), (x1, g1)]
+    for _ in range(maxit):
+        if abs(f(x1)) <= tol * W:
+            return x1
+        if g1 == g0:
+            break
+        x0, g0, x1 = x1, g1, x1 - g1 * (x1 - x0) / (g1 - g0)
+        g1 = g(x1)
+        pts.append((x1, g1))
+    neg = [x for x, v in pts if v < 0]
+    pos = [x for x, v in pts if v > 0]
+    if not (neg and pos):
+        raise ConvergenceError(message)
+    return brentq(f, max(neg), min(pos), xtol=xtol, rtol=rtol)

@@ -47,7 +47,6 @@ growing normal load on dissimilar bodies (35 stages: the stick ratio c/a stays c
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
 import numpy as np
