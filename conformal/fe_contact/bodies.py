@@ -292,8 +292,10 @@ def section_pair(rail: BodyModel, p1: StripPatch, wheel: BodyModel, p2: StripPat
         xp = 0.5 * patch.mx * patch.dx
         slave = (mesh.slave * xp, c - mesh.slave * half, c + mesh.slave * half)
         xr = xp + margin
+        # a solid block (no thin web) takes elements up to a tenth of its margin far away
+        h_max = mesh.section_h_max if not sec.name.startswith("block") else max(mesh.section_h_max, 0.2 * margin)
         m = mesh_section_body(body, sec, patch, slave, (-xr, xr), h0=patch.dx, growth=mesh.growth,
-                              h_max=max(mesh.section_h_max, patch.dx), reach=4.0 * size)
+                              h_max=max(h_max, patch.dx), reach=4.0 * size)
         m.stats["section_note"] = sec.note
         m.stats["margin_mm"] = margin
         bodies.append(m)
