@@ -169,33 +169,61 @@ def share_below(rec: dict, s_split: float | None) -> float | None:
     return float(f[s < s_split].sum() / f.sum())
 
 
-def run_scene(name: str, scene, quick: bool, parts: Path) -> dict:
+def run_scene(name: str, scene, quick: bool, parts: Path, only_variants=None, only_models=None) -> dict:
+    """Run (or complete) one scene: entries already in parts/<scene>.json with the same options
+    are kept, the missing ones computed, so that a scene can be extended run by run."""
     truth_opts = QUICK_TRUTH if quick else TRUTH
     variants = QUICK_VARIANTS if quick else VARIANTS
+    path = parts / f"{name}.json"
+    old = json.loads(path.read_text()) if path.exists() else {}
+    if old.get("truth_options") != truth_opts or old.get("wheel_load") != scene.load.wheel_load:
+        old = {}
     rec: dict = {"scene": name, "measured_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
-                 "wheel_load": scene.load.wheel_load, "truth_options": truth_opts}
-    print(f"{name}: truth {truth_opts}", flush=True)
-    rec["truth"] = _fe_contact(scene, truth_opts)
+                 "wheel_load": scene.load.wheel_load, "truth_options": truth_opts,
+                 "variants": {}, "models": {}}
+
+    def save():
+        _summarise(rec)
+        _write_json(path, rec)
+
+    if "truth" in old:
+        rec["truth"] = old["truth"]
+    else:
+        print(f"{name}: truth {truth_opts}", flush=True)
+        rec["truth"] = _fe_contact(scene, truth_opts)
     _say(name, "truth", rec["truth"])
-    rec["variants"] = {}
+    save()
     for label, extra in variants.items():
-        r = _fe_contact(scene, dict(truth_opts, **extra))
-        rec["variants"][label] = r
-        _say(name, label, r)
-    rec["models"] = {}
-    for label, fn in (("conformal half-space", lambda: _conformal(scene, "halfspace")),
-                      ("conformal FE", lambda: _conformal(scene, "fe")),
-                      ("fe_contact disc", lambda: _fe_contact(scene, {"fec_n": 3, "fec_order": 1} if quick else {}))):
-        if quick and label == "conformal FE":
+        o = old.get("variants", {}).get(label)
+        if only_variants is not None and label not in only_variants and o is None:
             continue
-        try:
-            rec["models"][label] = fn()
-            _say(name, label, rec["models"][label])
-        except Exception as exc:   # reported, not hidden
-            rec["models"][label] = {"error": f"{type(exc).__name__}: {exc}"}
-            print(f"{name} {label}: FAILED {exc}", flush=True)
-    _summarise(rec)
-    _write_json(parts / f"{name}.json", rec)
+        opts = dict(truth_opts, **extra)
+        rec["variants"][label] = o if o is not None and o.get("options") == opts else _fe_contact(scene, opts)
+        _say(name, label, rec["variants"][label])
+        save()
+    disc = {"fec_n": 3, "fec_order": 1} if quick else {}
+    models = [("conformal half-space", lambda: _conformal(scene, "halfspace")),
+              ("conformal FE", lambda: _conformal(scene, "fe")),
+              ("fe_contact disc", lambda: _fe_contact(scene, disc)),
+              ("fe_contact disc, body size 2", lambda: _fe_contact(scene, dict(disc, fec_body_size=2.0)))]
+    if quick:
+        models = models[:1]
+    for label, fn in models:
+        o = old.get("models", {}).get(label)
+        if only_models is not None and label not in only_models and o is None:
+            continue
+        if o is not None and "FN" in o:
+            rec["models"][label] = o
+        else:
+            try:
+                rec["models"][label] = fn()
+            except Exception as exc:   # reported, not hidden
+                rec["models"][label] = {"error": f"{type(exc).__name__}: {exc}"}
+                print(f"{name} {label}: FAILED {exc}", flush=True)
+                save()
+                continue
+        _say(name, label, rec["models"][label])
+        save()
     return rec
 
 
@@ -312,13 +340,15 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--scenes", nargs="*")
     ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument("--variants", nargs="*", help="truth variants to run (default: all)")
+    ap.add_argument("--models", nargs="*", help="models to run (default: all)")
     args = ap.parse_args(argv)
     out = args.out
     t0 = time.perf_counter()
     for name, sc in scenes(args.quick):
         if args.scenes and name not in args.scenes:
             continue
-        run_scene(name, sc, args.quick, out / "parts")
+        run_scene(name, sc, args.quick, out / "parts", args.variants, args.models)
     build(out)
     write_sidecar(out, __file__, vars(args) | {"out": str(out)}, {"wall_s": time.perf_counter() - t0})
     return 0
