@@ -76,9 +76,10 @@ def test_section_bodies_are_clamped_far_away_and_never_use_the_halfspace_field()
 
 @pytest.mark.slow
 def test_ground_truth_quick_study_agrees_with_conformal(tmp_path):
-    """The quick study (flange root at 6.2 mm, 10 kN; coarse truth: a / 3, quadratic, bodies 10 and 20
-    patch sizes beyond the patch): the clamped whole bodies agree with conformal half-space
-    contact at the prescribed wheel load, and the body size no longer matters."""
+    """The quick study (flange root at 6.2 mm, 10 kN; a coarse truth: a / 3, quadratic, the 60E1
+    section and the wheel rim + web 10 patch sizes beyond the patch, clamped): at the prescribed
+    wheel load conformal contact with half-space numbers meets the issue's targets against it
+    (measured: FN -0.4 %, pmax -0.2 %, area +3.0 %; the converged a / 6 truth: README)."""
     sys.path.insert(0, str(ROOT / "studies"))
     import fe_ground_truth as study
 
@@ -86,10 +87,10 @@ def test_ground_truth_quick_study_agrees_with_conformal(tmp_path):
     rec = study.build(tmp_path)["scenes"][0]
     t = rec["truth"]
     assert t["mesh1"]["section"] == "60E1 section" and t["mesh2"]["section"] == "wheel rim and web"
-    assert not t["edge"]
-    size = rec["convergence"]["larger body"]
-    assert abs(size["FN"]) < 0.005 and abs(size["pmax"]) < 0.005
+    assert t["stats"]["far_field"] == "clamped"
+    assert not t["edge"]                                  # the contact lies inside the slave surface
     hs = rec["models"]["conformal half-space"]["err"]
     assert abs(hs["FN"]) < 0.01
-    assert abs(hs["pmax"]) < 0.03            # the coarse truth (a / 3): see the README for a / 6 and a / 8
+    assert abs(hs["pmax"]) < 0.02
+    assert abs(hs["area"]) < 0.05
     assert (tmp_path / "ground_truth.md").exists() and (tmp_path / "ground_truth.png").exists()
