@@ -46,7 +46,8 @@ OUT = ROOT / "studies" / "out" / "fe_ground_truth"
 
 #: the reference truth mesh and its two convergence variants (a finer mesh, a larger body)
 TRUTH = {"fec_body": "section", "fec_n": 6, "fec_section_size": 20.0}
-VARIANTS = {"finer mesh": {"fec_n": 8}, "larger body": {"fec_section_size": 40.0}}
+VARIANTS = {"finer mesh": {"fec_n": 8}, "larger body": {"fec_section_size": 40.0},
+            "solid blocks": {"fec_body": "block"}}
 QUICK_TRUTH = {"fec_body": "section", "fec_n": 3, "fec_section_size": 10.0}
 QUICK_VARIANTS: dict = {}     # the quick run (the slow test): the coarse truth and conformal half-space only
 DEEP_LOAD = 2500.0     # N, vertical wheel load of the deep pair (prescribed; about its 0.05 mm approach)

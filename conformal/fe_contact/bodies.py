@@ -51,7 +51,9 @@ class ContactMesh:
         (the whole grid; semi-axis: half its smaller extent / 1.1).
     body : wheel-rail scenes: "disc" (the profile inside a disc around the patch, cut faces with the
         half-space field or clamped) or "section" (the ground truth: the whole rail section and the
-        wheel's rim and web, clamped far away, :func:`section_pair`).
+        wheel's rim and web, clamped far away, :func:`section_pair`) or "block" (solid blocks around
+        both profiles, their ends continued straight, clamped far away: large bodies without the
+        thin web, :func:`~conformal.geometry.sections.block_section`).
     section_size : "section" bodies: the rail's ends and the wheel's sector cuts lie this many
         patch sizes beyond the patch (on each side).
     section_h_max : "section" bodies: the largest element (mm).
@@ -72,8 +74,8 @@ class ContactMesh:
     slave: float = 1.6
 
     def __post_init__(self):
-        if self.body not in ("disc", "section"):
-            raise InputError(f"[model] fec_body: must be \"disc\" or \"section\", got {self.body!r}")
+        if self.body not in ("disc", "section", "block"):
+            raise InputError(f"[model] fec_body: must be \"disc\", \"section\" or \"block\", got {self.body!r}")
         if self.estimate not in ("halfspace", "grid"):
             raise InputError(f"[model] fec_estimate: must be \"halfspace\" or \"grid\", got {self.estimate!r}")
         if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
@@ -248,12 +250,12 @@ def wheel_rail_pair(grid, rail_points: np.ndarray, wheel_points: np.ndarray, mat
     p2 = strip_patch(x_half, float(w_lo), float(w_hi), h)
     M = _wheel_axes(grid)
     origin = np.asarray(grid.wheel_centre, dtype=float) + float(grid.wheel_radius) * M[:, 2]
-    if mesh.body == "section":
+    if mesh.body in ("section", "block"):
         return section_pair(rail, p1, wheel, p2, material, mesh, rotation2=M, origin2=origin)
     return _pair(rail, p1, wheel, p2, material, mesh, rotation2=M, origin2=origin)
 
 
-def body_section(body: BodyModel, extension: float):
+def body_section(body: BodyModel, extension: float, block: bool = False):
     """The whole cross-section of a wheel-rail body (:mod:`conformal.geometry.sections`): the 60E1
     rail section under a symmetric UIC 60 / 60E1 head (ends on both flanks at the same depth,
     35 mm), the rim and web under a wheel profile that starts at its flange back (y = -70, as
@@ -262,6 +264,8 @@ def body_section(body: BodyModel, extension: float):
     from conformal.geometry.sections import block_section, uic60_section, wheel_rim_section
 
     P = np.column_stack([body.profile.y, body.profile.z])
+    if block:
+        return block_section(P, body.kind, extension)
     if body.kind == "rail":
         head = abs(P[0, 1] - P[-1, 1]) < 1e-6 and abs(P[0, 0] + P[-1, 0]) < 1e-3 and 30 < P[-1, 0] < 40
         if head and 30.0 <= P[-1, 1] < 39.0 and np.min(P[:, 1]) > -1e-3:
@@ -284,7 +288,7 @@ def section_pair(rail: BodyModel, p1: StripPatch, wheel: BodyModel, p2: StripPat
     for body, patch in ((rail, p1), (wheel, p2)):
         size = patch.size
         margin = mesh.section_size * size
-        sec = body_section(body, margin)
+        sec = body_section(body, margin, block=mesh.body == "block")
         if sec.n_profile != len(body.profile.y):
             raise InputError(f"{body.kind} section: profile mismatch")
         e = patch.edges

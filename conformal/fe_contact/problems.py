@@ -25,7 +25,8 @@ key                default    meaning
 ``fec_solver``     auto       "auto" (pypardiso if installed, else scipy splu), "splu", "pardiso"
 ``fec_body``       disc       wheel-rail: "disc" (profile inside a disc around the patch) or "section"
                               (ground truth: whole rail section and wheel rim + web, clamped far away;
-                              the far field is then "clamped", no half-space field anywhere)
+                              the far field is then "clamped", no half-space field anywhere) or "block"
+                              (solid blocks around both profiles, clamped far away)
 ``fec_section_size``  20      "section": rail ends and wheel sector cuts, patch sizes beyond the patch
 ``fec_section_h_max`` 12      "section": largest element (mm)
 ``fec_slave``      1.6        "section": contact candidates = the patch enlarged by this factor
@@ -82,7 +83,7 @@ def settings_from_options(options: Mapping[str, Any] | None) -> tuple[ContactMes
                 raise InputError(f"[model] {k}: must be a number, got {v!r}")
             mesh_kw[_MESH_KEYS[k]] = float(v)
     mesh = ContactMesh(**mesh_kw)
-    if mesh.body == "section":
+    if mesh.body in ("section", "block"):
         # the ground truth: clamped far away on the real bodies, no half-space field anywhere
         if solver_kw.get("far_field", "clamped") != "clamped":
             raise InputError("[model] fec_far_field: fec_body = \"section\" is clamped far away; "
@@ -127,7 +128,7 @@ def run_quadratic(problem) -> FEContactRun:
     hz = problem.require_hertz("theory \"fe_contact\"")
     mesh, st = settings_from_options(problem.model.options)
     if mesh.body != "disc":
-        raise InputError("[model] fec_body: \"section\" needs a wheel-rail scene (a quadratic scene has no real bodies)")
+        raise InputError(f"[model] fec_body: \"{mesh.body}\" needs a wheel-rail scene (a quadratic scene has no real bodies)")
     b1, b2 = quadratic_pair(hz.A, hz.B, (hz.a, hz.b), problem.material, mesh)
     if problem.approach is not None:
         sol = solve_contact(b1, b2, approach=problem.approach, settings=st)
