@@ -65,6 +65,7 @@ def test_block_section_extends_the_profile_and_clamps_only_the_closure():
 def test_section_bodies_are_clamped_far_away_and_never_use_the_halfspace_field():
     mesh, st = settings_from_options({"fec_body": "section"})
     assert mesh.body == "section" and st.far_field == "clamped" and mesh.section_size == 20.0
+    assert settings_from_options({"fec_body": "block"})[1].far_field == "clamped"
     assert settings_from_options({})[1].far_field == "halfspace"          # existing default kept
     with pytest.raises(InputError, match="fec_far_field"):
         settings_from_options({"fec_body": "section", "fec_far_field": "halfspace"})
