@@ -47,7 +47,8 @@ OUT = ROOT / "studies" / "out" / "fe_ground_truth"
 #: the reference truth mesh and its two convergence variants (a finer mesh, a larger body)
 TRUTH = {"fec_body": "section", "fec_n": 6, "fec_section_size": 20.0}
 VARIANTS = {"finer mesh": {"fec_n": 8}, "larger body": {"fec_section_size": 40.0},
-            "solid blocks": {"fec_body": "block"}}
+            "solid blocks": {"fec_body": "block"},
+            "solid blocks, larger body": {"fec_body": "block", "fec_section_size": 40.0}}
 QUICK_TRUTH = {"fec_body": "section", "fec_n": 3, "fec_section_size": 10.0}
 QUICK_VARIANTS: dict = {}     # the quick run (the slow test): the coarse truth and conformal half-space only
 DEEP_LOAD = 2500.0     # N, vertical wheel load of the deep pair (prescribed; about its 0.05 mm approach)
@@ -322,7 +323,7 @@ def _plot(recs, path: Path) -> None:
     for ax, rec in zip(axes[0], recs):
         t = rec["truth"]
         ax.plot(t["profile_s"], t["profile_p"], "k-", lw=2, label="truth (section, clamped)")
-        for (label, r), st in zip(rec["variants"].items(), ("k:", "C3:")):
+        for (label, r), st in zip(rec["variants"].items(), ("k:", "C3:", "C5:", "C6:")):
             ax.plot(r["profile_s"], r["profile_p"], st, lw=1.5, label=f"truth, {label}")
         for (label, r), st in zip(rec["models"].items(), ("C0-", "C1--", "C2-.", "C4-.")):
             if "FN" in r and r["profile_s"]:
