@@ -15,7 +15,9 @@ current default FE bodies) and fe_contact with its default disc bodies (half-spa
 cut faces): FN, pmax, contact area and the load split (share of FN on the flank side of the
 truth's pressure minimum between the root and flank lobes, where there is one).  The truth's
 own convergence: a finer mesh (fec_n) and a larger body (fec_section_size), each against the
-reference run.
+reference run; and the same bodies replaced by solid blocks (``fec_body = "block"``: both profiles
+continued straight and closed by clamped rectangles, no thin webs) at 20 and 40 patch sizes, which
+separates the structural deflection of the webs from the contact.
 
 Outputs in studies/out/fe_ground_truth/: parts/<scene>.json (one per scene, ``--scenes`` runs a
 subset), ground_truth.json/.md/.png built from all parts, run.json (provenance).
