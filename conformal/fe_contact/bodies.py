@@ -291,6 +291,9 @@ def section_pair(rail: BodyModel, p1: StripPatch, wheel: BodyModel, p2: StripPat
         sec = body_section(body, margin, block=mesh.body == "block")
         if sec.n_profile != len(body.profile.y):
             raise InputError(f"{body.kind} section: profile mismatch")
+        if body.revolved and float(sec.points[:, 1].min()) <= float(body.axle_z) + 10.0:
+            raise InputError(f"wheel {sec.name}: reaches {-float(sec.points[:, 1].min()):.0f} mm towards the axle, "
+                             f"beyond the wheel radius {-float(body.axle_z):.0f} mm; reduce [model] fec_section_size")
         e = patch.edges
         c, half = 0.5 * (e[0] + e[-1]), 0.5 * (e[-1] - e[0])
         xp = 0.5 * patch.mx * patch.dx
