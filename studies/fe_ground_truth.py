@@ -184,7 +184,8 @@ def run_scene(name: str, scene, quick: bool, parts: Path, only_variants=None, on
         old = {}
     rec: dict = {"scene": name, "measured_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
                  "wheel_load": scene.load.wheel_load, "truth_options": truth_opts,
-                 "variants": {}, "models": {}}
+                 "variants": {k: v for k, v in old.get("variants", {}).items() if "FN" in v},
+                 "models": {k: v for k, v in old.get("models", {}).items() if "FN" in v}}
 
     def save():
         _summarise(rec)
@@ -202,7 +203,14 @@ def run_scene(name: str, scene, quick: bool, parts: Path, only_variants=None, on
         if only_variants is not None and label not in only_variants and o is None:
             continue
         opts = dict(truth_opts, **extra)
-        rec["variants"][label] = o if o is not None and o.get("options") == opts else _fe_contact(scene, opts)
+        if o is None or o.get("options") != opts:
+            try:
+                rec["variants"][label] = _fe_contact(scene, opts)
+            except Exception as exc:   # reported, not hidden
+                rec["variants"][label] = {"error": f"{type(exc).__name__}: {exc}", "options": opts}
+                print(f"{name} {label}: FAILED {exc}", flush=True)
+                save()
+                continue
         _say(name, label, rec["variants"][label])
         save()
     disc = {"fec_n": 3, "fec_order": 1} if quick else {}
@@ -249,6 +257,8 @@ def _summarise(rec: dict) -> None:
     t["split"] = share_below(t, s_split)
     conv = {}
     for label, r in rec["variants"].items():
+        if "FN" not in r:
+            continue
         r["split"] = share_below(r, s_split)
         conv[label] = {q: r[q] / t[q] - 1.0 for q in ("FN", "pmax", "area")}
     rec["convergence"] = conv
@@ -302,6 +312,8 @@ def build(out: Path) -> dict:
     lines += ["", "Truth meshes:", ""]
     for rec in recs:
         for label, r in [("reference", rec["truth"])] + list(rec["variants"].items()):
+            if "FN" not in r:
+                continue
             st = r["stats"]
             lines.append(f"- {rec['scene']}, {label}: {r['options']}, h = {r['h_contact']:.3f} mm, "
                          f"{r['n_unknowns']} unknowns ({st['dofs_body1']} rail, {st['dofs_body2']} wheel), "
@@ -326,6 +338,8 @@ def _plot(recs, path: Path) -> None:
         t = rec["truth"]
         ax.plot(t["profile_s"], t["profile_p"], "k-", lw=2, label="truth (section, clamped)")
         for (label, r), st in zip(rec["variants"].items(), ("k:", "C3:", "C5:", "C6:")):
+            if "FN" not in r:
+                continue
             ax.plot(r["profile_s"], r["profile_p"], st, lw=1.5, label=f"truth, {label}")
         for (label, r), st in zip(rec["models"].items(), ("C0-", "C1--", "C2-.", "C4-.")):
             if "FN" in r and r["profile_s"]:
