@@ -340,11 +340,15 @@ def _plot(recs, path: Path) -> None:
     for ax, rec in zip(axes[0], recs):
         t = rec["truth"]
         ax.plot(t["profile_s"], t["profile_p"], "k-", lw=2, label="truth (section, clamped)")
-        for (label, r), st in zip(rec["variants"].items(), ("k:", "C3:", "C5:", "C6:")):
+        styles = {"finer mesh": "k:", "larger body": "C3:", "solid blocks": "C5--",
+                  "solid blocks, larger body": "C6:", "conformal half-space": "C0-", "conformal FE": "C1--",
+                  "fe_contact disc": "C2-.", "fe_contact disc, body size 2": "C4-."}
+        for label, r in rec["variants"].items():
             if "FN" not in r:
                 continue
-            ax.plot(r["profile_s"], r["profile_p"], st, lw=1.5, label=f"truth, {label}")
-        for (label, r), st in zip(rec["models"].items(), ("C0-", "C1--", "C2-.", "C4-.")):
+            ax.plot(r["profile_s"], r["profile_p"], styles.get(label, "k:"), lw=1.5, label=f"truth, {label}")
+        for label, r in rec["models"].items():
+            st = styles.get(label, "C7-")
             if "FN" in r and r["profile_s"]:
                 ax.plot(r["profile_s"], r["profile_p"], st, lw=1.2, label=label)
         if rec.get("s_split") is not None:
@@ -353,7 +357,7 @@ def _plot(recs, path: Path) -> None:
         ax.set_xlabel("s - s_ref along the rail profile [mm]")
         ax.set_ylabel("pressure at x = 0 [N/mm²]")
         ax.grid(alpha=0.3)
-    axes[0][0].legend(fontsize=7)
+        ax.legend(fontsize=6)
     fig.tight_layout()
     tmp = path.with_name(path.stem + ".tmp.png")
     fig.savefig(tmp, dpi=110)
