@@ -14,6 +14,11 @@ around it enlarged by ``fec_patch`` (its half extents times fec_patch), clipped 
 narrow contact (the deep groove: 0.75 mm wide, 12 mm long) so gets elements that resolve its
 width, a wide one no finer elements than it needs.  ``fec_estimate = "grid"``: the whole grid is
 the patch and a = half its smaller extent / 1.1.
+
+Bodies (``[model] fec_body``): "disc" (default; quasi-quarter spaces cut out of the profiles,
+half-space field or clamped on the cut faces), "section" (the ground truth on real bodies: the
+60E1 rail section and the wheel's rim and web, clamped far away) or "block" (solid blocks around
+both profiles, clamped far away): :func:`conformal.fe_contact.bodies.section_pair`.
 """
 from __future__ import annotations
 

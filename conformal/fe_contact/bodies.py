@@ -49,6 +49,16 @@ class ContactMesh:
     estimate : wheel-rail scenes: "halfspace" (contact semi-axis and fine patch from a half-space
         solve on the same grid, :func:`conformal.cases.fe_contact.contact_estimate`) or "grid"
         (the whole grid; semi-axis: half its smaller extent / 1.1).
+    body : wheel-rail scenes: "disc" (the profile inside a disc around the patch, cut faces with the
+        half-space field or clamped) or "section" (the ground truth: the whole rail section and the
+        wheel's rim and web, clamped far away, :func:`section_pair`) or "block" (solid blocks around
+        both profiles, their ends continued straight, clamped far away: large bodies without the
+        thin web, :func:`~conformal.geometry.sections.block_section`).
+    section_size : "section" bodies: the rail's ends and the wheel's sector cuts lie this many
+        patch sizes beyond the patch (on each side).
+    section_h_max : "section" bodies: the largest element (mm).
+    slave : "section" bodies: the contact candidate surface is the patch enlarged by this factor
+        (its half extents).
     """
 
     n: int = 4
@@ -58,13 +68,20 @@ class ContactMesh:
     body_size: float = 1.0
     patch: float = 1.3
     estimate: str = "halfspace"
+    body: str = "disc"
+    section_size: float = 20.0
+    section_h_max: float = 12.0
+    slave: float = 1.6
 
     def __post_init__(self):
+        if self.body not in ("disc", "section", "block"):
+            raise InputError(f"[model] fec_body: must be \"disc\", \"section\" or \"block\", got {self.body!r}")
         if self.estimate not in ("halfspace", "grid"):
             raise InputError(f"[model] fec_estimate: must be \"halfspace\" or \"grid\", got {self.estimate!r}")
         if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
             raise InputError(f"[model] fec_n: must be a whole number >= 1, got {self.n!r}")
-        for name in ("growth", "h_max", "body_size", "patch") + (("h",) if self.h is not None else ()):
+        for name in ("growth", "h_max", "body_size", "patch", "section_size", "section_h_max", "slave") + (
+                ("h",) if self.h is not None else ()):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v > 0):
                 raise InputError(f"[model] fec_{name}: must be a number > 0, got {v!r}")
@@ -233,4 +250,62 @@ def wheel_rail_pair(grid, rail_points: np.ndarray, wheel_points: np.ndarray, mat
     p2 = strip_patch(x_half, float(w_lo), float(w_hi), h)
     M = _wheel_axes(grid)
     origin = np.asarray(grid.wheel_centre, dtype=float) + float(grid.wheel_radius) * M[:, 2]
+    if mesh.body in ("section", "block"):
+        return section_pair(rail, p1, wheel, p2, material, mesh, rotation2=M, origin2=origin)
     return _pair(rail, p1, wheel, p2, material, mesh, rotation2=M, origin2=origin)
+
+
+def body_section(body: BodyModel, extension: float, block: bool = False):
+    """The whole cross-section of a wheel-rail body (:mod:`conformal.geometry.sections`): the 60E1
+    rail section under a symmetric UIC 60 / 60E1 head (ends on both flanks at the same depth,
+    35 mm), the rim and web under a wheel profile that starts at its flange back (y = -70, as
+    S1002 and the EN 13715 profiles); any other profile gets a clamped block (its ends continued
+    straight by ``extension``, :func:`~conformal.geometry.sections.block_section`)."""
+    from conformal.geometry.sections import block_section, uic60_section, wheel_rim_section
+
+    P = np.column_stack([body.profile.y, body.profile.z])
+    if block:
+        return block_section(P, body.kind, extension)
+    if body.kind == "rail":
+        head = abs(P[0, 1] - P[-1, 1]) < 1e-6 and abs(P[0, 0] + P[-1, 0]) < 1e-3 and 30 < P[-1, 0] < 40
+        if head and 30.0 <= P[-1, 1] < 39.0 and np.min(P[:, 1]) > -1e-3:
+            return uic60_section(P)
+        return block_section(P, "rail", extension)
+    if abs(P[0, 0] + 70.0) < 0.5 and P[-1, 0] > P[0, 0] and P[-1, 0] < 65.0:
+        return wheel_rim_section(P, -float(body.axle_z))
+    return block_section(P, "wheel", extension)
+
+
+def section_pair(rail: BodyModel, p1: StripPatch, wheel: BodyModel, p2: StripPatch, material: Material,
+                 mesh: ContactMesh, rotation2=None, origin2=None) -> tuple[ContactBody, ContactBody]:
+    """The ground-truth bodies: whole sections (:func:`body_section`) swept over ``mesh.section_size``
+    patch sizes beyond the patch on each side (the rail's ends, the wheel sector's cuts), clamped
+    there and at the foot / hub, graded from the patch element size with ``mesh.growth`` up to
+    ``mesh.section_h_max`` (mm).  The contact candidates: the patch enlarged by ``mesh.slave``."""
+    from conformal.meshing.section_body import mesh_section_body
+
+    bodies = []
+    for body, patch in ((rail, p1), (wheel, p2)):
+        size = patch.size
+        margin = mesh.section_size * size
+        sec = body_section(body, margin, block=mesh.body == "block")
+        if sec.n_profile != len(body.profile.y):
+            raise InputError(f"{body.kind} section: profile mismatch")
+        if body.revolved and float(sec.points[:, 1].min()) <= float(body.axle_z) + 10.0:
+            raise InputError(f"wheel {sec.name}: reaches {-float(sec.points[:, 1].min()):.0f} mm towards the axle, "
+                             f"beyond the wheel radius {-float(body.axle_z):.0f} mm; reduce [model] fec_section_size")
+        e = patch.edges
+        c, half = 0.5 * (e[0] + e[-1]), 0.5 * (e[-1] - e[0])
+        xp = 0.5 * patch.mx * patch.dx
+        slave = (mesh.slave * xp, c - mesh.slave * half, c + mesh.slave * half)
+        xr = xp + margin
+        # a solid block (no thin web) takes elements up to a tenth of its margin far away
+        h_max = mesh.section_h_max if not sec.name.startswith("block") else max(mesh.section_h_max, 0.2 * margin)
+        m = mesh_section_body(body, sec, patch, slave, (-xr, xr), h0=patch.dx, growth=mesh.growth,
+                              h_max=max(h_max, patch.dx), reach=4.0 * size)
+        m.stats["section_note"] = sec.note
+        m.stats["margin_mm"] = margin
+        bodies.append(m)
+    kw = {} if rotation2 is None else {"rotation": rotation2, "origin": origin2}
+    return (ContactBody(bodies[0], material.G1, material.nu1),
+            ContactBody(bodies[1], material.G2, material.nu2, **kw))

@@ -23,6 +23,13 @@ key                default    meaning
                               the grid ("grid"), see :mod:`conformal.cases.fe_contact`
 ``fec_far_field``  halfspace  cut faces: "halfspace" (Boussinesq field) or "clamped"
 ``fec_solver``     auto       "auto" (pypardiso if installed, else scipy splu), "splu", "pardiso"
+``fec_body``       disc       wheel-rail: "disc" (profile inside a disc around the patch) or "section"
+                              (ground truth: whole rail section and wheel rim + web, clamped far away;
+                              the far field is then "clamped", no half-space field anywhere) or "block"
+                              (solid blocks around both profiles, clamped far away)
+``fec_section_size``  20      "section": rail ends and wheel sector cuts, patch sizes beyond the patch
+``fec_section_h_max`` 12      "section": largest element (mm)
+``fec_slave``      1.6        "section": contact candidates = the patch enlarged by this factor
 =================  =========  ===========================================================
 """
 from __future__ import annotations
@@ -41,9 +48,10 @@ from conformal.files import atomic_path
 from conformal.result import Result
 
 _MESH_KEYS = {"fec_n": "n", "fec_h": "h", "fec_growth": "growth", "fec_h_max": "h_max",
-              "fec_body_size": "body_size", "fec_patch": "patch"}
+              "fec_body_size": "body_size", "fec_patch": "patch", "fec_section_size": "section_size",
+              "fec_section_h_max": "section_h_max", "fec_slave": "slave"}
 _SOLVER_KEYS = {"fec_order": "order", "fec_far_field": "far_field", "fec_solver": "solver"}
-_STRING_MESH_KEYS = {"fec_estimate": "estimate"}
+_STRING_MESH_KEYS = {"fec_estimate": "estimate", "fec_body": "body"}
 KEYS = tuple(sorted(_MESH_KEYS) + sorted(_STRING_MESH_KEYS) + sorted(_SOLVER_KEYS))
 
 
@@ -60,7 +68,7 @@ def settings_from_options(options: Mapping[str, Any] | None) -> tuple[ContactMes
         raise InputError(f"[model] {unknown[0]}: unknown FE contact key (known: {', '.join(KEYS)})")
     mesh_kw, solver_kw = {}, {}
     for k, v in opts.items():
-        if k in ("fec_far_field", "fec_solver", "fec_estimate"):
+        if k in ("fec_far_field", "fec_solver", "fec_estimate", "fec_body"):
             if not isinstance(v, str):
                 raise InputError(f"[model] {k}: must be a string, got {v!r}")
             if k in _STRING_MESH_KEYS:
@@ -75,7 +83,14 @@ def settings_from_options(options: Mapping[str, Any] | None) -> tuple[ContactMes
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise InputError(f"[model] {k}: must be a number, got {v!r}")
             mesh_kw[_MESH_KEYS[k]] = float(v)
-    return ContactMesh(**mesh_kw), FEContactSettings(**solver_kw)
+    mesh = ContactMesh(**mesh_kw)
+    if mesh.body in ("section", "block"):
+        # the ground truth: clamped far away on the real bodies, no half-space field anywhere
+        if solver_kw.get("far_field", "clamped") != "clamped":
+            raise InputError("[model] fec_far_field: fec_body = \"section\" is clamped far away; "
+                             f"\"{solver_kw['far_field']}\" is not available with it")
+        solver_kw["far_field"] = "clamped"
+    return mesh, FEContactSettings(**solver_kw)
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,6 +119,7 @@ def common_extra(sol: FEContactSolution, mesh: ContactMesh, st: FEContactSetting
             "pmax_nodal": sol.pmax_nodal, "n_unknowns": sol.n_unknowns,
             "n_contact_nodes": int(sol.active.sum()), "F_load": sol.F_load,
             "fe_contact": {"n": mesh.n, "h": mesh.h, "estimate": mesh.estimate, "order": st.order, "growth": mesh.growth,
+                           "body": mesh.body, "section_size": mesh.section_size, "section_h_max": mesh.section_h_max,
                            "h_max": mesh.h_max, "body_size": mesh.body_size, "far_field": st.far_field,
                            **sol.stats}}
 
@@ -112,6 +128,8 @@ def run_quadratic(problem) -> FEContactRun:
     """Mesh and solve a quadratic (Hertzian) :class:`~conformal.problem.ContactProblem`."""
     hz = problem.require_hertz("theory \"fe_contact\"")
     mesh, st = settings_from_options(problem.model.options)
+    if mesh.body != "disc":
+        raise InputError(f"[model] fec_body: \"{mesh.body}\" needs a wheel-rail scene (a quadratic scene has no real bodies)")
     b1, b2 = quadratic_pair(hz.A, hz.B, (hz.a, hz.b), problem.material, mesh)
     if problem.approach is not None:
         sol = solve_contact(b1, b2, approach=problem.approach, settings=st)
