@@ -168,11 +168,9 @@ def solve_deck(parsed: ParsedDeck, cases=None):
             chain = chain[:keep[-1] + 1]
         first, p0 = chain[0]
         if getattr(first, "module", 3) == 1:
-            from conformal.contact_inp.solve1 import summary as summary1
-            from conformal.scene import scene_from_dict
-            from conformal.solve import solve_scene
+            from conformal.contact_inp.solve1 import solve_case, summary as summary1
 
-            yield summary1(first, solve_scene(scene_from_dict(p0, base_dir=parsed.path.parent, name=p0["name"])))
+            yield summary1(first, solve_case(first, p0, parsed.path.parent))
             continue
         T0 = first.digits["T"]
         if len(chain) == 1 and (T0 in (0, 3) or (T0 == 1 and first.digits["P"] == 2)):

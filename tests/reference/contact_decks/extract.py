@@ -22,7 +22,7 @@ HERE = Path(__file__).resolve().parent
 
 
 #: header lines whose next line holds the values the tests read
-_HEADERS = ("FN ", "FN/G", "NPOT", "FX(TR)", "XCP(TR)")
+_HEADERS = ("FN ", "FN/G", "NPOT", "FX(TR)", "XCP(TR)", "VX_WS", "BAR_FN", "TILDE_FN")
 
 
 def trimmed_ref_out(text: str) -> str:
