@@ -59,7 +59,8 @@ def test_public_deck_against_contact(name):
     entry = SUPPORTED[name]
     parsed = read_deck(DECKS / name, ignore_subsurface=True, ignore_temperature=True)
     pl = plan(parsed)
-    assert sum(len(chain) for chain in pl.chains) == entry["supported"]
+    # cases with friction over the profile (V = 1) that the solve found not constant over a patch
+    assert sum(len(chain) for chain in pl.chains) == entry["supported"] + len(entry.get("refused_after_solve", []))
     ok = [c.number for chain in pl.chains for c, _ in chain if getattr(c, "module", 3) == 3]
     ok = [n for n in ok if SUBSET.get(name, lambda n: True)(n)]
     ref = read_ref_out((DECKS / name).with_suffix(".ref_out").read_text(encoding="utf-8"))
@@ -138,18 +139,19 @@ def test_wheelrail_deck_against_contact(name, cases):
 #: forces -0.9, -0.4, -1.0 %.  The issue's targets: the groove's pitch within 1 %, the flange FN within 2 %.
 CONFORMAL_TOL = {
     "groove_li.inp": {"pitch_creepage": 1.0, "FN": 0.5, "pmax": 0.5, "n_contact": 1.0, "FZ_track": 0.01,
-                      "FX_track": 0.01, "FY_track": 0.01, "bar_FN": 0.5, "angle": 0.5},
+                      "FX_track": 0.01, "FY_track": 0.01, "bar_FN": 0.5, "angle": 0.5, "FX": 0.1, "bar_FS": 0.1},
     "mbench_conf.inp": {"FN": 2.0, "bar_FN": 2.0, "FX": 2.0, "bar_FS": 2.0, "pmax": 1.0, "n_contact": 1.0,
                         "angle": 1.0, "FX_track": 2.0, "FY_track": 2.0, "FZ_track": 2.0},
 }
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name, case", [("groove_li.inp", 1), ("groove_li.inp", 4), ("mbench_conf.inp", 1)])
+@pytest.mark.parametrize("name, case", [("groove_li.inp", 1), ("mbench_conf.inp", 1)])
 def test_conformal_deck_against_contact(name, case):
     """CONTACT's conformal decks (module 1, D = 4) through ``conformal inp``: groove_li (free
-    rolling, FX_WS = 0 prescribed with F = 1, the pitch solved; R 10.25 and 10.02 mm) and
-    mbench_conf (Z_WS prescribed with N = 0, friction over the profile V = 1, two patches)."""
+    rolling, FX_WS = 0 prescribed with F = 1, the pitch solved; R 10.25 mm, about 30 s; case 4,
+    R 10.02 mm, passes too but takes 2 minutes: README) and mbench_conf (Z_WS prescribed with N = 0,
+    friction over the profile V = 1, two patches; about 6 s)."""
     from conformal.contact_inp.refout import compare_conformal, read_ref_out_wheelrail
 
     parsed = read_deck(DECKS / name)
