@@ -47,7 +47,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _provenance import output_dir, write_sidecar  # noqa: E402
 
 from conformal.cases.conformal import solve_wheel_rail_conformal  # noqa: E402
-from conformal.contact_inp.solve1 import deck_scene  # noqa: E402
+from conformal.contact_inp.deck import deck_scene  # noqa: E402
 from conformal.scene import scene_from_dict  # noqa: E402
 
 TB = ROOT / "tests" / "reference" / "contact_testbank"
@@ -71,7 +71,7 @@ GROOVE_CASE = {"1025": 1, "1010": 2, "1005": 3, "1002": 4}          # groove_li.
 
 def groove_scene(radius: str, model: dict):
     """groove_li case of that groove, read from CONTACT's deck by ``conformal inp``'s reader
-    (conformal.contact_inp.solve1.deck_scene), the [model] keys replaced by ``model``."""
+    (conformal.contact_inp.deck.deck_scene), the [model] keys replaced by ``model``."""
     raw = deck_scene(TB / "groove_li.inp", GROOVE_CASE[radius], **model)
     return scene_from_dict(raw, base_dir=TB, name=f"groove_li_{radius}")
 

@@ -209,7 +209,7 @@ def mbench_conf(influence="halfspace_planar"):
     -4.3481124 rad/s, G = 82 GPa, DX = DS = 0.2 mm, two patches solved separately.  CONTACT's
     friction varies with the contact angle (0.2 below -20 degrees, 0.3 above -10 degrees); both
     patches lie below -21 degrees, so mu = 0.2."""
-    from conformal.contact_inp.solve1 import deck_scene
+    from conformal.contact_inp.deck import deck_scene
 
     raw = deck_scene(TB / "mbench_conf.inp", 1, influence=influence)
     assert raw["friction"]["mu_static"] == 0.2 and raw["grid"]["strips"] == "separate"

@@ -184,3 +184,18 @@ def solve_deck(parsed: ParsedDeck, cases=None):
         for (c, _), r in zip(chain, hist.steps):
             if want is None or c.number in want:
                 yield summary(c, r)
+
+
+def deck_scene(path, number: int, **model) -> dict:
+    """The scene dict of case ``number`` of a module-1 deck (profiles beside it), with ``[model]``
+    keys replaced by ``model`` (e.g. ``influence="halfspace"`` to compare the project's own model
+    on CONTACT's case)."""
+    from conformal.contact_inp.solve1 import scene_of
+
+    path = Path(path)
+    cases = {c.number: c for c in read_deck(path).cases}
+    if number not in cases or getattr(cases[number], "module", 3) != 1:
+        raise unsupported(path.name, 0, f"case {number} is not a module-1 case of the deck")
+    raw = scene_of(cases[number], path.parent)
+    raw["model"] = {**raw["model"], **model}
+    return raw

@@ -131,21 +131,6 @@ def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None)
     return raw
 
 
-def deck_scene(path, number: int, **model) -> dict:
-    """The scene dict of case ``number`` of a module-1 deck (profiles beside it), with ``[model]``
-    keys replaced by ``model`` (e.g. ``influence="halfspace"`` to compare the project's own model
-    on CONTACT's case)."""
-    from conformal.contact_inp.deck import read_deck
-
-    path = Path(path)
-    cases = {c.number: c for c in read_deck(path).cases}
-    if number not in cases or getattr(cases[number], "module", 3) != 1:
-        raise unsupported(path.name, 0, f"case {number} is not a module-1 case of the deck")
-    raw = scene_of(cases[number], path.parent)
-    raw["model"] = {**raw["model"], **model}
-    return raw
-
-
 def solve_case(case: Module1Case, raw: dict, base_dir: Path):
     """Solve one case's scene; with friction varying over the profile (V = 1) check that it is
     constant over every patch's band of contact angles (solved once more with that value where the
