@@ -190,6 +190,19 @@ def test_conformal_decks_map_their_digits():
     assert constant_friction(table, -1.3, -0.36) == 0.2 and constant_friction(table, -0.4, -0.3) is None
 
 
+@pytest.mark.slow
+def test_friction_over_the_profile_that_changes_within_a_patch_is_refused(tmp_path):
+    """mbench_conf with the friction ramp moved to -30 .. -10 degrees: the gauge-corner patch
+    (about -21 .. -27 degrees) spans the ramp, so the case is refused naming V = 1 (after its solve,
+    about 6 s)."""
+    text = (DECKS / "mbench_conf.inp").read_text(encoding="latin-1").replace("  -20d    0.200", "  -30d    0.200", 1)
+    for name in ("MBench_S1002_v3.prw", "MBench_UIC60_v3.prr"):
+        (tmp_path / name).write_bytes((DECKS / name).read_bytes())
+    (tmp_path / "ramp.inp").write_text(text, encoding="latin-1")
+    with pytest.raises(Unsupported, match=r"V = 1 \(friction varying over the profile: not constant"):
+        list(solve_deck(read_deck(tmp_path / "ramp.inp")))
+
+
 def test_conformal_example_reproduces_contacts_digits():
     """examples/conformal cases 1, 2, 4 (45-degree conformal contact, R 10 in R 10.2, the deck gives
     the undeformed distance and case 4 the rigid slip per element): the exact solver with planar
