@@ -193,7 +193,7 @@ def test_conformal_decks_map_their_digits():
 @pytest.mark.slow
 def test_friction_over_the_profile_that_changes_within_a_patch_is_refused(tmp_path):
     """mbench_conf with the friction ramp moved to -30 .. -10 degrees: the gauge-corner patch
-    (about -21 .. -27 degrees) spans the ramp, so the case is refused naming V = 1 (after its solve,
+    (around -24 degrees) spans the ramp, so the case is refused naming V = 1 (after its solve,
     about 6 s)."""
     text = (DECKS / "mbench_conf.inp").read_text(encoding="latin-1").replace("  -20d    0.200", "  -30d    0.200", 1)
     for name in ("MBench_S1002_v3.prw", "MBench_UIC60_v3.prr"):
