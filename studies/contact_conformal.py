@@ -47,7 +47,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _provenance import output_dir, write_sidecar  # noqa: E402
 
 from conformal.cases.conformal import solve_wheel_rail_conformal  # noqa: E402
-from conformal.cases.wheelrail import place_scene  # noqa: E402
+from conformal.contact_inp.deck import deck_scene  # noqa: E402
 from conformal.scene import scene_from_dict  # noqa: E402
 
 TB = ROOT / "tests" / "reference" / "contact_testbank"
@@ -66,27 +66,21 @@ VARIANTS = {"contact": {"influence": "halfspace_planar"},
             "turned_contact_creep": {"influence": "halfspace", "creepage": "wheel_surface"}}
 
 
+GROOVE_CASE = {"1025": 1, "1010": 2, "1005": 3, "1002": 4}          # groove_li.inp, cases 1-4 (C3 = 2)
+
+
 def groove_scene(radius: str, model: dict):
-    return scene_from_dict({
-        "material": {"G": 80000.0, "nu": 0.28}, "friction": {"mu": 0.3},
-        "geometry": {"kind": "wheel_rail", "wheel_profile": "circ_r10.prw", "rail_profile": f"groove_r{radius}.prr",
-                     "placement": "single", "side": "right", "rail_cant": 0.0, "lateral_shift": 0.0,
-                     "wheel_radius": NOMRAD, "smoothing": 0.0, "element_size": DX, "element_size_s": DS},
-        "load": {"wheel_load": 10000.0}, "kinematics": {"speed": 420.0, "fx_rel": 0.0, "pitch_velocity": -1.0},
-        "model": {"theory": "conformal", **model}}, base_dir=TB, name=f"groove_li_{radius}")
+    """groove_li case of that groove, read from CONTACT's deck by ``conformal inp``'s reader
+    (conformal.contact_inp.deck.deck_scene), the [model] keys replaced by ``model``."""
+    raw = deck_scene(TB / "groove_li.inp", GROOVE_CASE[radius], **model)
+    return scene_from_dict(raw, base_dir=TB, name=f"groove_li_{radius}")
 
 
 def mbench_scene(model: dict, strips: str = "separate"):
-    raw = {"material": {"G": 82000.0, "nu": 0.28}, "friction": {"mu": 0.2},
-           "geometry": {"kind": "wheel_rail", "wheel_profile": "MBench_S1002_v3.prw",
-                        "rail_profile": "MBench_UIC60_v3.prr", "rail_cant": 0.025, "side": "right",
-                        "placement": "wheelset", "lateral_shift": 6.25, "yaw": 0.024, "roll": 0.0,
-                        "gauge": 1435.0, "gauge_height": 14.0, "flange_back": 1360.0, "flange_back_pos": -70.0,
-                        "wheel_radius": 460.0, "element_size": 0.2, "smoothing": 0.0},
-           "load": {"wheel_load": 10000.0}, "kinematics": {"speed": 2000.0, "pitch_velocity": -4.3481124},
-           "grid": {"strips": strips}, "model": {"theory": "conformal", **model}}
-    z_first = place_scene(scene_from_dict(raw, base_dir=TB)).z_first
-    raw["load"] = {"approach": 0.1720 - z_first}           # CONTACT's Z_WS = 0.1720 mm
+    """mbench_conf case 1 from CONTACT's deck (Z_WS = 0.1720 mm prescribed: the approach from the
+    first touch; friction 0.2, constant over both patches' angles), ``model`` and ``strips`` set."""
+    raw = deck_scene(TB / "mbench_conf.inp", 1, **model)
+    raw["grid"] = {**raw.get("grid", {}), "strips": strips}
     return scene_from_dict(raw, base_dir=TB, name="mbench_conf")
 
 

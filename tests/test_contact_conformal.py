@@ -20,7 +20,6 @@ import pytest
 
 from conformal.cases import solve_wheel_rail
 from conformal.cases.conformal import solve_wheel_rail_conformal
-from conformal.cases.wheelrail import place_scene
 from conformal.errors import InputError
 from conformal.scene import load_scene, scene_from_dict
 from conformal.solve import solve
@@ -205,20 +204,15 @@ def test_groove_li_free_rolling_in_contact_formulation(tmp_path):
 
 
 def mbench_conf(influence="halfspace_planar"):
-    """mbench_conf.inp, case 1: S1002 on UIC 60 (MBench v3 profiles), cant 1:40, y = 6.25 mm, yaw
-    24 mrad, Z_WS = 0.1720 mm prescribed, V = 2 m/s, pitch -4.3481124 rad/s, G = 82 GPa, DX = DS =
-    0.2 mm, two patches solved separately.  CONTACT's friction varies with the contact angle (0.2
-    below -20 degrees, 0.3 above -10 degrees); both patches lie below -21 degrees, so mu = 0.2."""
-    raw = {"material": {"G": 82000.0, "nu": 0.28}, "friction": {"mu": 0.2},
-           "geometry": {"kind": "wheel_rail", "wheel_profile": "MBench_S1002_v3.prw",
-                        "rail_profile": "MBench_UIC60_v3.prr", "rail_cant": 0.025, "side": "right",
-                        "placement": "wheelset", "lateral_shift": 6.25, "yaw": 0.024, "roll": 0.0,
-                        "gauge": 1435.0, "gauge_height": 14.0, "flange_back": 1360.0, "flange_back_pos": -70.0,
-                        "wheel_radius": 460.0, "element_size": 0.2, "smoothing": 0.0},
-           "load": {"wheel_load": 10000.0}, "kinematics": {"speed": 2000.0, "pitch_velocity": -4.3481124},
-           "grid": {"strips": "separate"}, "model": {"theory": "conformal", "influence": influence}}
-    z_first = place_scene(scene_from_dict(raw, base_dir=TB)).z_first
-    raw["load"] = {"approach": 0.1720 - z_first}
+    """mbench_conf.inp, case 1, read by ``conformal inp``'s reader: S1002 on UIC 60 (MBench v3
+    profiles), cant 1:40, y = 6.25 mm, yaw 24 mrad, Z_WS = 0.1720 mm prescribed, V = 2 m/s, pitch
+    -4.3481124 rad/s, G = 82 GPa, DX = DS = 0.2 mm, two patches solved separately.  CONTACT's
+    friction varies with the contact angle (0.2 below -20 degrees, 0.3 above -10 degrees); both
+    patches lie below -21 degrees, so mu = 0.2."""
+    from conformal.contact_inp.deck import deck_scene
+
+    raw = deck_scene(TB / "mbench_conf.inp", 1, influence=influence)
+    assert raw["friction"]["mu_static"] == 0.2 and raw["grid"]["strips"] == "separate"
     return scene_from_dict(raw, base_dir=TB, name="mbench_conf")
 
 

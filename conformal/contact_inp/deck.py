@@ -168,11 +168,9 @@ def solve_deck(parsed: ParsedDeck, cases=None):
             chain = chain[:keep[-1] + 1]
         first, p0 = chain[0]
         if getattr(first, "module", 3) == 1:
-            from conformal.contact_inp.solve1 import summary as summary1
-            from conformal.scene import scene_from_dict
-            from conformal.solve import solve_scene
+            from conformal.contact_inp.solve1 import solve_case, summary as summary1
 
-            yield summary1(first, solve_scene(scene_from_dict(p0, base_dir=parsed.path.parent, name=p0["name"])))
+            yield summary1(first, solve_case(first, p0, parsed.path.parent))
             continue
         T0 = first.digits["T"]
         if len(chain) == 1 and (T0 in (0, 3) or (T0 == 1 and first.digits["P"] == 2)):
@@ -186,3 +184,18 @@ def solve_deck(parsed: ParsedDeck, cases=None):
         for (c, _), r in zip(chain, hist.steps):
             if want is None or c.number in want:
                 yield summary(c, r)
+
+
+def deck_scene(path, number: int, **model) -> dict:
+    """The scene dict of case ``number`` of a module-1 deck (profiles beside it), with ``[model]``
+    keys replaced by ``model`` (e.g. ``influence="halfspace"`` to compare the project's own model
+    on CONTACT's case)."""
+    from conformal.contact_inp.solve1 import scene_of
+
+    path = Path(path)
+    cases = {c.number: c for c in read_deck(path).cases}
+    if number not in cases or getattr(cases[number], "module", 3) != 1:
+        raise unsupported(path.name, 0, f"case {number} is not a module-1 case of the deck")
+    raw = scene_of(cases[number], path.parent)
+    raw["model"] = {**raw["model"], **model}
+    return raw

@@ -51,6 +51,8 @@ class Module1State:
     velocity: tuple | None = None          # VS_WS VY_WS VZ_WS VROLL VYAW V_INP
     reasons: dict = field(default_factory=dict)
     case_count: int = 0
+    conformal: bool = False                # the last discretisation had D = 4 (conformal approach)
+    friction_table: tuple = ()             # V = 1: (ALPHA, FSTAT, FKIN) rows
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,6 +76,8 @@ class Module1Case:
     unsupported: tuple = ()
     skipped: tuple = ()
     module: int = 1
+    conformal: bool = False            # D = 4: CONTACT's conformal approach (conformal.contact_inp.solve1)
+    friction_table: tuple = ()         # V = 1: (ALPHA, FSTAT, FKIN) per surface inclination (rad)
 
     @property
     def rail_file(self) -> str:
@@ -112,10 +116,14 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
         if d[letter] not in ok:
             raise unsupported(deck.name, line, f"module 1, control digit {letter} = {d[letter]}")
     own = []
+    conf = d["D"] == 4 or (d["D"] in (0, 1) and state.conformal)     # CONTACT's conformal approach (D = 4)
     for letter, ok, what in (("C1", (0, 1), "rollers"), ("P", (2,), "transient sequences"), ("B", (0,), "traction bound"),
-                             ("T", (0, 3), "shift or transient rolling"), ("N", (1,), "vertical position prescribed"),
-                             ("F", (0,), "forces prescribed or rail deflection"), ("D", (0, 1, 2),
-                             "a discretisation other than planar wgt-wgt (D = 2)"), ("M2", (0,), "damping"),
+                             ("T", (0, 3), "shift or transient rolling"),
+                             ("N", (0, 1) if conf else (1,), "vertical position prescribed" + ("" if conf else
+                                                                   ", only with the conformal approach D = 4")),
+                             ("F", (0, 1) if conf else (0,), "forces prescribed or rail deflection"),
+                             ("D", (0, 1, 2, 4), "a discretisation other than planar (D = 2) or conformal (D = 4)"),
+                             ("M2", (0,), "damping"),
                              ("H", (0,) if not ignore_temperature else (0, 1, 3), "surface temperatures"),
                              ("E", (0, 1, 2, 3), "flexible wheelset")):
         if d[letter] not in ok:
@@ -142,13 +150,17 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
             state.friction = tuple(deck.reals(nval, "friction parameters", angle=True))
         else:
             nvf = deck.ints(1, "NVF")[0]
-            for _ in range(nvf):
-                deck.reals(nval + 1, "ALPHA/SVF and friction parameters", angle=True)
+            rows = [tuple(deck.reals(nval + 1, "ALPHA/SVF and friction parameters", angle=True)) for _ in range(nvf)]
             state.friction = ("varying",)
+            state.friction_table = tuple(rows) if d["V"] == 1 and L == 0 else ()
         if L in (2, 3, 4, 6):
             deck.reals(2, "MEMDST MEM_S0", angle=True)
+        if not d["V"]:
+            state.friction_table = ()
         reason = None
-        if d["V"]:
+        if d["V"] == 1 and L == 0 and all(r[1] == r[2] for r in state.friction_table):
+            reason = None            # accepted with D = 4 where constant over each patch (solve1)
+        elif d["V"]:
             reason = f"module 1, control digit V = {d['V']} (friction varying over the profile)"
         elif L != 0:
             reason = f"module 1, control digit L = {L} (friction law)"
@@ -189,7 +201,8 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
             deck.reals(1, "BETAPL", angle=True)
     if d["D"] >= 2:
         state.discretisation = tuple(deck.reals(6, "DX DS DQREL A_SEP D_SEP D_COMB", optional=2, angle=True))
-        if d["D"] != 2:
+        state.conformal = d["D"] == 4
+        if d["D"] not in (2, 4):
             inh["discretisation"] = f"module 1, control digit D = {d['D']} (contact search / conformal approach)"
         else:
             inh.pop("discretisation", None)
@@ -229,7 +242,9 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
         skipped = skipped + (f"surface temperatures (H = {d['H']}) not computed",)
     geo = []
     gaught, gaugsq, gaugwd, cant = state.track[:4]
-    if gaught <= 0 or gaugsq != 0 or (len(state.track) > 4 and state.track[4] != 0):
+    single = (conf and gaught <= 0 and gaugsq == 0 and gaugwd == 0 and len(state.track) <= 4
+              and tuple(state.wheelset[:2]) == (0.0, 0.0))    # one wheel over one rail, origins together
+    if (gaught <= 0 and not single) or (gaught > 0 and gaugsq != 0) or (len(state.track) > 4 and state.track[4] != 0):
         geo.append("module 1, a track given by rail position (GAUGHT <= 0), GAUGSQ != 0 or a curved track")
     for name, prof in (("rail", state.rail), ("wheel", state.wheel)):
         mirz = prof[4] if len(prof) > 4 else 0
@@ -240,13 +255,16 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
         if prof[1] != 0 or prof[2] != 1.0 or prof[3] != 0.0 or mirz != 0:
             geo.append(f"module 1, {name} profile options MIRRORY = {prof[1]}, SCALEYZ = {prof[2]:g}, "
                        f"SMOOTH = {prof[3]:g}, MIRRORZ = {mirz} (only 0, 1, 0, 0)")
+    if state.friction_table and not conf:
+        geo.append("module 1, control digit V = 1 (friction varying over the profile; only with the conformal "
+                   "approach D = 4)")
     if any(v != 0.0 for v in state.rail_dev):
         geo.append("module 1, rail deviations DYRAIL .. VROLLR")
     if len(state.wheelset) > 3 and state.wheelset[3] != 0:
         geo.append("module 1, YTAPE")
     dx, ds = state.discretisation[0], state.discretisation[1]
-    if abs(dx - ds) > 1e-12:
-        geo.append(f"module 1, DX = {dx:g} != DS = {ds:g} (square elements only)")
+    if abs(dx - ds) > 1e-12 and not conf:
+        geo.append(f"module 1, DX = {dx:g} != DS = {ds:g} (square elements only with D = 2)")
     vel = state.velocity
     if vel is not None and (vel[2] != 0.0):
         geo.append("module 1, a vertical wheelset velocity VZ_WS")
@@ -255,4 +273,5 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
                        friction=state.friction, material=state.material, discretisation=state.discretisation,
                        track=state.track, rail=state.rail, wheelset=state.wheelset, wheel=state.wheel,
                        position=state.position, velocity=state.velocity, rail_dev=state.rail_dev, eps=eps,
-                       unsupported=tuple(own) + tuple(inh.values()) + tuple(geo), skipped=skipped)
+                       unsupported=tuple(own) + tuple(inh.values()) + tuple(geo), skipped=skipped,
+                       conformal=conf, friction_table=state.friction_table)

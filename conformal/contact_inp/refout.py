@@ -144,3 +144,42 @@ def compare_wheelrail(ours: dict, ref: dict, mu: float) -> dict[str, float]:
         if rkey in ref["track"]:
             out[key] = abs(ours[key] - float(ref["track"][rkey])) / max(0.01 * abs(float(ref["track"][rkey])), floor)
     return out
+
+
+def compare_conformal(ours: dict, ref: dict, nomrad: float) -> dict[str, float]:
+    """Deviations (%) of a conformal (D = 4) module-1 case from CONTACT's printed values: per patch
+    (paired by normal force) the developed normal force against TILDE_FN, the forces in CONTACT's
+    "bar" frame (the track-frame patch forces turned by CONTACT's reference angle DELTCP) against
+    BAR_FN and BAR_FS, FX against BAR_FX, pmax, the elements in contact; ``angle`` the contact angle's
+    difference in degrees; the track forces relative to max(|F|, 1 % of FZ); with a solved pitch
+    velocity, the free-rolling pitch creepage omega NOMRAD / V - 1 (VPITCH_WS, VX_WS)."""
+    import math
+
+    def pct(a: float, b: float, floor: float = 0.0) -> float:
+        return 100.0 * (a - b) / max(abs(b), floor)
+
+    out: dict[str, float] = {}
+    rp = sorted(ref["patches"], key=lambda p: -float(p["TILDE_FN"]))
+    op = sorted(ours["patches"], key=lambda p: -p["FN"])
+    if len(rp) != len(op):
+        return {"n_patches": float("inf")}
+    for k, (o, r) in enumerate(zip(op, rp), start=1):
+        d = float(r["DELTCP(TR)"])                  # rad
+        fy, fz = o["FY_track"], o["FZ_track"]
+        bar_fn, bar_fs = fz * math.cos(d) - fy * math.sin(d), fy * math.cos(d) + fz * math.sin(d)
+        floor = 0.01 * float(r["BAR_FN"])
+        out[f"patch{k}.FN"] = pct(o["FN"], float(r["TILDE_FN"]))
+        out[f"patch{k}.bar_FN"] = pct(bar_fn, float(r["BAR_FN"]))
+        out[f"patch{k}.FX"] = pct(o["FX"], float(r["BAR_FX"]), floor)
+        out[f"patch{k}.bar_FS"] = pct(bar_fs, float(r["BAR_FS"]), floor)
+        out[f"patch{k}.pmax"] = pct(o["pmax"], float(r["PMAX"]))
+        out[f"patch{k}.n_contact"] = pct(o["n_contact"], float(r["NCON"]))
+        out[f"patch{k}.angle"] = math.degrees(o["contact_angle"] - d)
+    t = ref["track"]
+    fz_ref = float(t["FZ(TR)"])
+    for key, rkey in (("FX_track", "FX(TR)"), ("FY_track", "FY(TR)"), ("FZ_track", "FZ(TR)")):
+        out[key] = pct(ours[key], float(t[rkey]), 0.01 * abs(fz_ref))
+    if "pitch_velocity" in ours and "VPITCH_WS" in t:
+        v = float(t["VX_WS"])
+        out["pitch_creepage"] = pct(-ours["pitch_velocity"] * nomrad / v - 1.0, -float(t["VPITCH_WS"]) * nomrad / v - 1.0)
+    return out

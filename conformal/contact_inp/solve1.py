@@ -5,7 +5,17 @@ The deck's inputs map onto scene keys: the profiles (``.prr``/``.prw`` beside th
 conformal.geometry.profiles), the track (GAUGHT, GAUGWD, CANT), the wheelset (FBDIST, FBPOS,
 NOMRADW), its position (Y_WS, ROLL, YAW; the vertical force FZ) and velocity (VS_WS, VY_WS, VROLL,
 VYAW, VPITCH), the element size DX (= DS), and the distance D_SEP above which patches are solved
-separately (``patch_combine``).  The geometry processing is the project's own (smoothing spline,
+separately (``patch_combine``).
+
+Cases with CONTACT's conformal approach (D = 4) map onto theory ``conformal`` with influence
+``halfspace_planar`` (CONTACT's conformal half-space numbers, C3 = 2) and its rigid slip (creepage
+``wheel_surface``), element sizes DX and DS (``element_size``, ``element_size_s``), every patch on
+its own strip (``[grid] strips = "separate"``); there the deck may prescribe the wheelset height
+Z_WS (N = 0: ``[load] approach`` from the first touch), the longitudinal force FX_WS with the pitch
+velocity solved (F = 1: ``fx_rel``), one wheel over one rail (GAUGHT <= 0 with the rail and wheel
+origins together: placement "single") and friction varying with the surface inclination (V = 1),
+accepted where it is constant over every patch's band of contact angles (checked after the solve,
+:func:`solve_case`).  The geometry processing is the project's own (smoothing spline,
 contact search, patch reference point and angle), so the results agree with CONTACT's to the
 accuracy of that processing (README, Manchester benchmark), not to its printed digits.
 """
@@ -13,24 +23,46 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from conformal.contact_inp.module1 import Module1Case
 from conformal.contact_inp.module3 import unsupported
 
 
+def _profile_path(case: Module1Case, name: str, base_dir: Path) -> Path:
+    """The profile as the deck names it, else the file of that name beside the deck."""
+    for path in (Path(name) if Path(name).is_absolute() else base_dir / name, base_dir / Path(name).name):
+        if path.is_file():
+            return path.resolve()
+    raise unsupported(case.deck, case.line, f"the profile {name} is missing beside the deck")
+
+
+def friction_at(table, alpha: float) -> float:
+    """CONTACT's friction varying with the surface inclination (V = 1): FSTAT interpolated linearly
+    between the rows (ALPHA, FSTAT, FKIN), constant beyond the first and last."""
+    a = [r[0] for r in table]
+    return float(np.interp(alpha, a, [r[1] for r in table]))
+
+
+def constant_friction(table, lo: float, hi: float) -> float | None:
+    """The friction coefficient if it is the same over the band of angles [lo, hi], else None."""
+    inside = [r[0] for r in table if lo < r[0] < hi]
+    values = {round(friction_at(table, a), 12) for a in [lo, hi, *inside]}
+    return values.pop() if len(values) == 1 else None
+
+
 def scene_of(case: Module1Case, base_dir: Path) -> dict:
     """The scene (as a dict for conformal.scene.scene_from_dict) of one module-1 case."""
+    if case.conformal:
+        return _conformal_scene(case, base_dir)
     nu1, nu2, g1, g2 = case.material
     gaught, _, gaugwd, cant = case.track[:4]
     fbdist, fbpos, nomrad = case.wheelset[:3]
     s_ws, y_ws, fz, roll, yaw, _pitch = case.position
     dx = case.discretisation[0]
     d_sep = case.discretisation[4]
-    files = {}
-    for key, name in (("rail_profile", case.rail_file), ("wheel_profile", case.wheel_file)):
-        path = Path(name) if Path(name).is_absolute() else base_dir / name
-        if not path.is_file():
-            raise unsupported(case.deck, case.line, f"the profile {name} is missing beside the deck")
-        files[key] = str(path)
+    files = {key: str(_profile_path(case, name, base_dir))
+             for key, name in (("rail_profile", case.rail_file), ("wheel_profile", case.wheel_file))}
     kin: dict = {}
     if case.digits["T"] == 3:
         vs, vy, vz, vroll, vyaw, vpitch = case.velocity
@@ -49,17 +81,106 @@ def scene_of(case: Module1Case, base_dir: Path) -> dict:
     }
 
 
+def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None) -> dict:
+    """A D = 4 case: theory conformal with CONTACT's formulation (module docstring)."""
+    from conformal.cases.wheelrail import place_scene
+    from conformal.scene import scene_from_dict
+
+    nu1, nu2, g1, g2 = case.material
+    gaught, _, gaugwd, cant = case.track[:4]
+    fbdist, fbpos, nomrad = case.wheelset[:3]
+    s_ws, y_ws, z_inp, roll, yaw, _pitch = case.position
+    dx, ds = case.discretisation[:2]
+    files = {key: str(_profile_path(case, name, base_dir))
+             for key, name in (("rail_profile", case.rail_file), ("wheel_profile", case.wheel_file))}
+    if case.friction_table:
+        fr = mu if mu is not None else case.friction_table[0][1]
+        friction = {"mu_static": fr, "mu_kinetic": fr}
+    else:
+        friction = {"mu_static": case.friction[0], "mu_kinetic": case.friction[1]}
+    if gaught > 0:
+        place = {"placement": "wheelset", "gauge": gaugwd, "gauge_height": gaught, "flange_back": fbdist,
+                 "flange_back_pos": fbpos}
+    else:                                  # one wheel over one rail, origins together (module1)
+        place = {"placement": "single"}
+    vs, vy, _vz, vroll, vyaw, v6 = case.velocity
+    kin = {"speed": vs, "yaw_rate": vyaw, "roll_rate": vroll, "lateral_velocity": vy}
+    if case.digits["F"] == 1:              # FX_WS prescribed, the pitch velocity solved
+        if case.digits["N"] != 1:
+            raise unsupported(case.deck, case.line, "module 1, F = 1 with N = 0 (force with the height prescribed)")
+        kin.update(fx_rel=v6 / (friction["mu_static"] * z_inp), pitch_velocity=-vs / nomrad)
+    else:
+        kin["pitch_velocity"] = v6
+    raw = {
+        "name": f"{case.deck} case {case.number}",
+        "material": {"G": g1, "nu": nu1, "body2": {"G": g2, "nu": nu2}},
+        "friction": friction,
+        "geometry": {"kind": "wheel_rail", **files, "rail_cant": cant, "side": case.side, **place,
+                     "lateral_shift": y_ws, "yaw": yaw, "roll": roll, "wheel_radius": nomrad,
+                     "element_size": dx, "element_size_s": ds, "smoothing": 0.0},
+        "load": {"wheel_load": z_inp},
+        "kinematics": {k: v for k, v in kin.items() if v != 0.0 or k in ("pitch_velocity", "fx_rel")},
+        "grid": {"strips": "separate"},
+        "model": {"theory": "conformal", "influence": "halfspace_planar"},
+    }
+    if case.digits["N"] == 0:              # Z_WS prescribed: the approach from the first touch
+        z_first = place_scene(scene_from_dict(raw, base_dir=base_dir)).z_first
+        if z_inp - z_first <= 0.0:
+            raise unsupported(case.deck, case.line, f"module 1, Z_WS = {z_inp:g} mm leaves the wheel off the rail")
+        raw["load"] = {"approach": z_inp - z_first}
+    return raw
+
+
+def solve_case(case: Module1Case, raw: dict, base_dir: Path):
+    """Solve one case's scene; with friction varying over the profile (V = 1) check that it is
+    constant over every patch's band of contact angles (solved once more with that value where the
+    first guess was another), else refuse naming the digit."""
+    from conformal.contact_inp.module3 import Unsupported
+    from conformal.scene import scene_from_dict
+    from conformal.solve import solve_scene
+
+    def run(d):
+        return solve_scene(scene_from_dict(d, base_dir=base_dir, name=d["name"]))
+
+    r = run(raw)
+    if not case.friction_table:
+        return r
+    for attempt in range(2):
+        mus = [constant_friction(case.friction_table, p.extra["contact_angle_min"], p.extra["contact_angle_max"])
+               for p in (r.patches or (r,))]
+        if any(m is None for m in mus) or len(set(mus)) > 1:
+            raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
+                              "control digit V = 1 (friction varying over the profile: not constant over the "
+                              "contact patches)")
+        if mus[0] == raw["friction"]["mu_static"]:
+            return r
+        raw = _conformal_scene(case, base_dir, mu=mus[0])
+        r = run(raw)
+    raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, control digit "
+                      "V = 1 (the friction coefficient of the patches does not settle)")
+
+
 def summary(case: Module1Case, r) -> dict:
     """The JSON object of one solved module-1 case: totals, the track-frame forces on the rail and
     one entry per patch (FN, FX, FS, MN, pmax, n_contact, contact_angle, y_rail)."""
     patches = []
     for p in r.patches or (r,):
         f = p.field
+        g = p.extra.get("grid")
+        if f is None and g is not None:        # conformal strips: elements from the area
+            ncon = int(round(p.extra["contact_area"] / (g["dx"] * g["ds"])))
+        else:
+            ncon = f.n_contact if f is not None else None
+        angle, y_rail = p.extra.get("contact_angle"), p.extra.get("y_rail")
+        if "contact_angle_min" in p.extra:     # a conformal strip: the middle of its band of angles
+            angle, y_rail = 0.5 * (p.extra["contact_angle_min"] + p.extra["contact_angle_max"]), None
         patches.append({"FN": p.FN, "FX": p.FX, "FS": p.FY, "MN": p.MZ, "pmax": p.pmax,
-                        "n_contact": f.n_contact if f is not None else None,
+                        "n_contact": ncon,
                         "n_adhesion": f.n_adhesion if f is not None else None,
                         "n_slip": f.n_slip if f is not None else None,
-                        "contact_angle": p.extra.get("contact_angle"), "y_rail": p.extra.get("y_rail")})
+                        "contact_angle": angle, "y_rail": y_rail,
+                        **({"FY_track": p.extra["FY_track"], "FZ_track": p.extra["FZ_track"]}
+                           if "FY_track" in p.extra else {})})
     warnings = list(case.skipped) + list(r.extra.get("warnings", []))
     if not r.converged:
         warnings.append("not converged")
@@ -68,4 +189,5 @@ def summary(case: Module1Case, r) -> dict:
             "n_adhesion": sum(p["n_adhesion"] or 0 for p in patches), "n_slip": sum(p["n_slip"] or 0 for p in patches),
             "FX_track": r.extra.get("FX_track"), "FY_track": r.extra.get("FY_track"),
             "FZ_track": r.extra.get("FZ_track"), "z_ws": r.extra.get("z_ws"), "patches": patches,
+            **({"pitch_velocity": r.extra["pitch_velocity_solved"]} if "pitch_velocity_solved" in r.extra else {}),
             "warnings": warnings}

@@ -1,6 +1,10 @@
 """Rebuild this folder from a CONTACT checkout (github.com/eve70a/CONTACT, Apache-2.0).
 
-    PYTHONPATH=. python tests/reference/contact_decks/extract.py /path/to/CONTACT
+    PYTHONPATH=. python tests/reference/contact_decks/extract.py /path/to/CONTACT [DECK.inp ...]
+
+(names after the checkout: redo only those decks; the others keep their manifest entries).
+Cases with friction varying over the profile (module 1, V = 1) are solved, since whether the
+friction is constant over every patch is known only then (about 6 minutes, testbank case 35).
 
 For every public deck (examples/*.inp, testbank/**/*.inp) it counts the cases (the ``Case``
 blocks of its .ref_out) and the cases ``conformal inp`` can solve, with the reasons for the
@@ -15,14 +19,15 @@ import shutil
 import sys
 from pathlib import Path
 
-from conformal.contact_inp.deck import plan, read_deck
+from conformal.contact_inp.deck import plan, read_deck, solve_deck
+from conformal.contact_inp.module3 import Unsupported
 from conformal.errors import InputError
 
 HERE = Path(__file__).resolve().parent
 
 
 #: header lines whose next line holds the values the tests read
-_HEADERS = ("FN ", "FN/G", "NPOT", "FX(TR)", "XCP(TR)")
+_HEADERS = ("FN ", "FN/G", "NPOT", "FX(TR)", "XCP(TR)", "VX_WS", "BAR_FN", "TILDE_FN")
 
 
 def trimmed_ref_out(text: str) -> str:
@@ -38,11 +43,17 @@ def trimmed_ref_out(text: str) -> str:
     return "\n".join(keep) + "\n"
 
 
-def main(root: str) -> int:
+def main(root: str, only=()) -> int:
+    """``only``: deck file names to redo; the others keep their manifest entries."""
     root = Path(root)
     decks = sorted(root.glob("examples/*.inp")) + sorted(root.glob("testbank/**/*.inp"))
     manifest = []
     for inp in decks:
+        if only and inp.name not in only:
+            old = {e["deck"]: e for e in json.loads((HERE / "manifest.json").read_text(encoding="utf-8"))["decks"]}
+            if inp.relative_to(root).as_posix() in old:
+                manifest.append(old[inp.relative_to(root).as_posix()])
+                continue
         rel = inp.relative_to(root).as_posix()
         ref = inp.with_suffix(".ref_out")
         if not ref.is_file():
@@ -56,6 +67,15 @@ def main(root: str) -> int:
             entry["module"] = sorted({getattr(c, "module", 3) for c in parsed.cases})
             for _, why in pl.unsupported:
                 entry["reasons"][why] = entry["reasons"].get(why, 0) + 1
+            for case, _ in (item for chain in pl.chains for item in chain):
+                if getattr(case, "friction_table", ()):   # V = 1: checked over the patches after the solve
+                    try:
+                        list(solve_deck(parsed, cases=[case.number]))
+                    except Unsupported as exc:
+                        why = str(exc).split("not supported: ", 1)[-1]
+                        entry["reasons"][why] = entry["reasons"].get(why, 0) + 1
+                        entry["supported"] -= 1
+                        entry.setdefault("refused_after_solve", []).append(case.number)
         except InputError as exc:
             entry["reasons"][str(exc).split(": ", 1)[-1]] = n_cases
         manifest.append(entry)
@@ -77,4 +97,4 @@ def main(root: str) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1]))
+    sys.exit(main(sys.argv[1], set(sys.argv[2:])))
