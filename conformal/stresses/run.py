@@ -210,8 +210,18 @@ def fe_body_section(result, scene, sf, params=None, figure=None, vtu=None) -> di
     """The maxima inside the FE body of ``sf`` (rail or wheel) on the cross-section through the
     half-space maximum (:func:`fe_body_stress_section`), against the half-space stresses of
     ``sf`` at the same points; ``figure``: also write the comparison figure there and its 3-D
-    view (pyvista) beside it as ``<stem>_3d.png`` (conformal.stresses.plots); ``vtu``: the FE
+    view (pyvista) beside it as ``<stem>_3d.png`` (:func:`fe_section_figures`); ``vtu``: the FE
     body's stresses around the patch for ParaView."""
+    out, pts, bs, hs_sigma = fe_body_section_data(result, scene, sf, vtu=vtu)
+    if figure is not None:
+        fe_section_figures(result, scene, sf, pts, bs, hs_sigma, figure)
+    return out
+
+
+def fe_body_section_data(result, scene, sf, vtu=None):
+    """(summary, points, BodyStresses, half-space sigma at the points) of :func:`fe_body_section`
+    without the figures (a study meshes every body before it draws with VTK: gmsh meshing after a
+    VTK render in the same process has crashed the heap)."""
     from dataclasses import replace as _replace
 
     from conformal.stresses.field import StressField
@@ -221,25 +231,30 @@ def fe_body_section(result, scene, sf, params=None, figure=None, vtu=None) -> di
     who = "rail" if sf.body == 1 else "wheel"
     fe = StressField(bs.sigma, pts, sf.depths, sf.normal, sf.frame, sf.body)
     hs = _replace(fe, sigma=sf.sigma[:, x_i:x_i + 1])
-    if figure is not None:
-        from pathlib import Path as _Path
-
-        from conformal.stresses.invariants import von_mises
-        from conformal.stresses.plots import plot_section_3d, plot_section_comparison
-
-        plot_section_comparison(pts[:, 0], hs.sigma[:, 0], bs.sigma[:, 0], figure,
-                                title=f"{scene.name}: stresses in the {who} at x = {pts[0, 0, 0, 0]:.2f} mm",
-                                surface=surface_curve(result), body_label=f"FE {who}")
-        fig3d = _Path(figure).with_name(_Path(figure).stem + "_3d.png")   # the same section in 3-D (pyvista)
-        plot_section_3d(result, pts[:, 0], von_mises(bs.sigma[:, 0]), fig3d,
-                        title=f"{scene.name}: von Mises in the FE {who}, section x = {pts[0, 0, 0, 0]:.2f} mm",
-                        body=who)
     out = {"body": who, "section_x": float(pts[0, 0, 0, 0]), "fe": _section_maxima(fe),
            "halfspace": _section_maxima(hs), "max_correction": float(np.abs(bs.sigma_c).max()),
            "stats": bs.stats,
            "note": "sigma = half-space field of the elements on the body's tangent planes + FE correction of "
                    "the real body (split method, one FE solve with the final load)"}
-    return out
+    return out, pts, bs, hs.sigma
+
+
+def fe_section_figures(result, scene, sf, pts, bs, hs_sigma, figure) -> None:
+    """The section figure (matplotlib: half-space, FE body, difference) at ``figure`` and its 3-D
+    view (pyvista) at ``<stem>_3d.png``."""
+    from pathlib import Path as _Path
+
+    from conformal.stresses.invariants import von_mises
+    from conformal.stresses.plots import plot_section_3d, plot_section_comparison
+
+    who = "rail" if sf.body == 1 else "wheel"
+    plot_section_comparison(pts[:, 0], hs_sigma[:, 0], bs.sigma[:, 0], figure,
+                            title=f"{scene.name}: stresses in the {who} at x = {pts[0, 0, 0, 0]:.2f} mm",
+                            surface=surface_curve(result), body_label=f"FE {who}")
+    fig3d = _Path(figure).with_name(_Path(figure).stem + "_3d.png")   # the same section in 3-D (pyvista)
+    plot_section_3d(result, pts[:, 0], von_mises(bs.sigma[:, 0]), fig3d,
+                    title=f"{scene.name}: von Mises in the FE {who}, section x = {pts[0, 0, 0, 0]:.2f} mm",
+                    body=who)
 
 
 def surface_curve(result) -> np.ndarray | None:
