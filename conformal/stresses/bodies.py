@@ -1,6 +1,7 @@
-"""Stresses inside the FE rail body under the solved tractions of a conformal strip (issue 24, item 2).
+"""Stresses inside the FE rail and wheel bodies under the solved tractions of a conformal strip
+(issue 24, item 2).
 
-One FE solve of the rail (body 1) with the final surface load, by the split method of
+One FE solve of the rail (body 1) or of the wheel (body 2) with the final surface load, by the split method of
 :mod:`conformal.influence.fe` (its mesh, space, assembly, loads and residual traction are reused
 through its functions): sigma = sigma_hs + sigma_c, where sigma_hs is the superposed closed-form
 half-space field of the loaded elements, each on its own tangent plane
@@ -13,7 +14,11 @@ On a flat block the residual is zero and the FE body gives the half-space stress
 P1 tetrahedra (the correction is smooth; fe.py's default), the mesh conforming to every element of
 the strip (``conform = "all"``: the residual traction jumps at the element edges).  The strip is
 placed on the mesh's columns (x = (ix - mx // 2) dx); the rail is an extrusion, so this shift
-along x changes nothing, and the points are given and returned in the strip's own x.
+along x changes nothing, and the points are given and returned in the strip's own x.  The wheel
+(a body of revolution in its own axes, :func:`conformal.influence.fe.wheel_body_from_grid`)
+carries the opposite tractions in its own element frames; the shift is a rotation about its axle,
+and its half-space part is the field of its own tangent planes (:func:`_split_halfspace`), so
+that sigma_hs + sigma_c is the split solution; points and stresses are in the rail-profile frame.
 """
 from __future__ import annotations
 
@@ -159,7 +164,7 @@ def _split_halfspace(bm, grid, loads_of, X: np.ndarray, G: float, nu: float) -> 
 
     out = np.zeros((len(X), 3, 3))
     for x0, J, c in loads_of:
-        loads = bm_loads(bm, x0)
+        loads = _loads(bm, float(x0))
         R = loads.local[J]
         q = (X - loads.centres[J]) @ R.T
         q[:, 2] = np.maximum(q[:, 2], 0.0)
@@ -167,12 +172,6 @@ def _split_halfspace(bm, grid, loads_of, X: np.ndarray, G: float, nu: float) -> 
         s_loc = sig @ (loads.B @ c)
         out += R.T @ s_loc @ R
     return out
-
-
-def bm_loads(bm, x0):
-    from conformal.influence.fe import _loads
-
-    return _loads(bm, float(x0))
 
 
 def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FESettings = FESettings(),
