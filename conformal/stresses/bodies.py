@@ -174,6 +174,23 @@ def _split_halfspace(bm, grid, loads_of, X: np.ndarray, G: float, nu: float) -> 
     return out
 
 
+def _mesh_isolated(model, patch, spec, attempts: int = 3):
+    """:func:`mesh_body` in a forked child process, retried: gmsh's mesh generation has aborted
+    the whole process (heap corruption, intermittent) on the S1002/UIC60 bodies with conform =
+    "all"; a crashed child is retried up to ``attempts`` times before a RuntimeError."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures.process import BrokenProcessPool
+
+    for k in range(attempts):
+        try:
+            with ProcessPoolExecutor(1, mp_context=mp.get_context("fork")) as ex:
+                return ex.submit(mesh_body, model, patch, spec).result()
+        except BrokenProcessPool:
+            continue
+    raise RuntimeError(f"stresses: gmsh aborted meshing the {model.kind} body {attempts} times")
+
+
 def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FESettings = FESettings(),
                   profile_points: np.ndarray | None = None, vtu=None, vtu_radius: float | None = None
                   ) -> BodyStresses:
@@ -202,7 +219,7 @@ def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FE
     else:
         model, patch, rot = wheel_body_from_grid(grid, profile_points)
     spec = replace(settings.mesh, conform="all", order=1)
-    bm = mesh_body(model, patch, spec)
+    bm = _mesh_isolated(model, patch, spec)
     m, space = _space(bm, 1)
     lam = 2.0 * G * nu / (1.0 - 2.0 * nu)
     K = asm(linear_elasticity(lam, G), space.basis).tocsr()
