@@ -177,7 +177,8 @@ def _split_halfspace(bm, grid, loads_of, X: np.ndarray, G: float, nu: float) -> 
 def _mesh_isolated(model, patch, spec, attempts: int = 3):
     """:func:`mesh_body` in a forked child process, retried: gmsh's mesh generation has aborted
     the whole process (heap corruption, intermittent) on the S1002/UIC60 bodies with conform =
-    "all"; a crashed child is retried up to ``attempts`` times before a RuntimeError."""
+    "all"; a crashed child is retried up to ``attempts`` times before an FESolveError (exit 2 in
+    the CLI, a note in the study, instead of the lost process)."""
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor
     from concurrent.futures.process import BrokenProcessPool
@@ -188,7 +189,10 @@ def _mesh_isolated(model, patch, spec, attempts: int = 3):
                 return ex.submit(mesh_body, model, patch, spec).result()
         except BrokenProcessPool:
             continue
-    raise RuntimeError(f"stresses: gmsh aborted meshing the {model.kind} body {attempts} times")
+    from conformal.influence.factor import FESolveError
+
+    raise FESolveError(f"stresses: gmsh aborted meshing the {model.kind} body ({attempts} tries); try other "
+                       "[model] fe_h_load / fe_h_patch or [grid] n")
 
 
 def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FESettings = FESettings(),
