@@ -167,7 +167,8 @@ def plot_section_3d(result, points, values, path, *, title: str = "", label: str
     c = P.reshape(-1, 3).mean(axis=0)
     span = float(np.ptp(P[..., 1]) + np.ptp(P[..., 2]))
     pl.camera.focal_point = tuple(c)
-    pl.camera.position = tuple(c + span * np.array([-2.2, -0.5, -0.9]))
+    # from above the rail; a wheel section from below, so that the patch is not behind the wheel
+    pl.camera.position = tuple(c + span * np.array([-2.2, -0.5, -0.9 if body == "rail" else 0.9]))
     pl.camera.up = (0.0, 0.0, -1.0)
     path = Path(path)
     try:
