@@ -17,17 +17,20 @@ Per case, influence model, body and frame: the maxima of von Mises, the principa
 mm), the surface fatigue index FI_surf (shakedown map, k = 300 N/mm²) and the Dang Van index
 (alpha = 1/3, tau_e = 300 N/mm²).  Then the stresses inside the FE rail (conformal.stresses.bodies:
 half-space field of the elements on their tangent planes plus the FE correction of the real rail,
-one FE solve with the final load) on the cross-section through the half-space von Mises maximum,
+one FE solve with the final load) and inside the FE wheel (the opposite tractions in the wheel's
+element frames), each on the cross-section through that body's half-space von Mises maximum,
 against the half-space stresses at the same points ("FE body, section" and "half-space, same
-section"; the wheel's FE body is not computed).
+section"; tau_DV is not evaluated there: it needs the whole rolling pass).
 
 Writes to --out (default studies/out/gauge_corner_stresses): gauge_corner_stresses.csv, .md, and
 <case>_<influence>_rail.png / _wheel.png (slices, von Mises and orthogonal shear, per-depth maxima),
-<case>_<influence>_fe_section.png (von Mises in the half-space and in the FE rail on the section).
+<case>_<influence>_fe_section.png / _fe_section_wheel.png (von Mises in the half-space and in the
+FE rail / wheel on the section; _3d.png: the section in 3-D), and with --vtu
+<case>_<influence>_fe_rail.vtu / _fe_wheel.vtu (the FE bodies around the patch, for ParaView).
 
     python studies/gauge_corner_stresses.py             # all cases, half-space and FE (minutes: FE)
     python studies/gauge_corner_stresses.py --no-fe     # half-space influence numbers only
-    python studies/gauge_corner_stresses.py --no-fe --n 24   # coarser strips (the committed outputs)
+    python studies/gauge_corner_stresses.py --no-fe --n 24   # coarser strips, FE bodies (the committed outputs)
     python studies/gauge_corner_stresses.py --quick --out DIR   # 6.2 mm, coarse grid, half-space (seconds)
 """
 from __future__ import annotations
@@ -83,6 +86,8 @@ def run_case(name, path, shift, influence, args):
     elif args.n:
         over["grid"] = {"n": args.n}
     scene = scene.with_(**{f"{s}__{k}": v for s, kv in over.items() for k, v in kv.items()})
+    if args.fe_h_load is not None:      # the FE body meshes (and FE influence numbers) at the loaded column
+        scene = scene.with_model(options=dict(scene.model.options, fe_h_load=args.fe_h_load))
     t0 = time.perf_counter()
     result = solve_scene(scene)
     t_solve = time.perf_counter() - t0
@@ -109,20 +114,31 @@ def run_case(name, path, shift, influence, args):
                          "FI_sub": sm["dang_van"]["FI_sub"], "solve_s": t_solve, "stress_s": t_st,
                          "surface_check": surface_check(result, sf) if frame == "strip" else ""})
     if not args.quick and not args.no_fe_body:
-        from conformal.stresses.run import fe_body_section
+        from conformal.stresses.run import fe_body_section_data, fe_section_figures
 
-        t1 = time.perf_counter()
-        sec = fe_body_section(result, scene, fields["rail"], PARAMS, figure=Path(args.out) / f"{name}_{influence}_fe_section.png")
-        for frame, key in (("FE body, section", "fe"), ("half-space, same section", "halfspace")):
-            m = sec[key]
-            rows.append({**{k: rows[0][k] for k in ("case", "influence", "FN", "FX", "FY", "pmax", "a", "b", "FI_surf")},
-                         "body": "rail", "frame": frame, "max_von_mises": m["max_von_mises"],
-                         "vm_depth": m["max_von_mises_depth"], "vm_y": m["max_von_mises_position"][1],
-                         "vm_z": m["max_von_mises_position"][2], "max_shear": m["max_shear"],
-                         "shear_depth": m["max_shear_depth"], "max_orthogonal_shear": m["max_orthogonal_shear"],
-                         "orth_depth": m["max_orthogonal_shear_depth"], "tau_dv": float("nan"), "dv_depth": float("nan"),
-                         "FI_sub": float("nan"), "solve_s": t_solve, "stress_s": time.perf_counter() - t1,
-                         "surface_check": f"x = {sec['section_x']:.2f} mm, max |sigma_c| {sec['max_correction']:.1f}"})
+        figures = []                                   # drawn after both bodies are meshed (gmsh before VTK)
+        for who in ("rail", "wheel"):
+            t1 = time.perf_counter()
+            stem = f"{name}_{influence}_fe_section" + ("" if who == "rail" else "_wheel")
+            vtu = Path(args.out) / f"{name}_{influence}_fe_{who}.vtu" if args.vtu else None
+            sec, pts, bs, hs_sigma = fe_body_section_data(result, scene, fields[who], vtu=vtu)
+            figures.append((fields[who], pts, bs, hs_sigma, Path(args.out) / f"{stem}.png"))
+            base = next(r for r in rows if r["body"] == who and r["frame"] == "strip")
+            for frame, key in (("FE body, section", "fe"), ("half-space, same section", "halfspace")):
+                m = sec[key]
+                rows.append({**{k: base[k] for k in ("case", "influence", "FN", "FX", "FY", "pmax", "a", "b", "FI_surf")},
+                             "body": who, "frame": frame, "max_von_mises": m["max_von_mises"],
+                             "vm_depth": m["max_von_mises_depth"], "vm_y": m["max_von_mises_position"][1],
+                             "vm_z": m["max_von_mises_position"][2], "max_shear": m["max_shear"],
+                             "shear_depth": m["max_shear_depth"], "max_orthogonal_shear": m["max_orthogonal_shear"],
+                             "orth_depth": m["max_orthogonal_shear_depth"], "tau_dv": float("nan"),
+                             "dv_depth": float("nan"), "FI_sub": float("nan"), "solve_s": t_solve,
+                             "stress_s": time.perf_counter() - t1,
+                             "surface_check": f"x = {sec['section_x']:.2f} mm, max |sigma_c| {sec['max_correction']:.1f}, "
+                                              f"{sec['stats']['dofs']} unknowns"})
+            print(f"  FE {who}: {sec['stats']['dofs']} unknowns, {time.perf_counter() - t1:.0f} s", flush=True)
+        for sf, pts, bs, hs_sigma, fig in figures:
+            fe_section_figures(result, scene, sf, pts, bs, hs_sigma, fig)
     return result, rows, fields
 
 
@@ -161,12 +177,22 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="6.2 mm only, coarse grid, half-space, no FE")
     ap.add_argument("--no-fe", action="store_true", help="half-space influence numbers only")
-    ap.add_argument("--no-fe-body", action="store_true", help="no FE rail stresses (conformal.stresses.bodies)")
+    ap.add_argument("--no-fe-body", action="store_true", help="no FE body stresses (conformal.stresses.bodies)")
+    ap.add_argument("--cases", help="comma-separated subset of " + ", ".join(c[0] for c in CASES))
+    ap.add_argument("--fe-h-load", type=float, help="[model] fe_h_load of the FE bodies (gmsh aborted meshing the "
+                    "S1002 wheel at 6.2 mm, n = 24 with the default 0.5 and conform = all; 0.45 meshes)")
+    ap.add_argument("--vtu", action="store_true", help="also write the FE bodies' stresses as VTU (ParaView)")
     ap.add_argument("--n", type=int, help="[grid] n of every scene (default: the scenes' 40 and 30)")
     ap.add_argument("--out", help="output folder")
     args = ap.parse_args(argv)
     out = output_dir("gauge_corner_stresses", args)
     cases = CASES[:1] if args.quick else CASES
+    if args.cases:
+        want = args.cases.split(",")
+        bad = sorted(set(want) - {c[0] for c in CASES})
+        if bad:
+            ap.error(f"--cases: unknown case {bad[0]!r}")
+        cases = tuple(c for c in CASES if c[0] in want)
     models = ("halfspace",) if (args.quick or args.no_fe) else ("halfspace", "fe")
     rows, notes = [], []
     for name, path, shift in cases:

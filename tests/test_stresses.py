@@ -348,6 +348,8 @@ def test_result_methods_and_cli(tmp_path, capsys):
     ("", ["--depth", "-1"], "--depth"),
     ("[stresses]\nk = -3.0\n", [], "k"),
     ("", ["--vtu", "x.txt"], "--vtu"),
+    ("[stresses]\nfe_body = \"tyre\"\n", [], "fe_body"),
+    ("[stresses]\nfe_body = \"wheel\"\n", [], "fe_body"),
 ])
 def test_cli_bad_input(tmp_path, capsys, extra, args, msg):
     from conformal.cli import main
@@ -379,6 +381,49 @@ def test_fe_flat_rail_gives_the_halfspace_stresses():
     bs = rail_body_stresses(f, pts, G=82000.0, nu=0.28, rail_points=rail)
     assert np.abs(bs.sigma_c).max() < 1e-6 * np.abs(bs.sigma_hs).max()
     assert np.allclose(bs.sigma_hs, stresses(f, pts, nu=0.28), atol=1e-9)
+
+
+@pytest.mark.slow
+def test_fe_large_flat_wheel_gives_the_halfspace_stresses(tmp_path):
+    """The FE wheel (body 2) of a flat profile and radius 1e5 mm under the opposite tractions: the
+    wheel's tangent planes deviate from the strip's plane by at most x/R = 1.6e-5 rad and the
+    surface from them by x²/2R = 1.3e-5 mm over the patch, so the split's residual traction and
+    the FE correction are of that relative order; the stresses at points inside the wheel (on
+    the side z < 0, in the rail-profile frame) are the half-space stresses of body 2 within 1e-4
+    of their size.  mx = 8: the strip's x is shifted by half an element against the mesh columns
+    (a rotation about the axle), so a wrong placement would show as a misfit of order pmax.  The
+    VTU of the FE wheel holds tetrahedra above the rail (z <= 0) with von Mises close to the
+    half-space's at the same places."""
+    import meshio
+
+    from conformal.solvers.conformal import CurvedTractionField
+    from conformal.stresses.bodies import wheel_body_stresses
+
+    R = 1.0e5
+    cg = _tilted_strip(0.0, mx=8, ms=5, dx=0.4, ds=0.4)
+    prof = np.c_[np.linspace(-40, 40, 801), np.zeros(801)]
+    cg = type(cg)(**{**cg.__dict__, "rail_curve": np.c_[np.linspace(-5, 7, 121), np.zeros(121)],
+                     "rail_curve_s": np.linspace(0, 12, 121) - 5.0, "wheel_profile": prof,
+                     "wheel_centre": np.array([0.0, 0.0, -R]), "wheel_radius": R})
+    X, S = cg.mesh()
+    pn = 900.0 * np.clip(1 - (X / 1.2) ** 2 - ((S - cg.s_ref) / 0.9) ** 2, 0, None) ** 0.5
+    f = CurvedTractionField(PlanarGrid(8, 5, 0.4, 0.4, cg.xl, -1.0), pn=pn, px=0.3 * pn, py=0.1 * pn,
+                            status=(pn > 0).astype(int), curved=cg)
+    pts = np.array([[x, cg.s_ref + 0.1, -z] for z in (0.2, 0.5, 0.9) for x in (-0.5, 0.0, 0.3)])
+    bs = wheel_body_stresses(f, pts, G=82000.0, nu=0.28, wheel_points=prof, vtu=tmp_path / "w.vtu")
+    hs = stresses(f, pts, nu=0.28, body=2)
+    scale = np.abs(hs).max()
+    assert scale > 300.0
+    assert np.abs(bs.sigma_c).max() < 1e-4 * scale
+    assert np.abs(bs.sigma - hs).max() < 1e-4 * scale
+    mesh = meshio.read(tmp_path / "w.vtu")
+    assert mesh.points[:, 2].max() < 1e-6 and mesh.points[:, 2].min() < -2.0
+    tets = mesh.cells_dict["tetra"]
+    cent = mesh.points[tets].mean(axis=1)
+    near = np.flatnonzero(np.linalg.norm(cent - [0.0, cg.s_ref, -0.5], axis=1) < 0.6)
+    assert near.size > 5
+    vm_hs = von_mises(stresses(f, cent[near], nu=0.28, body=2))
+    assert np.allclose(mesh.cell_data_dict["von_mises"]["tetra"][near], vm_hs, atol=1e-4 * scale)
 
 
 @pytest.mark.slow

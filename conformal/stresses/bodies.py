@@ -1,6 +1,7 @@
-"""Stresses inside the FE rail body under the solved tractions of a conformal strip (issue 24, item 2).
+"""Stresses inside the FE rail and wheel bodies under the solved tractions of a conformal strip
+(issue 24, item 2).
 
-One FE solve of the rail (body 1) with the final surface load, by the split method of
+One FE solve of the rail (body 1) or of the wheel (body 2) with the final surface load, by the split method of
 :mod:`conformal.influence.fe` (its mesh, space, assembly, loads and residual traction are reused
 through its functions): sigma = sigma_hs + sigma_c, where sigma_hs is the superposed closed-form
 half-space field of the loaded elements, each on its own tangent plane
@@ -13,10 +14,15 @@ On a flat block the residual is zero and the FE body gives the half-space stress
 P1 tetrahedra (the correction is smooth; fe.py's default), the mesh conforming to every element of
 the strip (``conform = "all"``: the residual traction jumps at the element edges).  The strip is
 placed on the mesh's columns (x = (ix - mx // 2) dx); the rail is an extrusion, so this shift
-along x changes nothing, and the points are given and returned in the strip's own x.
+along x changes nothing, and the points are given and returned in the strip's own x.  The wheel
+(a body of revolution in its own axes, :func:`conformal.influence.fe.wheel_body_from_grid`)
+carries the opposite tractions in its own element frames; the shift is a rotation about its axle,
+and its half-space part is the field of its own tangent planes (:func:`_split_halfspace`), so
+that sigma_hs + sigma_c is the split solution; points and stresses are in the rail-profile frame.
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, replace
 
@@ -74,7 +80,8 @@ def _locate_tets(m, P: np.ndarray, k: int = 16) -> np.ndarray:
 
 
 def rail_body_stresses(field, points, *, G: float, nu: float, settings: FESettings = FESettings(),
-                       rail_points: np.ndarray | None = None) -> BodyStresses:
+                       rail_points: np.ndarray | None = None, vtu=None, vtu_radius: float | None = None
+                       ) -> BodyStresses:
     """Stresses in the FE rail under the tractions of a conformal strip, at ``points`` (..., 3)
     (rail-profile frame, mm; inside the rail, within the FE body).
 
@@ -89,23 +96,134 @@ def rail_body_stresses(field, points, *, G: float, nu: float, settings: FESettin
         The FE model (the scene's [model] fe_* keys); method split, P1, ``conform = "all"`` are imposed.
     rail_points : (n, 2), optional
         The whole rail profile (else the grid's local curve).
+    vtu, vtu_radius : optional
+        Also write the FE body's stresses to this VTU file (:func:`write_body_vtu`).
     """
+    return body_stresses(field, points, body=1, G=G, nu=nu, settings=settings, profile_points=rail_points,
+                         vtu=vtu, vtu_radius=vtu_radius)
+
+
+def wheel_body_stresses(field, points, *, G: float, nu: float, settings: FESettings = FESettings(),
+                        wheel_points: np.ndarray | None = None, vtu=None, vtu_radius: float | None = None
+                        ) -> BodyStresses:
+    """Stresses in the FE wheel (body 2) under the tractions of a conformal strip, at ``points``
+    (..., 3, rail-profile frame, mm, inside the wheel); returned in the rail-profile frame.
+
+    The wheel carries the opposite tractions, given in its own element frames (the rotations of
+    :func:`conformal.influence.fe.wheel_body_from_grid`, as in its FE influence numbers); the
+    half-space part sigma_hs is that of the wheel's own tangent planes (so that sigma_hs + sigma_c
+    is the split solution); the half-space field of the rail's planes is
+    ``halfspace.stresses(field, points, body=2)``.  Parameters as :func:`rail_body_stresses`.
+    """
+    return body_stresses(field, points, body=2, G=G, nu=nu, settings=settings, profile_points=wheel_points,
+                         vtu=vtu, vtu_radius=vtu_radius)
+
+
+@dataclass(frozen=True, eq=False)
+class _Placement:
+    """Body mesh coordinates <-> rail-profile frame: X_mesh = Q (M^T (P - c) - o) + o (rotation
+    about the wheel's axle for the strip's x shift; a translation along x for the rail)."""
+
+    M: np.ndarray            # (3, 3) columns: mesh axes in the rail-profile frame
+    c: np.ndarray            # (3,) mesh origin in the rail-profile frame (x-shifted for the rail)
+    off: np.ndarray          # (3,) wheel: (0, 0, -R) (mesh origin at the wheel surface)
+    Q: np.ndarray            # (3, 3) rotation about the axle (identity for the rail)
+    axle: np.ndarray         # (3,) a point of the axle in mesh coordinates
+
+    def to_mesh(self, P: np.ndarray) -> np.ndarray:
+        q = (P - self.c) @ self.M + self.off
+        return (q - self.axle) @ self.Q.T + self.axle
+
+    def from_mesh(self, X: np.ndarray) -> np.ndarray:
+        q = (X - self.axle) @ self.Q + self.axle
+        return (q - self.off) @ self.M.T + self.c
+
+    def tensor_from_mesh(self, sig: np.ndarray) -> np.ndarray:
+        T = self.M @ self.Q.T                                  # mesh components -> rail-profile frame
+        return T @ sig @ T.T
+
+
+def _placement(grid, body: int, shift: float, bm) -> _Placement:
+    if body == 1:
+        return _Placement(np.eye(3), np.array([shift, 0.0, 0.0]), np.zeros(3), np.eye(3), np.zeros(3))
+    from conformal.influence.fe import _wheel_axes
+
+    M = _wheel_axes(grid)
+    R = float(grid.wheel_radius)
+    d = shift / float(bm.extent.x_ref_radius)                 # the strip's column x = shift is the mesh's x = 0
+    Q = np.array([[math.cos(d), 0.0, -math.sin(d)], [0.0, 1.0, 0.0], [math.sin(d), 0.0, math.cos(d)]])
+    return _Placement(M, np.asarray(grid.wheel_centre, float), np.array([0.0, 0.0, -R]), Q,
+                      np.array([0.0, 0.0, float(bm.body.axle_z)]))
+
+
+def _split_halfspace(bm, grid, loads_of, X: np.ndarray, G: float, nu: float) -> np.ndarray:
+    """sigma_hs (n, 3, 3) in mesh coordinates at mesh points X: the closed-form field of every
+    loaded element on its own tangent plane of the body mesh (the half-space part of the split
+    method, consistent with :func:`conformal.influence.fe._residual_load`)."""
+    from conformal.stresses.rectangle import rectangle_stress
+
+    out = np.zeros((len(X), 3, 3))
+    for x0, J, c in loads_of:
+        loads = _loads(bm, float(x0))
+        R = loads.local[J]
+        q = (X - loads.centres[J]) @ R.T
+        q[:, 2] = np.maximum(q[:, 2], 0.0)
+        sig = rectangle_stress(q, grid.dx, float(loads.widths[J]), G=G, nu=nu, near=None)   # (n, 3, 3, 3 local)
+        s_loc = sig @ (loads.B @ c)
+        out += R.T @ s_loc @ R
+    return out
+
+
+def _mesh_isolated(model, patch, spec, attempts: int = 3):
+    """:func:`mesh_body` in a forked child process, retried: gmsh's mesh generation has aborted
+    the whole process (heap corruption, intermittent) on the S1002/UIC60 bodies with conform =
+    "all"; a crashed child is retried up to ``attempts`` times before an FESolveError (exit 2 in
+    the CLI, a note in the study, instead of the lost process)."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures.process import BrokenProcessPool
+
+    for k in range(attempts):
+        try:
+            with ProcessPoolExecutor(1, mp_context=mp.get_context("fork")) as ex:
+                return ex.submit(mesh_body, model, patch, spec).result()
+        except BrokenProcessPool:
+            continue
+    from conformal.influence.factor import FESolveError
+
+    raise FESolveError(f"stresses: gmsh aborted meshing the {model.kind} body ({attempts} tries); try other "
+                       "[model] fe_h_load / fe_h_patch or [grid] n")
+
+
+def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FESettings = FESettings(),
+                  profile_points: np.ndarray | None = None, vtu=None, vtu_radius: float | None = None
+                  ) -> BodyStresses:
+    """The FE body ``body`` (1: rail, 2: wheel) under the strip's tractions at ``points`` (..., 3)
+    in the rail-profile frame; see :func:`rail_body_stresses` and :func:`wheel_body_stresses`."""
     from skfem import asm
     from skfem.models.elasticity import linear_elasticity
+
+    from conformal.influence.fe import wheel_body_from_grid
 
     grid = getattr(field, "curved", None)
     if grid is None:
         raise InputError("stresses: FE body stresses need a conformal strip (theory \"conformal\")")
     if settings.far_field != "halfspace":
         raise InputError("stresses: FE body stresses need [model] fe_far_field = \"halfspace\"")
+    if body not in (1, 2):
+        raise InputError(f"stresses: body must be 1 or 2, got {body!r}")
     t0 = time.perf_counter()
     pts = np.asarray(points, float)
     shape = pts.shape[:-1]
     P = pts.reshape(-1, 3)
     pn, px, ps = (np.asarray(field.side_frame(k), float) for k in ("pn", "px", "py"))
-    rail, patch = rail_body_from_grid(grid, rail_points)
+    if body == 1:
+        model, patch = rail_body_from_grid(grid, profile_points)
+        rot = np.broadcast_to(np.eye(3), (grid.ms, 3, 3))
+    else:
+        model, patch, rot = wheel_body_from_grid(grid, profile_points)
     spec = replace(settings.mesh, conform="all", order=1)
-    bm = mesh_body(rail, patch, spec)
+    bm = _mesh_isolated(model, patch, spec)
     m, space = _space(bm, 1)
     lam = 2.0 * G * nu / (1.0 - 2.0 * nu)
     K = asm(linear_elasticity(lam, G), space.basis).tocsr()
@@ -115,13 +233,21 @@ def rail_body_stresses(field, points, *, G: float, nu: float, settings: FESettin
     t_mesh = time.perf_counter()
     ic = grid.mx // 2
     shift = grid.xl + (ic + 0.5) * grid.dx                    # strip x of the mesh's column x = 0
+    place = _placement(grid, body, shift, bm)
+    sgn = 1.0 if body == 1 else -1.0
     Fc = np.zeros((3, space.n_scalar))
     loaded = np.argwhere((pn != 0) | (px != 0) | (ps != 0))
+    sources = []                                               # (x0, J, common load) per loaded element
     for ix in np.unique(loaded[:, 0]):
-        loads = _loads(bm, float((ix - ic) * grid.dx))
+        x0 = float((ix - ic) * grid.dx)
+        loads = _loads(bm, x0)
         for J in loaded[loaded[:, 0] == ix, 1]:
+            # the traction on this body in its own element frames (common components, the
+            # convention of fe.combine: the wheel carries -p, turned by rot^T into its frames)
+            c = sgn * (rot[J].T @ np.array([px[ix, J], ps[ix, J], pn[ix, J]]))
             r = _residual_load(loads, surf, space, patch, G, nu, int(J))        # (3, n_scalar, 3 loads)
-            Fc += r @ np.array([px[ix, J], ps[ix, J], pn[ix, J]])
+            Fc += r @ c
+            sources.append((x0, int(J), c))
     F = np.zeros(space.basis.N)
     for c in range(3):
         F[space.dofmap[c]] = Fc[c]
@@ -135,17 +261,68 @@ def rail_body_stresses(field, points, *, G: float, nu: float, settings: FESettin
     if F.any():
         U[free] = Factor(K[free][:, free].tocsr(), solver, settings.amg_tol).solve(F[free])
     t_solve = time.perf_counter()
-    # the FE correction's stress at the points (P1: constant per tetrahedron)
-    Pm = P.copy()
-    Pm[:, 0] -= shift
-    tets = _locate_tets(m, Pm)
     Uc = np.stack([U[space.dofmap[c]] for c in range(3)])[:, :m.nvertices]
-    grad = _p1_gradients(m, Uc, tets)
-    eps = 0.5 * (grad + np.swapaxes(grad, 1, 2))
-    sig_c = 2.0 * G * eps + lam * np.trace(eps, axis1=1, axis2=2)[:, None, None] * np.eye(3)
-    sig_hs = halfspace_stresses(field, P, nu=nu, body=1)
+
+    def correction(tets):
+        grad = _p1_gradients(m, Uc, tets)
+        eps = 0.5 * (grad + np.swapaxes(grad, 1, 2))
+        return 2.0 * G * eps + lam * np.trace(eps, axis1=1, axis2=2)[:, None, None] * np.eye(3)
+
+    # the FE correction's stress at the points (P1: constant per tetrahedron)
+    Pm = place.to_mesh(P)
+    sig_c = place.tensor_from_mesh(correction(_locate_tets(m, Pm)))
+    if body == 1:
+        sig_hs = halfspace_stresses(field, P, nu=nu, body=1)
+    else:
+        sig_hs = place.tensor_from_mesh(_split_halfspace(bm, grid, sources, Pm, G, nu))
     t_end = time.perf_counter()
-    stats = {"dofs": int(space.basis.N), "tets": int(m.nelements), "loaded_elements": int(len(loaded)),
-             "mesh_s": t_mesh - t0, "rhs_s": t_rhs - t_mesh, "solve_s": t_solve - t_rhs,
-             "stress_s": t_end - t_solve, "residual_norm": float(np.abs(F).sum())}
+    stats = {"body": "rail" if body == 1 else "wheel", "dofs": int(space.basis.N), "tets": int(m.nelements),
+             "loaded_elements": int(len(loaded)), "mesh_s": t_mesh - t0, "rhs_s": t_rhs - t_mesh,
+             "solve_s": t_solve - t_rhs, "stress_s": t_end - t_solve, "residual_norm": float(np.abs(F).sum())}
+    if vtu is not None:
+        t1 = time.perf_counter()
+        stats["vtu"] = write_body_vtu(vtu, m, place, correction, bm, grid, sources, field, body, G, nu, P,
+                                      vtu_radius)
+        stats["vtu_s"] = time.perf_counter() - t1
     return BodyStresses(pts, sig_hs.reshape(shape + (3, 3)), sig_c.reshape(shape + (3, 3)), stats)
+
+
+def write_body_vtu(path, m, place, correction, bm, grid, sources, field, body, G, nu, P, radius=None) -> dict:
+    """The FE body's tetrahedra within ``radius`` (default: 3 times the extent of ``P``, at least
+    4 mm) of the points' centre as a VTU file in the rail-profile frame (mm): cell data (constant
+    per P1 tetrahedron, evaluated at its centroid) sigma_xx ... sigma_yz of sigma_hs + sigma_c,
+    von_mises, principal_shear, orthogonal_shear (sigma_xn, n the normal of the nearest strip
+    column), max_principal, correction_von_mises (of sigma_c alone), N/mm².  Atomic write."""
+    import meshio
+
+    from conformal.files import atomic_path
+    from conformal.stresses.invariants import max_principal, principal_shear, von_mises
+    from conformal.stresses.plots import _COMPONENTS
+
+    X = place.from_mesh(m.p.T)                                 # vertices, rail-profile frame
+    cent = X[m.t].mean(axis=0)                                 # (T, 3)
+    mid = P.mean(axis=0)
+    if radius is None:
+        radius = max(4.0, 3.0 * float(np.ptp(P, axis=0).max()))
+    keep = np.flatnonzero(np.linalg.norm(cent - mid, axis=1) <= radius)
+    cm = place.to_mesh(cent[keep])
+    sc = place.tensor_from_mesh(correction(keep))
+    if body == 1:
+        sh = halfspace_stresses(field, cent[keep], nu=nu, body=1)
+    else:
+        sh = place.tensor_from_mesh(_split_halfspace(bm, grid, sources, cm, G, nu))
+    sig = sh + sc
+    n = np.asarray(grid.normal, float)
+    n = n / np.linalg.norm(n, axis=1, keepdims=True)
+    cy, cz = np.asarray(grid.y, float), np.asarray(grid.z, float)
+    near = np.argmin((cent[keep, 1, None] - cy) ** 2 + (cent[keep, 2, None] - cz) ** 2, axis=1)
+    nn = np.column_stack([np.zeros(len(keep)), n[near, 0], n[near, 1]])
+    verts, inv = np.unique(m.t[:, keep].T, return_inverse=True)
+    data = {name: [sig[:, i, j]] for name, i, j in _COMPONENTS}
+    data.update(von_mises=[von_mises(sig)], principal_shear=[principal_shear(sig)],
+                orthogonal_shear=[np.einsum("ni,nij,nj->n", np.tile([1.0, 0, 0], (len(keep), 1)), sig, nn)],
+                max_principal=[max_principal(sig)], correction_von_mises=[von_mises(sc)])
+    mesh = meshio.Mesh(X[verts], [("tetra", inv.reshape(-1, 4))], cell_data=data)
+    with atomic_path(path, keep_suffix=True) as tmp:
+        meshio.write(tmp, mesh)
+    return {"path": str(path), "cells": int(len(keep)), "radius": float(radius)}

@@ -102,7 +102,8 @@ def plot_stress_field(sf, path: str | Path, title: str = "", dang_van_alpha: flo
     return save_figure(fig, path, dpi=110)
 
 
-def plot_section_comparison(points, sigma_hs, sigma_fe, path, title: str = "", surface=None) -> Path:
+def plot_section_comparison(points, sigma_hs, sigma_fe, path, title: str = "", surface=None,
+                            body_label: str = "FE rail") -> Path:
     """von Mises on a cross-section (points (nd, nc, 3), rail-profile frame) of the half-space
     and of the FE body, and their difference (N/mm²)."""
     import matplotlib
@@ -119,8 +120,8 @@ def plot_section_comparison(points, sigma_hs, sigma_fe, path, title: str = "", s
     lim = (min(v_hs.min(), v_fe.min()), max(v_hs.max(), v_fe.max()))
     d = v_fe - v_hs
     for ax, val, name, kw in ((axes[0], v_hs, "half-space\n(elements on their tangent planes)", {"vmin": lim[0], "vmax": lim[1]}),
-                              (axes[1], v_fe, "FE rail\n(half-space + FE correction, P1)", {"vmin": lim[0], "vmax": lim[1]}),
-                              (axes[2], d, "\nFE rail - half-space", {"cmap": "RdBu_r", "vmin": -np.abs(d).max(),
+                              (axes[1], v_fe, f"{body_label}\n(half-space + FE correction, P1)", {"vmin": lim[0], "vmax": lim[1]}),
+                              (axes[2], d, f"\n{body_label} - half-space", {"cmap": "RdBu_r", "vmin": -np.abs(d).max(),
                                                                      "vmax": np.abs(d).max()})):
         m = ax.pcolormesh(Y, Z, val, shading="gouraud", **kw)
         if surface is not None:
@@ -137,10 +138,11 @@ def plot_section_comparison(points, sigma_hs, sigma_fe, path, title: str = "", s
 
 
 def plot_section_3d(result, points, values, path, *, title: str = "", label: str = "von Mises (N/mm²)",
-                    window: tuple[int, int] = (1300, 950)) -> Path:
+                    window: tuple[int, int] = (1300, 950), body: str = "rail") -> Path:
     """Off-screen pyvista PNG: the rail around a conformal strip (grey), the contact patch coloured
     by its pressure and a cross-section of the rail head (points (nd, nc, 3), rail-profile frame)
-    coloured by ``values`` (nd, nc), with axes in mm."""
+    coloured by ``values`` (nd, nc), with axes in mm; ``body = "wheel"``: the wheel's surface
+    instead of the rail's, for a section through the wheel."""
     from conformal.plots import _offscreen_plotter, conformal_meshes, strip_mesh
 
     meshes = conformal_meshes(result)
@@ -150,7 +152,7 @@ def plot_section_3d(result, points, values, path, *, title: str = "", label: str
     section.point_data[label] = np.asarray(values, float).T.reshape(-1)
     pl = _offscreen_plotter(window)
     # the rail and the patch ahead of the section (x >= x0): the cut face is in view
-    rail = meshes["rail"].clip(normal=(-1.0, 0.0, 0.0), origin=(x0, 0.0, 0.0))
+    rail = meshes[body].clip(normal=(-1.0, 0.0, 0.0), origin=(x0, 0.0, 0.0))
     pl.add_mesh(rail, color="lightgrey", opacity=0.45)
     strip = meshes["strip"].threshold(1e-9, scalars="pn").clip(normal=(-1.0, 0.0, 0.0), origin=(x0, 0.0, 0.0))
     bar = {"vertical": True, "height": 0.6, "width": 0.05, "title_font_size": 14, "label_font_size": 12}
@@ -165,7 +167,8 @@ def plot_section_3d(result, points, values, path, *, title: str = "", label: str
     c = P.reshape(-1, 3).mean(axis=0)
     span = float(np.ptp(P[..., 1]) + np.ptp(P[..., 2]))
     pl.camera.focal_point = tuple(c)
-    pl.camera.position = tuple(c + span * np.array([-2.2, -0.5, -0.9]))
+    # from above the rail; a wheel section from below, so that the patch is not behind the wheel
+    pl.camera.position = tuple(c + span * np.array([-2.2, -0.5, -0.9 if body == "rail" else 0.9]))
     pl.camera.up = (0.0, 0.0, -1.0)
     path = Path(path)
     try:

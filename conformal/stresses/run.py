@@ -10,9 +10,11 @@ The scene may carry a ``[stresses]`` section (read here, not by the scene loader
     depth = 2.0        # deepest plane (mm); default twice the smaller semi-axis of each patch
     n_depths = 40      # planes from the surface to depth
     body = 1           # 1: the rail (body 1), 2: the wheel
-    fe_body = true     # theory "conformal" with influence "fe": also the stresses inside the FE rail
+    fe_body = true     # theory "conformal" with influence "fe": also the stresses inside the FE body
                        # (one FE solve with the final load) on the cross-section through the
-                       # half-space maximum (default: true for influence = "fe", else false)
+                       # half-space maximum (default: true for influence = "fe", else false);
+                       # true: the stressed body (`body`), or "rail", "wheel", "both"; with
+                       # --vtu OUT.vtu the FE body's stresses go to OUT_fe_rail.vtu / OUT_fe_wheel.vtu
 """
 from __future__ import annotations
 
@@ -66,8 +68,10 @@ def _finite_max(values) -> float:
     return max(vals) if vals else float("nan")
 
 
-def patch_stresses(result, scene, opts: dict) -> tuple[dict, list]:
-    """The JSON summary of the stresses of every patch of ``result`` and the StressFields."""
+def patch_stresses(result, scene, opts: dict, vtu=None) -> tuple[dict, list]:
+    """The JSON summary of the stresses of every patch of ``result`` and the StressFields;
+    ``vtu`` (the --vtu path): the FE bodies' stresses go beside it as ``<stem>_fe_rail.vtu`` and
+    ``<stem>_fe_wheel.vtu`` (``_patch<k>`` added when there are several patches)."""
     params = FatigueParameters(k=_number(opts, "k", K_SHEAR), alpha_dv=_number(opts, "alpha_dv", ALPHA_DV),
                                tau_e=_number(opts, "tau_e", TAU_E))
     body = opts.get("body", 1)
@@ -95,8 +99,19 @@ def patch_stresses(result, scene, opts: dict) -> tuple[dict, list]:
         row["contact_area"] = area
         row["FI_surf_equivalent"] = surface_index_area(p.FN, p.FX, p.FY, area, params.k)
         row["mu_eff"] = math.hypot(p.FX, p.FY) / p.FN
-        if _want_fe_body(scene, result, opts) and body == 1:
-            row["fe_body"] = fe_body_section(p, scene, sf, params)
+        fe_bodies = _fe_bodies(scene, result, opts, body)
+        if fe_bodies:
+            row["fe_bodies"] = {}
+            for b in fe_bodies:
+                who = "rail" if b == 1 else "wheel"
+                sfb = sf if b == body else stress_field(p.field, depths, nu=scene.material.nu1 if b == 1
+                                                        else scene.material.nu2, body=b)
+                vp = None
+                if vtu is not None:
+                    vtu = Path(vtu)
+                    vp = vtu.with_name(f"{vtu.stem}_fe_{who}" + (f"_patch{k}" if len(patches) > 1 else "") + ".vtu")
+                row["fe_bodies"][who] = fe_body_section(p, scene, sfb, params, vtu=vp)
+            row["fe_body"] = row["fe_bodies"]["rail" if fe_bodies[0] == 1 else "wheel"]   # the stressed body
         rows.append(row)
         fields.append(sf)
     if not rows:
@@ -118,7 +133,9 @@ def patch_stresses(result, scene, opts: dict) -> tuple[dict, list]:
                       "tau_dv_max": dv["tau_dv_max"], "tau_dv_depth": dv["depth"], "FI_sub": dv["FI_sub"]}
     fe_rows = [r for r in rows if "fe_body" in r]
     if fe_rows:
-        out["fe_body"] = max(fe_rows, key=lambda r: r["max_von_mises"])["fe_body"]
+        best_fe = max(fe_rows, key=lambda r: r["max_von_mises"])
+        out["fe_body"] = best_fe["fe_body"]
+        out["fe_bodies"] = best_fe["fe_bodies"]
     out["frame"] = rows[0]["frame"]
     out["patches"] = rows
     warnings = list(result.warnings)
@@ -136,14 +153,20 @@ def patch_stresses(result, scene, opts: dict) -> tuple[dict, list]:
     return _jsonable(out), fields
 
 
-def _want_fe_body(scene, result, opts) -> bool:
+def _fe_bodies(scene, result, opts, body: int) -> tuple[int, ...]:
+    """The FE bodies to compute: ``[stresses] fe_body`` true (the stressed body ``body``), false,
+    "rail", "wheel" or "both"; default: the stressed body for influence = "fe", else none."""
     want = opts.get("fe_body", None)
-    if want is not None and not isinstance(want, bool):
-        raise InputError(f"[stresses] fe_body: must be true or false, got {want!r}")
+    choices = {True: (body,), False: (), "rail": (1,), "wheel": (2,), "both": (1, 2)}
+    if want is not None and (not isinstance(want, (bool, str)) or want not in choices):
+        raise InputError(f"[stresses] fe_body: must be true, false, \"rail\", \"wheel\" or \"both\", got {want!r}")
     fe = result.theory == "conformal" and scene.model.influence == "fe"
-    if want and not fe:
+    if want not in (None, False) and not fe:
         raise InputError("[stresses] fe_body: needs [model] theory = \"conformal\" with influence = \"fe\"")
-    return fe if want is None else want
+    if want is None:
+        return (body,) if fe else ()
+    bodies = choices[want]
+    return tuple(sorted(bodies, key=lambda b: b != body))      # the stressed body first
 
 
 def _section_maxima(sf) -> dict:
@@ -158,52 +181,80 @@ def _section_maxima(sf) -> dict:
     return out
 
 
-def fe_body_stress_section(result, scene, sf):
-    """(points (nd, 1, nc, 3), BodyStresses) inside the FE rail (conformal.stresses.bodies) on the
-    cross-section of the strip through the half-space von Mises maximum of ``sf``."""
+def fe_body_stress_section(result, scene, sf, body: int | None = None, vtu=None):
+    """(points (nd, 1, nc, 3), BodyStresses) inside the FE body (1: rail, 2: wheel; default the
+    body of ``sf``; conformal.stresses.bodies) on the cross-section of the strip through the
+    half-space von Mises maximum of ``sf`` (the StressField of that body); ``vtu``: also write the
+    FE body's stresses around the patch there (conformal.stresses.bodies.write_body_vtu)."""
     from conformal.cases.conformal import scene_profiles
     from conformal.influence.fe import settings_from_options
-    from conformal.stresses.bodies import rail_body_stresses
+    from conformal.stresses.bodies import rail_body_stresses, wheel_body_stresses
 
+    body = sf.body if body is None else body
     vm = sf.von_mises
     x_i = int(np.unravel_index(int(np.nanargmax(vm)), vm.shape)[1])
     pts = sf.points[:, x_i:x_i + 1]
-    rail_pts, _ = scene_profiles(scene)
-    bs = rail_body_stresses(result.field, pts, G=scene.material.G1, nu=scene.material.nu1,
-                            settings=settings_from_options(scene.model.options), rail_points=rail_pts)
+    rail_pts, wheel_pts = scene_profiles(scene)
+    settings = settings_from_options(scene.model.options)
+    field = result.field if result.field is not None else result.patches[0].field
+    if body == 1:
+        bs = rail_body_stresses(field, pts, G=scene.material.G1, nu=scene.material.nu1, settings=settings,
+                                rail_points=rail_pts, vtu=vtu)
+    else:
+        bs = wheel_body_stresses(field, pts, G=scene.material.G2, nu=scene.material.nu2, settings=settings,
+                                 wheel_points=wheel_pts, vtu=vtu)
     return pts, bs
 
 
-def fe_body_section(result, scene, sf, params=None, figure=None) -> dict:
-    """The maxima inside the FE rail on the cross-section through the half-space maximum
-    (:func:`fe_body_stress_section`), against the half-space stresses at the same points;
-    ``figure``: also write the comparison figure there and its 3-D view (pyvista) beside it as
-    ``<stem>_3d.png`` (conformal.stresses.plots)."""
+def fe_body_section(result, scene, sf, params=None, figure=None, vtu=None) -> dict:
+    """The maxima inside the FE body of ``sf`` (rail or wheel) on the cross-section through the
+    half-space maximum (:func:`fe_body_stress_section`), against the half-space stresses of
+    ``sf`` at the same points; ``figure``: also write the comparison figure there and its 3-D
+    view (pyvista) beside it as ``<stem>_3d.png`` (:func:`fe_section_figures`); ``vtu``: the FE
+    body's stresses around the patch for ParaView."""
+    out, pts, bs, hs_sigma = fe_body_section_data(result, scene, sf, vtu=vtu)
+    if figure is not None:
+        fe_section_figures(result, scene, sf, pts, bs, hs_sigma, figure)
+    return out
+
+
+def fe_body_section_data(result, scene, sf, vtu=None):
+    """(summary, points, BodyStresses, half-space sigma at the points) of :func:`fe_body_section`
+    without the figures (a study meshes every body before it draws with VTK: gmsh meshing after a
+    VTK render in the same process has crashed the heap)."""
     from dataclasses import replace as _replace
 
     from conformal.stresses.field import StressField
 
-    pts, bs = fe_body_stress_section(result, scene, sf)
-    fe = StressField(bs.sigma, pts, sf.depths, sf.normal, sf.frame, 1)
-    hs = _replace(fe, sigma=bs.sigma_hs)
-    if figure is not None:
-        from conformal.stresses.plots import plot_section_comparison
+    pts, bs = fe_body_stress_section(result, scene, sf, vtu=vtu)
+    x_i = int(np.unravel_index(int(np.nanargmax(sf.von_mises)), sf.von_mises.shape)[1])
+    who = "rail" if sf.body == 1 else "wheel"
+    fe = StressField(bs.sigma, pts, sf.depths, sf.normal, sf.frame, sf.body)
+    hs = _replace(fe, sigma=sf.sigma[:, x_i:x_i + 1])
+    out = {"body": who, "section_x": float(pts[0, 0, 0, 0]), "fe": _section_maxima(fe),
+           "halfspace": _section_maxima(hs), "max_correction": float(np.abs(bs.sigma_c).max()),
+           "stats": bs.stats,
+           "note": "sigma = half-space field of the elements on the body's tangent planes + FE correction of "
+                   "the real body (split method, one FE solve with the final load)"}
+    return out, pts, bs, hs.sigma
 
-        from pathlib import Path as _Path
 
-        from conformal.stresses.invariants import von_mises
-        from conformal.stresses.plots import plot_section_3d
+def fe_section_figures(result, scene, sf, pts, bs, hs_sigma, figure) -> None:
+    """The section figure (matplotlib: half-space, FE body, difference) at ``figure`` and its 3-D
+    view (pyvista) at ``<stem>_3d.png``."""
+    from pathlib import Path as _Path
 
-        plot_section_comparison(pts[:, 0], bs.sigma_hs[:, 0], bs.sigma[:, 0], figure,
-                                title=f"{scene.name}: stresses in the rail at x = {pts[0, 0, 0, 0]:.2f} mm",
-                                surface=surface_curve(result))
-        fig3d = _Path(figure).with_name(_Path(figure).stem + "_3d.png")   # the same section in 3-D (pyvista)
-        plot_section_3d(result, pts[:, 0], von_mises(bs.sigma[:, 0]), fig3d,
-                        title=f"{scene.name}: von Mises in the FE rail, section x = {pts[0, 0, 0, 0]:.2f} mm")
-    return {"section_x": float(pts[0, 0, 0, 0]), "fe": _section_maxima(fe), "halfspace": _section_maxima(hs),
-            "max_correction": float(np.abs(bs.sigma_c).max()), "stats": bs.stats,
-            "note": "sigma = half-space field of the elements on their tangent planes + FE correction of the "
-                    "real rail (split method, one FE solve with the final load)"}
+    from conformal.stresses.invariants import von_mises
+    from conformal.stresses.plots import plot_section_3d, plot_section_comparison
+
+    who = "rail" if sf.body == 1 else "wheel"
+    plot_section_comparison(pts[:, 0], hs_sigma[:, 0], bs.sigma[:, 0], figure,
+                            title=f"{scene.name}: stresses in the {who} at x = {pts[0, 0, 0, 0]:.2f} mm",
+                            surface=surface_curve(result), body_label=f"FE {who}")
+    fig3d = _Path(figure).with_name(_Path(figure).stem + "_3d.png")   # the same section in 3-D (pyvista)
+    plot_section_3d(result, pts[:, 0], von_mises(bs.sigma[:, 0]), fig3d,
+                    title=f"{scene.name}: von Mises in the FE {who}, section x = {pts[0, 0, 0, 0]:.2f} mm",
+                    body=who)
 
 
 def surface_curve(result) -> np.ndarray | None:
@@ -232,7 +283,7 @@ def cmd_stresses(args) -> int:
     if args.body is not None:
         opts["body"] = args.body
     result = solve_scene(scene)
-    summary, fields = patch_stresses(result, scene, opts)
+    summary, fields = patch_stresses(result, scene, opts, vtu=args.vtu)
     for w in summary["warnings"]:
         print(f"conformal: warning: {w}", file=sys.stderr)
     text = json.dumps(summary, indent=2)
