@@ -945,13 +945,18 @@ def as_scene(source: "Scene | str | Path | Mapping[str, Any]", **overrides: Any)
     return scene.with_(**overrides) if overrides else scene
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Read and validate a TOML scene file."""
+def read_scene_file(path: str | Path) -> dict:
+    """The TOML mapping of a scene file (not yet validated); InputError if it is missing or not TOML."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"scene file not found: {path}")
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        return tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: not a valid TOML file ({exc})") from None
-    return scene_from_dict(data, base_dir=path.parent, name=path.stem)
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a TOML scene file."""
+    path = Path(path)
+    return scene_from_dict(read_scene_file(path), base_dir=path.parent, name=path.stem)

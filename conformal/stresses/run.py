@@ -19,7 +19,6 @@ The scene may carry a ``[stresses]`` section (read here, not by the scene loader
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -28,7 +27,7 @@ import numpy as np
 from conformal.errors import InputError
 from conformal.files import write_text
 from conformal.result import _jsonable
-from conformal.scene import scene_from_dict
+from conformal.scene import read_scene_file, scene_from_dict
 from conformal.stresses.fatigue import (ALPHA_DV, K_SHEAR, TAU_E, FatigueParameters, surface_index,
                                        surface_index_area)
 from conformal.stresses.field import N_DEPTHS, default_depths, stress_field
@@ -39,12 +38,7 @@ _KEYS = {"k", "alpha_dv", "tau_e", "depth", "n_depths", "body", "fe_body"}
 def read_scene_with_stresses(path: str | Path):
     """(scene, options) of a TOML scene with an optional ``[stresses]`` section."""
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"scene file not found: {path}")
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: not a valid TOML file ({exc})") from None
+    data = read_scene_file(path)
     opts = data.pop("stresses", {})
     if not isinstance(opts, dict):
         raise InputError(f"[stresses] must be a table, got stresses = {opts!r}")
