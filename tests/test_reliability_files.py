@@ -420,7 +420,7 @@ KERNEL_SCRIPT = textwrap.dedent("""\
 def test_items_in_one_process_in_any_order_match_a_fresh_process(tmp_path):
     """The FE numbers of a body do not depend on what the process computed before (gmsh is
     initialised and finalised per body): two bodies in either order, and the first alone in a
-    fresh process, give identical unknowns and kernels."""
+    fresh process, give identical unknowns and kernels (to rounding across processes)."""
     from conformal.influence.fe import body_influence
 
     items = _small_items(tmp_path)
@@ -434,8 +434,12 @@ def test_items_in_one_process_in_any_order_match_a_fresh_process(tmp_path):
                        text=True, env={**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1"}, check=True)
     assert ra1.stats["dofs"] == ra2.stats["dofs"] == int(r.stdout.split()[-1])
     assert rb1.stats["dofs"] == rb2.stats["dofs"]
-    assert np.array_equal(ra1.kernel, ra2.kernel) and np.array_equal(ra1.kernel, np.load(tmp_path / "k.npy"))
-    assert np.array_equal(rb1.kernel, rb2.kernel)
+    assert np.array_equal(ra1.kernel, ra2.kernel) and np.array_equal(rb1.kernel, rb2.kernel)
+    # Across processes the mesh and unknowns are identical (asserted above); the kernels may differ in the
+    # last bits only, as threaded BLAS/sparse factorisations may sum in another order (CI showed this
+    # without pypardiso).  The defect this guards against moved kernels by 1.7e-3 of their maximum.
+    fresh = np.load(tmp_path / "k.npy")
+    assert np.max(np.abs(fresh - ra1.kernel)) <= 1e-9 * np.max(np.abs(ra1.kernel))
 
 
 # ============================================================================ every file written atomically
