@@ -8,29 +8,29 @@
 
 ``[model]`` keys (all optional; unknown ``fec_*`` keys are rejected):
 
-=================  =========  ===========================================================
-key                default    meaning
-=================  =========  ===========================================================
-``fec_n``          4          elements per (smaller) contact semi-axis on the contact surface
-``fec_h``          --         element size on the contact surface in mm (overrides fec_n)
-``fec_order``      2          1 (linear) or 2 (quadratic) tetrahedra
-``fec_growth``     0.3        increase of the element size per mm away from the contact
-``fec_h_max``      0.25       largest element, relative to the body depth
-``fec_body_size``  1.0        margin of the bodies beyond the contact patch, in patch sizes
-``fec_patch``      1.3        fine patch extent in contact semi-axes (quadratic problems; wheel-rail:
-                              in half extents of the half-space estimate of the contact)
-``fec_estimate``   halfspace  wheel-rail: contact size from a half-space solve ("halfspace") or from
-                              the grid ("grid"), see :mod:`conformal.cases.fe_contact`
-``fec_far_field``  halfspace  cut faces: "halfspace" (Boussinesq field) or "clamped"
-``fec_solver``     auto       "auto" (pypardiso if installed, else scipy splu), "splu", "pardiso"
-``fec_body``       disc       wheel-rail: "disc" (profile inside a disc around the patch) or "section"
-                              (ground truth: whole rail section and wheel rim + web, clamped far away;
-                              the far field is then "clamped", no half-space field anywhere) or "block"
-                              (solid blocks around both profiles, clamped far away)
-``fec_section_size``  20      "section": rail ends and wheel sector cuts, patch sizes beyond the patch
-``fec_section_h_max`` 12      "section": largest element (mm)
-``fec_slave``      1.6        "section": contact candidates = the patch enlarged by this factor
-=================  =========  ===========================================================
+=====================  =========  ===========================================================
+key                    default    meaning
+=====================  =========  ===========================================================
+``fec_n``              4          elements per (smaller) contact semi-axis on the contact surface
+``fec_h``              --         element size on the contact surface in mm (overrides fec_n)
+``fec_order``          2          1 (linear) or 2 (quadratic) tetrahedra
+``fec_growth``         0.3        increase of the element size per mm away from the contact
+``fec_h_max``          0.25       largest element, relative to the body depth
+``fec_body_size``      1.0        margin of the bodies beyond the contact patch, in patch sizes
+``fec_patch``          1.3        fine patch extent in contact semi-axes (quadratic problems; wheel-rail:
+                                  in half extents of the half-space estimate of the contact)
+``fec_estimate``       halfspace  wheel-rail: contact size from a half-space solve ("halfspace") or from
+                                  the grid ("grid"), see :mod:`conformal.cases.fe_contact`
+``fec_far_field``      halfspace  cut faces: "halfspace" (Boussinesq field) or "clamped"
+``fec_solver``         auto       "auto" (pypardiso if installed, else scipy splu), "splu", "pardiso"
+``fec_body``           disc       wheel-rail: "disc" (profile inside a disc around the patch) or "section"
+                                  (ground truth: whole rail section and wheel rim + web, clamped far away;
+                                  the far field is then "clamped", no half-space field anywhere) or "block"
+                                  (solid blocks around both profiles, clamped far away)
+``fec_section_size``   20         "section": rail ends and wheel sector cuts, patch sizes beyond the patch
+``fec_section_h_max``  12         "section": largest element (mm)
+``fec_slave``          1.6        "section": contact candidates = the patch enlarged by this factor
+=====================  =========  ===========================================================
 """
 from __future__ import annotations
 
