@@ -3,7 +3,7 @@
 Data flows one way: scene -> geometry -> grid -> influence numbers -> solvers -> cases (the
 wheel-rail orchestration) -> api / cli.  "seed Eq. N" in the docstrings refers to the review that
 seeded the workbench and the primary sources are cited where their equations are implemented
-(README, References).  Units everywhere: mm, N, N/mm² (MPa), rad; creepages
+(docs/references.md).  Units everywhere: mm, N, N/mm² (MPa), rad; creepages
 dimensionless, spin in rad/mm.
 
 >>> import conformal

@@ -24,7 +24,7 @@ def load_scene(source: Scene | str | Path | Mapping[str, Any], **overrides: Any)
     Parameters
     ----------
     source : Scene, str, pathlib.Path or mapping
-        A scene file (TOML, see the README's "Scene files"), the same content as a dict, or a
+        A scene file (TOML, see docs/reference/scene-files.md), the same content as a dict, or a
         scene to change.
     **overrides
         Keys to change, written ``section__key=value`` (``model__theory="exact"``,

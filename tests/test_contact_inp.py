@@ -29,7 +29,7 @@ SUPPORTED = {Path(e["deck"]).name: e for e in MANIFEST["decks"] if e["supported"
 DIGITS = {name: e for name, e in SUPPORTED.items() if 3 in e.get("module", [])}
 WHEELRAIL = {name: e for name, e in SUPPORTED.items() if 1 in e.get("module", [])}
 #: a subset of the long decks (slow-lane budget, < 90 s): the first cases of each sequence (a
-#: sequence always starts at its first case) and every third independent case; the README's
+#: sequence always starts at its first case) and every third independent case; the numbers of docs/how-to/contact-decks.md
 #: numbers come from all cases (tests/reference/contact_decks/extract.py and conformal inp)
 SUBSET = {"spence35.inp": lambda n: n <= 15, "catt_to_cart.inp": lambda n: n <= 20 or 60 <= n <= 80,
           "tractcurv.inp": lambda n: n % 3 == 1, "tractcurve_plast.inp": lambda n: n % 3 == 1,
@@ -118,7 +118,7 @@ def test_wheelrail_decks_map_onto_scenes():
 def test_wheelrail_deck_against_contact(name, cases):
     """Manchester A-2.2 (right wheel, y_ws = 0 and 6 mm) through ``conformal inp``: patch forces and
     track forces within max(1 %, 0.002 mu FN), contact angle 0.005 rad, position on the rail
-    0.2 mm, pmax 3 %, contact elements 10 % (the project's own profile processing: README)."""
+    0.2 mm, pmax 3 %, contact elements 10 % (the project's own profile processing: docs/how-to/contact-decks.md)."""
     from conformal.contact_inp.refout import compare_wheelrail, read_ref_out_wheelrail
 
     parsed = read_deck(DECKS / name)
@@ -133,7 +133,7 @@ def test_wheelrail_deck_against_contact(name, cases):
 
 #: conformal (D = 4) module-1 cases against CONTACT (its .ref_out), with tolerances (%; angle in
 #: degrees) set from the agreement measured with the same formulation built by hand
-#: (tests/test_contact_conformal.py, README "CONTACT's conformal formulation"): groove_li pitch
+#: (tests/test_contact_conformal.py, docs/validation/flange-contact.md "CONTACT's conformal formulation"): groove_li pitch
 #: creepage +0.15 .. +0.17 %, pmax 0.04 %, area 0.22 %, TILDE_FN 0.07 %; mbench_conf FN -1.1 / +0.1 %,
 #: FX -1.3 / 0.0 %, FS -1.1 / -0.5 %, pmax -0.3 / -0.2 %, 320 / 128 elements for 321 / 129, track
 #: forces -0.9, -0.4, -1.0 %.  The issue's targets: the groove's pitch within 1 %, the flange FN within 2 %.
@@ -150,7 +150,7 @@ CONFORMAL_TOL = {
 def test_conformal_deck_against_contact(name, case):
     """CONTACT's conformal decks (module 1, D = 4) through ``conformal inp``: groove_li (free
     rolling, FX_WS = 0 prescribed with F = 1, the pitch solved; R 10.25 mm, about 30 s; case 4,
-    R 10.02 mm, passes too but takes 2 minutes: README) and mbench_conf (Z_WS prescribed with N = 0,
+    R 10.02 mm, passes too but takes 2 minutes: docs/how-to/contact-decks.md) and mbench_conf (Z_WS prescribed with N = 0,
     friction over the profile V = 1, two patches; about 6 s)."""
     from conformal.contact_inp.refout import compare_conformal, read_ref_out_wheelrail
 

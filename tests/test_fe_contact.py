@@ -110,7 +110,7 @@ def test_prescribed_force_inverts_prescribed_approach():
 @pytest.mark.slow
 def test_clamped_cut_faces_are_much_stiffer():
     """Why the half-space field on the cut faces: clamped small bodies carry far more load at the
-    same approach (the offset of DESIGN.md §5), the half-space condition removes it."""
+    same approach (the offset of docs/architecture.md §5), the half-space condition removes it."""
     hz = _sphere_hertz()
     b1, b2 = sphere_on_block(R, (hz.a, hz.b), n=2)
     hs = solve_contact(b1, b2, approach=DELTA, settings=FEContactSettings(order=1))

@@ -80,7 +80,7 @@ def test_ground_truth_quick_study_agrees_with_conformal(tmp_path):
     """The quick study (flange root at 6.2 mm, 10 kN; a coarse truth: a / 3, quadratic, the 60E1
     section and the wheel rim + web 10 patch sizes beyond the patch, clamped): at the prescribed
     wheel load conformal contact with half-space numbers meets the issue's targets against it
-    (measured: FN -0.4 %, pmax -0.2 %, area +3.0 %; the converged a / 6 truth: README)."""
+    (measured: FN -0.4 %, pmax -0.2 %, area +3.0 %; the converged a / 6 truth: docs/validation/ground-truth.md)."""
     sys.path.insert(0, str(ROOT / "studies"))
     import fe_ground_truth as study
 

@@ -1,5 +1,5 @@
 """Issue 22 item 12: what the figures say (checked on the matplotlib/pyvista objects; the PNGs
-were also looked at, see the README's "Command line" section)."""
+were also looked at, see docs/validation/reliability.md)."""
 from __future__ import annotations
 
 from dataclasses import replace

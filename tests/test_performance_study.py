@@ -49,7 +49,7 @@ def test_performance_study_quick(tmp_path):
     pair = res["fe_pair"][0]
     assert "error" not in pair and pair["workers"] == 2
     assert pair["rail"]["dofs"] > 1000 and pair["wheel"]["dofs"] > 1000
-    # FE scene: the crowned wheel on the flat rail gives Hertz within 0.2 % (README: 0.06 %)
+    # FE scene: the crowned wheel on the flat rail gives Hertz within 0.2 % (docs/validation/models.md: 0.06 %)
     scene = res["fe_scenes"][0]
     assert scene["scene"] == "hertz_crowned_wheel.toml" and "error" not in scene
     assert scene["FN"] == pytest.approx(HERTZ_FN, rel=2e-3)

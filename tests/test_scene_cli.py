@@ -123,7 +123,7 @@ def test_cli_good_scene_prints_json(tmp_path, capsys, theory):
 
 
 def test_demo_solves_the_flange_scene_and_balances_the_wheel_load(tmp_path, capsys):
-    """`conformal demo` (README command 1): conformal contact of S1002 on UIC60 at the flange root.
+    """`conformal demo` (README command 1, docs/getting-started.md): conformal contact of S1002 on UIC60 at the flange root.
     The vertical force on the rail must equal the prescribed 10 kN wheel load (seed Eq. 46) and
     the patch must lie on the curved gauge corner (contact angles spread over more than 10 deg)."""
     import json

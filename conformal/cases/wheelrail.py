@@ -1,7 +1,7 @@
 """Wheel-rail cases: from ``[geometry] kind = "wheel_rail"`` to contact problems and one result.
 
 Stages (the seed paper's geometry, kinematic and dynamic stages; "seed" is the review cited in
-the README's References):
+docs/references.md):
 
 1. the wheelset placed and the height where the wheel of ``side`` first touches its rail
    (:mod:`conformal.geometry.wheelrail`);

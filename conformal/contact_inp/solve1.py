@@ -17,7 +17,7 @@ origins together: placement "single") and friction varying with the surface incl
 accepted where it is constant over every patch's band of contact angles (checked after the solve,
 :func:`solve_case`).  The geometry processing is the project's own (smoothing spline,
 contact search, patch reference point and angle), so the results agree with CONTACT's to the
-accuracy of that processing (README, Manchester benchmark), not to its printed digits.
+accuracy of that processing (docs/validation/halfspace.md, Manchester benchmark), not to its printed digits.
 """
 from __future__ import annotations
 

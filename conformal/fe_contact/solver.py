@@ -30,7 +30,7 @@ With a prescribed normal force the approach is one more unknown with the equatio
 sum_A a_j lambda_j (n_j . d) = F.
 
 Artificial boundaries.  A body cut out of a large one and clamped at its cut faces is stiffer
-than the large body (DESIGN.md §5: 20-40 % in FN at a prescribed approach).  With
+than the large body (docs/architecture.md §5: 20-40 % in FN at a prescribed approach).  With
 ``far_field = "halfspace"`` (default) the cut faces of each body carry, instead of zero, the
 displacement of the half-space tangent to the contact at the loaded node under the same point
 force (Boussinesq 1885; Johnson 1985, eq. 3.19): the truncated body then behaves like a

@@ -3,7 +3,7 @@
 For each body (:class:`~conformal.meshing.bodies.BodyModel`, meshed by
 :func:`~conformal.meshing.gmsh_body.mesh_body`) the influence numbers are computed on ONE loaded
 column of contact elements (the one at x = 0; the rail is an extrusion and the wheel a body of
-revolution, so they depend only on the offset ix - jx, DESIGN.md §4) and observed on the 2 mx - 1
+revolution, so they depend only on the offset ix - jx, docs/architecture.md §4) and observed on the 2 mx - 1
 columns around it.  The result is the kernel of :class:`~conformal.influence.curved.CurvedInfluence`:
 
     K[kx, I, J, i, j],  shape (2 mx - 1, ms, ms, 3, 3),  kx = ix - jx + mx - 1,

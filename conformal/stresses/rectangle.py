@@ -4,7 +4,7 @@
 of conformal.stresses superpose these fields, Love 1929 / Boussinesq-Cerruti.)
 
 The FE influence numbers (:mod:`conformal.influence.fe`) split the displacement of a body into
-the analytic half-space field of the loaded element and a smooth FE correction (DESIGN.md §5,
+the analytic half-space field of the loaded element and a smooth FE correction (docs/architecture.md §5,
 "subtract the analytic singular part").  The FE correction needs the half-space field inside the
 body (Dirichlet data on the clamped faces) and its stress on the free surface (the residual
 traction of a curved surface), so this module gives displacement and stress at any point with
