@@ -29,8 +29,8 @@ SUPPORTED = {Path(e["deck"]).name: e for e in MANIFEST["decks"] if e["supported"
 DIGITS = {name: e for name, e in SUPPORTED.items() if 3 in e.get("module", [])}
 WHEELRAIL = {name: e for name, e in SUPPORTED.items() if 1 in e.get("module", [])}
 #: a subset of the long decks (slow-lane budget, < 90 s): the first cases of each sequence (a
-#: sequence always starts at its first case) and every third independent case; the numbers of docs/how-to/contact-decks.md
-#: numbers come from all cases (tests/reference/contact_decks/extract.py and conformal inp)
+#: sequence always starts at its first case) and every third independent case; the numbers in docs/how-to/contact-decks.md
+#: come from all cases (tests/reference/contact_decks/extract.py and conformal inp)
 SUBSET = {"spence35.inp": lambda n: n <= 15, "catt_to_cart.inp": lambda n: n <= 20 or 60 <= n <= 80,
           "tractcurv.inp": lambda n: n % 3 == 1, "tractcurve_plast.inp": lambda n: n % 3 == 1,
           "euro_tractcurv.inp": lambda n: n % 3 == 1}
