@@ -18,7 +18,7 @@
 #   c33_convergence are kept) - review `git diff conformal/data` afterwards.
 # * c33_convergence also writes the header of conformal/data/kalker_c33.csv (values unchanged).
 # * fe_influence_speed_error: the committed outputs (studies/out/fe_influence_speed_error.*,
-#   fe_kernel_*.npy) are those of its --quick mode (README "FE influence numbers").
+#   fe_kernel_*.npy) are those of its --quick mode (docs/validation/fe-influence.md).
 # * FE studies cache their influence numbers ($CONFORMAL_CACHE): a second run is much faster.
 set -u
 cd "$(dirname "$0")/.." || exit 2

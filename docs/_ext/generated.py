@@ -208,6 +208,34 @@ def _usage(parser: argparse.ArgumentParser) -> str:
     return " ".join(parser.format_usage().split())[len("usage: "):]
 
 
+def _command_sections(prog: str, parser: argparse.ArgumentParser, help_text: str) -> list[str]:
+    """One section per command, then one per sub-command (``conformal table build``, ...)."""
+    out = [f"## `{prog}`", "", _cell(help_text or parser.description or ""), "",
+           "```text", _usage(parser), "```", ""]
+    rows, nested = [], []
+    for a in parser._actions:
+        if isinstance(a, argparse._HelpAction):
+            continue
+        if isinstance(a, argparse._SubParsersAction):
+            helps = {c.dest: c.help for c in a._choices_actions}
+            for name, sub in a.choices.items():
+                rows.append(f"| `{name}` | {_cell(helps.get(name) or '')} (`{prog} {name}`, below) |")
+                nested.append((f"{prog} {name}", sub, helps.get(name) or ""))
+            continue
+        names = ", ".join(a.option_strings) or a.dest
+        if a.metavar and a.option_strings:
+            names += f" {a.metavar}"
+        text = a.help or ""
+        if a.choices and not isinstance(a.choices, dict):
+            text += f" (one of: {', '.join(map(str, a.choices))})"
+        rows.append(f"| `{_cell(names)}` | {_cell(text)} |")
+    if rows:
+        out += ["| argument | meaning |", "|---|---|", *rows, ""]
+    for sub_prog, sub, text in nested:
+        out += _command_sections(sub_prog, sub, text)
+    return out
+
+
 def cli_markdown() -> str:
     """Every ``conformal`` command with its options, from the argparse parser."""
     from conformal.cli import build_parser
@@ -217,27 +245,11 @@ def cli_markdown() -> str:
            "Generated from `conformal.cli.build_parser` when the documentation is built. "
            "`conformal COMMAND --help` prints the same.", "",
            "```text", _usage(parser), "```", ""]
-    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
-    for sp in subs:
-        helps = {c.dest: c.help for c in sp._choices_actions}
-        for name, p in sp.choices.items():
-            out += [f"## `conformal {name}`", "", _cell(helps.get(name) or p.description or ""), "",
-                    "```text", _usage(p), "```", "", "| argument | meaning |", "|---|---|"]
-            for a in p._actions:
-                if isinstance(a, argparse._HelpAction):
-                    continue
-                if isinstance(a, argparse._SubParsersAction):
-                    for cname, cp in a.choices.items():
-                        out.append(f"| `{cname}` | `conformal {name} {cname}`: {_cell(_usage(cp))} |")
-                    continue
-                names = ", ".join(a.option_strings) or a.dest
-                if a.metavar and a.option_strings:
-                    names += f" {a.metavar}"
-                text = a.help or ""
-                if a.choices and not isinstance(a.choices, dict):
-                    text += f" (one of: {', '.join(map(str, a.choices))})"
-                out.append(f"| `{_cell(names)}` | {_cell(text)} |")
-            out.append("")
+    for a in parser._actions:
+        if isinstance(a, argparse._SubParsersAction):
+            helps = {c.dest: c.help for c in a._choices_actions}
+            for name, sub in a.choices.items():
+                out += _command_sections(f"conformal {name}", sub, helps.get(name) or "")
     return "\n".join(out)
 
 
