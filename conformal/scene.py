@@ -18,17 +18,20 @@ import difflib
 import math
 import os
 import tomllib
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, Mapping
 
 from conformal.errors import InputError
 from conformal.materials import Material
+from conformal.registry import (APPROACH_ALONG, HISTORY, INFLUENCE_FILE, LOAD_ANGLE, MODELS, MU_TABLE,
+                                PLANAR_HALFSPACE, RIGID_SLIP, flatten_model_table)
 from conformal.specs import Friction, HistoryStep, Kinematics, ModelSpec  # noqa: F401  (part of the scene API)
 
-THEORIES = ("hertz", "linear", "empirical", "johnson_vermeulen", "fastsim", "exact", "conformal", "table", "fe_contact")
+#: the theory names (conformal.registry.MODELS: each model's declaration)
+THEORIES = MODELS.names
 #: theories that solve the normal problem only (no tangential tractions)
-NORMAL_ONLY_THEORIES = ("hertz", "fe_contact")
+NORMAL_ONLY_THEORIES = tuple(m.name for m in MODELS if m.normal_only)
 GEOMETRY_KINDS = ("quadratic", "hertz", "table", "wheel_rail")
 #: ``[model] influence``: half-space numbers with the element frames turned by the contact angles (the
 #: default), without that turn ("halfspace_planar": CONTACT's conformal approach, its D = 4 with
@@ -36,29 +39,11 @@ GEOMETRY_KINDS = ("quadratic", "hertz", "table", "wheel_rail")
 INFLUENCES = ("halfspace", "halfspace_planar", "fe")
 
 #: model-specific ``[model]`` keys (besides theory, bound, influence, tol, maxit, layer_flexibility),
-#: with the module that reads them.  Any other key is rejected (a misspelt key would otherwise be
-#: ignored silently and the default model would run).
-MODEL_OPTIONS = {
-    "maxout": "outer (normal-tangential) iterations of the exact and conformal solvers",
-    "max_mx": "conformal: largest number of strip elements along x",
-    "max_ms": "conformal: largest number of strip elements along s",
-    "creepage": "conformal: \"surface\" | \"reference\" | \"wheel_surface\" (CONTACT's rigid slip) creepages on the strip",
-    "creep_coefficients": "empirical: \"kalker\" | \"elliptic\"",
-    "n": "fastsim: number of strips",
-    "flexibilities": "fastsim: the flexibilities L1, L2, L3",
-    "discretisation": "fastsim: \"midpoint\" | \"contact\"",
-    "require_c33": "linear: compute C33 also without spin",
-    "table": "table: the creep-force table file",
-    "fe_method": "FE: \"split\" | \"direct\"", "fe_order": "FE: element order 1 | 2",
-    "fe_h_patch": "FE: element size on the patch (mm)", "fe_h_load": "FE: element size of the loaded column",
-    "fe_growth": "FE: element growth rate", "fe_h_max": "FE: largest element (mm)",
-    "fe_conform": "FE: conforming mesh", "fe_body_size": "FE: body size over the patch",
-    "fe_solver": "FE: linear solver", "fe_collocation": "FE: collocation rule",
-    "fe_far_field": "FE: far-field boundary condition",
-    "fe_closure": "FE: a profile ending inside the body: \"extend\" (straight, slabs limited; default) | \"straight\" | \"cut\"",
-    "influence_file": "exact: influence numbers read from a file (conformal.influence.contact_file)",
-    **{k: "fe_contact: see conformal.fe_contact.problems" for k in ("fec_n", "fec_h", "fec_order", "fec_growth", "fec_h_max", "fec_body_size", "fec_patch", "fec_far_field", "fec_solver", "fec_estimate")},
-}
+#: with the theories that read them, from the registry (conformal.registry).  Any other key is
+#: rejected (a misspelt key would otherwise be ignored silently and the default model would run).
+#: Keys of a method may also be nested: ``[model.fe] order`` is ``[model] fe_order``.
+MODEL_OPTIONS = {key: f"{', '.join(MODELS.readers(key)) or opt.group}: {opt.doc}"
+                 for key, opt in MODELS.options().items()}
 
 #: the largest [model] tol: the iterations stop when the tractions change by less than tol (relative);
 #: tol = 10 was reported converged with FX 35 % off (issue 22); the default is 1e-6
@@ -190,8 +175,21 @@ class Scene:
     history: tuple = ()        # HistoryStepSpec per [[history]] step (empty: one solve, no history)
 
     def with_model(self, **changes) -> "Scene":
-        """The scene with other ``[model]`` values, e.g. ``scene.with_model(theory="exact")``."""
-        return replace(self, model=replace(self.model, **changes))
+        """The scene with other ``[model]`` values, e.g. ``scene.with_model(theory="exact")``,
+        validated again as :meth:`with_`; ``options=`` replaces all model-specific keys.
+
+        >>> s = scene_from_dict({"geometry": {"kind": "quadratic", "A": 0.001, "B": 0.001},
+        ...                      "load": {"normal_force": 1e4}, "model": {"maxout": 3}})
+        >>> s.with_model(theory="exact").model.options, s.with_model(options={"n": 20}).model.options
+        ({'maxout': 3}, {'n': 20})
+        """
+        data = self.to_dict()
+        if "options" in changes:
+            core = {f.name for f in fields(ModelSpec)} - {"options"}
+            data["model"] = {k: v for k, v in data["model"].items() if k in core}
+            data["model"].update(dict(changes.pop("options") or {}))
+        data["model"].update(changes)
+        return scene_from_dict(data, base_dir=self.base_dir, name=self.name)
 
     def with_(self, key: str | None = None, value: Any = None, /, **changes) -> "Scene":
         """The scene with one or more keys changed, without nested :func:`dataclasses.replace`.
@@ -301,6 +299,9 @@ def _set_toml_key(data: dict, path: str, value: Any) -> None:
     if sec == "material":
         _set_material_key(table, parts[1:], value, path)
         return
+    if sec == "model" and len(parts) == 3 and parts[1] in {me.name for me in MODELS.methods}:
+        (flat,) = flatten_model_table({parts[1]: {parts[2]: value}})     # an unknown key: InputError
+        parts = [sec, flat]
     if len(parts) != 2:
         raise InputError(f"{path}: expected section.key, e.g. \"model.theory\"")
     key = parts[1]
@@ -318,6 +319,9 @@ def _set_toml_key(data: dict, path: str, value: Any) -> None:
         table.pop("normal_force", None), table.pop("wheel_load", None)   # first touch or [load] approach
     elif sec == "load" and key in ("normal_force", "approach", "wheel_load"):
         table.pop("approach_along", None)
+    if value is None:           # TOML has no null: None removes the key (its default applies)
+        table.pop(key, None)
+        return
     table[key] = value
 
 
@@ -687,7 +691,7 @@ def _grid(data: Any) -> GridSpec:
 def _model(data: Any, base_dir: Path = Path(".")) -> ModelSpec:
     if data is not None and not isinstance(data, Mapping):
         raise InputError(f"[model] must be a table, got {type(data).__name__} {data!r}")
-    raw = dict(data or {})
+    raw = flatten_model_table(dict(data or {}))     # [model.fe] order -> fe_order, ...
     core = {f.name for f in fields(ModelSpec)} - {"options"}
     _Section("model", raw, core | set(MODEL_OPTIONS))      # unknown keys (with the closest known one)
     sec = _Section("model", {k: v for k, v in raw.items() if k in core})
@@ -708,45 +712,13 @@ def _model(data: Any, base_dir: Path = Path(".")) -> ModelSpec:
                      options=options)
 
 
-def _whole(minimum: int):
-    def check(v):
-        if isinstance(v, bool) or not isinstance(v, int):
-            return f"must be a whole number >= {minimum}, got {v!r}"
-        return None if v >= minimum else f"must be >= {minimum}, got {v}"
-    return check
-
-
-def _one_of(*choices):
-    def check(v):
-        return None if v in choices else f"must be one of {', '.join(repr(c) for c in choices)}, got {v!r}"
-    return check
-
-
-def _flexibilities(v):
-    ok = (isinstance(v, (list, tuple)) and len(v) == 3 and all(
-        isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and x > 0 for x in v))
-    return None if ok else f"must be three numbers > 0 (L1, L2, L3 in mm³/N), got {v!r}"
-
-
-def _boolean(v):
-    return None if isinstance(v, bool) else f"must be true or false, got {v!r}"
-
-
-#: checks of the [model] options' values (None: fine, else the problem), read when the scene is read
-#: so that a bad value is refused whatever the theory (it was ignored where the theory did not read it)
-_OPTION_CHECKS = {
-    "maxout": _whole(1), "max_mx": _whole(4), "max_ms": _whole(4), "n": _whole(4),
-    "creepage": _one_of("surface", "reference"), "creep_coefficients": _one_of("kalker", "elliptic"),
-    "discretisation": _one_of("midpoint", "contact"), "flexibilities": _flexibilities,
-    "require_c33": _boolean,
-}
-
-
 def _check_model_options(sec: "_Section", options: Mapping[str, Any]) -> None:
-    """Refuse a bad value of a [model] option (InputError naming the key)."""
+    """Refuse a bad value of a [model] option (InputError naming the key), checked against its
+    declaration in the registry when the scene is read, so that a bad value is refused whatever the
+    theory (it was ignored where the theory did not read it)."""
+    declared = MODELS.options()
     for key, v in options.items():
-        check = _OPTION_CHECKS.get(key)
-        problem = check(v) if check is not None else None
+        problem = declared[key].problem(v) if key in declared else None
         if problem:
             raise sec.error(key, f"{problem} ({MODEL_OPTIONS[key]})")
 
@@ -755,9 +727,9 @@ SECTIONS = ("name", "material", "friction", "geometry", "load", "kinematics", "g
 
 
 #: bytes per grid element a theory needs (arrays it allocates; the exact theory: zero-padded FFTs of
-#: the 3 x 3 influence kernel and its working arrays).  The conformal theory adds dense blocks along s.
-_BYTES_PER_ELEMENT = {"hertz": 48, "linear": 48, "empirical": 48, "johnson_vermeulen": 48, "fastsim": 240,
-                      "exact": 900, "conformal": 900, "table": 48}
+#: the 3 x 3 influence kernel and its working arrays), from the registry.  The conformal theory adds
+#: dense blocks along s (conformal.registry.Model.bytes_dense_y).
+_BYTES_PER_ELEMENT = {m.name: m.bytes_per_element for m in MODELS}
 
 
 def available_memory() -> float | None:
@@ -778,11 +750,7 @@ def available_memory() -> float | None:
 
 def grid_bytes(mx: int, my: int, theory: str) -> float:
     """An estimate of the memory (bytes) an mx x my grid needs with ``theory``."""
-    n = float(mx) * float(my)
-    need = n * _BYTES_PER_ELEMENT.get(theory, 900)
-    if theory == "conformal":        # (2mx-1) x ms x ms x 3 x 3 kernel and its FFT along x
-        need += 2.0 * float(mx) * float(my) ** 2 * 9 * 16
-    return need
+    return MODELS.grid_bytes(mx, my, theory)
 
 
 def check_grid_memory(mx: int, my: int, theory: str, key: str, hint: str = "use a coarser grid") -> None:
@@ -812,36 +780,39 @@ def grid_memory(scene: "Scene") -> tuple[int, int, float]:
 def validate(scene: "Scene") -> "Scene":
     """Checks that need several sections (a grid too large for the memory of this machine, the
     ranges of changed keys); raises :class:`InputError` naming the key.  Returns the scene."""
-    if scene.model.theory not in THEORIES:
-        raise InputError(f"[model] theory: must be one of {', '.join(THEORIES)}, got {scene.model.theory!r}"
-                         f"{_did_you_mean(scene.model.theory, THEORIES)}")
+    theory = scene.model.theory
+    if theory not in MODELS:
+        raise InputError(f"[model] theory: must be one of {', '.join(THEORIES)}, got {theory!r}"
+                         f"{_did_you_mean(theory, THEORIES)}")
+    model = MODELS[theory]
     geo = scene.geometry
     kin, fr = scene.kinematics, scene.friction
-    for key, given in (("[kinematics] direction", kin.direction == -1), ("[kinematics] rigid_slip", kin.rigid_slip is not None),
-                       ("[friction] mu_table", fr.mu_table is not None),
-                       ("[model] influence_file", "influence_file" in scene.model.options)):
+    for key, given, cap in (("[kinematics] direction", kin.direction == -1, None),
+                            ("[kinematics] rigid_slip", kin.rigid_slip is not None, RIGID_SLIP),
+                            ("[friction] mu_table", fr.mu_table is not None, MU_TABLE),
+                            ("[model] influence_file", "influence_file" in scene.model.options, INFLUENCE_FILE)):
         if given and isinstance(geo, WheelRailGeometry):
             raise InputError(f"{key}: for planar scenes (kind quadratic, hertz, table); not yet for wheel_rail scenes")
-        if given and key != "[kinematics] direction" and scene.model.theory != "exact":
-            raise InputError(f"{key}: only theory \"exact\" uses it (got theory {scene.model.theory!r}); "
+        if given and cap is not None and not model.accepts(cap):
+            raise InputError(f"{key}: only theory {MODELS.quoted(cap)} uses it (got theory {theory!r}); "
                              "other theories would ignore it")
     if scene.history:
         if isinstance(geo, WheelRailGeometry):
             raise InputError("[[history]]: load histories are for planar scenes (kind quadratic, hertz, table)")
-        if scene.model.theory != "exact":
-            raise InputError(f"[[history]]: a load history is solved by theory \"exact\", got {scene.model.theory!r}")
+        if not model.accepts(HISTORY):
+            raise InputError(f"[[history]]: a load history is solved by theory {MODELS.quoted(HISTORY)}, got {theory!r}")
         if kin.direction == -1 or kin.rigid_slip is not None or fr.mu_table is not None \
                 or "influence_file" in scene.model.options:
             raise InputError("[[history]]: not combined with direction = -1, rigid_slip, mu_table or influence_file")
-    if scene.model.influence == "halfspace_planar" and scene.model.theory != "conformal":
+    if scene.model.influence == "halfspace_planar" and not model.accepts(PLANAR_HALFSPACE):
         raise InputError(f"[model] influence: \"halfspace_planar\" (CONTACT's conformal approach) is for theory "
-                         f"\"conformal\", got theory {scene.model.theory!r}")
-    if scene.load.approach_along is not None and scene.model.theory != "conformal":
+                         f"{MODELS.quoted(PLANAR_HALFSPACE)}, got theory {theory!r}")
+    if scene.load.approach_along is not None and not model.accepts(APPROACH_ALONG):
         raise InputError(f"[load] approach_along: an approach along the load direction needs [model] theory = "
-                         f"\"conformal\", got {scene.model.theory!r}")
-    if scene.load.load_angle != 0.0 and scene.model.theory != "conformal":
+                         f"{MODELS.quoted(APPROACH_ALONG)}, got {theory!r}")
+    if scene.load.load_angle != 0.0 and not model.accepts(LOAD_ANGLE):
         raise InputError(f"[load] load_angle: a load direction other than vertical needs [model] theory = "
-                         f"\"conformal\" (the {scene.model.theory!r} model balances the vertical load)")
+                         f"{MODELS.quoted(LOAD_ANGLE)} (the {theory!r} model balances the vertical load)")
     if isinstance(geo, WheelRailGeometry):
         if abs(geo.yaw) > MAX_YAW:
             raise InputError(f"[geometry] yaw: the wheelset yaw must lie within +-{MAX_YAW:g} rad, got {geo.yaw:g}")
@@ -860,7 +831,7 @@ def scene_warnings(scene: "Scene") -> list[str]:
     out = []
     geo = scene.geometry
     kin = scene.kinematics
-    if scene.model.theory in NORMAL_ONLY_THEORIES:
+    if scene.model.theory in MODELS and MODELS[scene.model.theory].normal_only:
         given = [k for k in ("xi", "eta", "phi") if getattr(kin, k) != 0.0]
         given += [k for k in ("fx_rel", "fy_rel", "speed") if getattr(kin, k) is not None]
         if given:

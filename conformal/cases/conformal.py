@@ -339,7 +339,7 @@ def _solve_pitch(scene, *, max_enlarge: int, max_pitch: int) -> Result:
     ``pitch_creepage_solved`` (the reference column's xi, the JSON ``xi``),
     ``reference_rolling_radius`` and, for fx_rel = 0, ``pitch_creepage_free``."""
     target = float(scene.kinematics.fx_rel)
-    plain = replace(scene, kinematics=replace(scene.kinematics, fx_rel=None))
+    plain = scene.with_("kinematics.fx_rel", None)
     state = loaded_state(scene, grids=False)[:2]       # the pitch does not move the planar balance
     motion0 = wheelset_motion(scene)
     solves: dict[float, tuple] = {}
@@ -349,7 +349,7 @@ def _solve_pitch(scene, *, max_enlarge: int, max_pitch: int) -> Result:
         if xi not in solves:
             if ref:
                 pitch, _ = _pitch_for_reference_creepage(ref["problem"], ref["motion"], xi)
-                sc = replace(plain, kinematics=replace(plain.kinematics, pitch_velocity=pitch))
+                sc = plain.with_("kinematics.pitch_velocity", pitch)
             else:
                 sc = plain
             res, prob = _solve_conformal(sc, max_enlarge=max_enlarge, with_problem=True, state=state)
