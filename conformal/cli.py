@@ -48,7 +48,7 @@ def _solve_and_report(scene, json_path: str | None, plot_path: str | None, vtu_p
     conformal.plots.Render3D started before the solve (the demo) for the plot's 3-D view.  A
     result that did not converge is reported on stderr and ends with EXIT_UNCONVERGED unless
     ``allow_unconverged``."""
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     check_output_path(json_path, "--json")
     check_output_path(plot_path, "--plot", PLOT_SUFFIXES)

@@ -70,7 +70,7 @@ from conformal.errors import ConformalError  # noqa: E402
 
 def solve_at(scene_file: str, approach: float, influence: str, **fe) -> dict:
     from conformal.scene import Load, load_scene
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     scene = load_scene(SCENES / scene_file)
     options = dict(scene.model.options)

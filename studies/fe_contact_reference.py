@@ -194,7 +194,7 @@ def _profile(r):
 
 
 def _solve(scene, theory: str, options: dict, influence: str = "halfspace"):
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     opts = dict(scene.model.options)
     opts.update(options)

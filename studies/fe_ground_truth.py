@@ -113,7 +113,7 @@ def _slave_edge(run) -> bool:
 
 
 def _conformal(scene, influence: str) -> dict:
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     sc = scene.with_model(theory="conformal", influence=influence, options=dict(scene.model.options))
     t0 = time.perf_counter()

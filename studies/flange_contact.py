@@ -48,7 +48,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _provenance import output_dir, write_sidecar  # noqa: E402
 from conformal.errors import ConformalError  # noqa: E402
 from conformal.scene import load_scene  # noqa: E402
-from conformal.solve import solve_scene  # noqa: E402
+from conformal.dispatch import solve_scene  # noqa: E402
 
 SCENE = ROOT / "meshes" / "scenes" / "flange_s1002_uic60.toml"
 WORN = ROOT / "meshes" / "scenes" / "flange_worn.toml"

@@ -38,7 +38,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _provenance import output_dir, write_sidecar  # noqa: E402
 from conformal.errors import ConformalError  # noqa: E402
 from conformal.scene import load_scene  # noqa: E402
-from conformal.solve import solve_scene  # noqa: E402
+from conformal.dispatch import solve_scene  # noqa: E402
 
 SCENE = ROOT / "meshes" / "scenes" / "flange_s1002_uic60.toml"
 SCENES = (("tread, y = 0", 0.0), ("flange root, y = 6.2", 6.2), ("flange flank, y = 6.3", 6.3))

@@ -14,7 +14,7 @@ from conformal.grid import PlanarGrid
 from conformal.materials import Material
 from conformal.result import SLIP
 from conformal.scene import load_scene, scene_from_dict
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 from conformal.cases import conformal as CC
 from conformal.solvers import conformal as C
 from conformal.solvers.normal import solve_normal

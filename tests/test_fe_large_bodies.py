@@ -18,7 +18,7 @@ from conformal.materials import Material
 from conformal.meshing.bodies import BodyModel, Profile2D, StripPatch
 from conformal.meshing.gmsh_body import MeshSpec
 from conformal.scene import load_scene
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 from conformal.theories.hertz import hertz_from_curvatures
 
 SCENES = Path(__file__).parents[1] / "meshes" / "scenes"

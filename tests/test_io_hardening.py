@@ -113,7 +113,7 @@ def test_output_paths_are_checked_before_solving(tmp_path, capsys, monkeypatch, 
     def no_solve(scene):
         raise AssertionError("solved before checking the output path")
 
-    monkeypatch.setattr("conformal.solve.solve_scene", no_solve)
+    monkeypatch.setattr("conformal.dispatch.solve_scene", no_solve)
     code, out, err = run_cli(capsys, "solve", scene_file(tmp_path), option, tmp_path / name)
     assert code == 2 and message in one_line_error(err)
 
@@ -160,7 +160,7 @@ def test_a_steep_rail_cant_warns(tmp_path, capsys):
 def test_reported_approach_gives_back_the_wheel_load(theory, n):
     """The JSON's ``approach`` of a wheel-load solve is the wheelset's lowering below the height where
     its first wheel touches, as ``[load] approach``: solving at it gives back the same forces."""
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     sc = load_scene(DEMO).with_(model__theory=theory, grid__n=n)
     r = solve_scene(sc)

@@ -116,7 +116,7 @@ def test_precompute_fills_the_conformal_strip_of_a_multi_patch_scene(tmp_path, m
     from pathlib import Path
 
     from conformal.scene import load_scene
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     scene = load_scene(Path(__file__).parents[1] / "meshes" / "scenes" / "flange_worn_three_patches.toml")
     # at 9.93 mm (the scene's shift: three patches) the strip turns past the vertical gauge face

@@ -10,7 +10,7 @@ import pytest
 from conformal.cli import main
 from conformal.plots import curved_strip_points, export_conformal_vtu, render_conformal_3d
 from conformal.scene import load_scene
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 
 SCENES = Path(__file__).resolve().parents[1] / "meshes" / "scenes"
 

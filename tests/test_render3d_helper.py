@@ -8,7 +8,7 @@ import pytest
 
 from conformal.plots import Render3D, render_conformal_3d
 from conformal.scene import load_scene
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 
 SCENES = Path(__file__).resolve().parents[1] / "meshes" / "scenes"
 

@@ -13,7 +13,7 @@ from conformal.cases.wheelrail import (BALANCE_TOL, BalanceCounts, WarmStart, ba
                                        balance_height_bracketing, place_scene, solve_wheel_rail)
 from conformal.cli import main
 from conformal.scene import load_scene
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 MBENCH = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"

@@ -15,7 +15,7 @@ from conformal.geometry.patches import find_patches, planar_distance
 from conformal.cases.wheelrail import (curved_problems_from_wheel_rail, place_scene,
                                           problems_from_wheel_rail, solve_wheel_rail, state_at)
 from conformal.scene import load_scene
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 from conftest import reference_cases
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -545,12 +545,7 @@ def _solve_separate(scene, builder: StripBuilder, coupled_problem: CurvedProblem
     all_warn = warnings + [w for r in finished for w in r.extra.get("warnings", [])]
     if all_warn:
         extra["warnings"] = list(dict.fromkeys(all_warn))
-    out = Result(theory="conformal", FN=sum(r.FN for r in finished), FX=sum(r.FX for r in finished),
-                 FY=sum(r.FY for r in finished), MZ=sum(r.MZ for r in finished), a=main.a, b=main.b,
-                 pmax=max(r.pmax for r in finished), approach=main.approach, xi=main.xi, eta=main.eta,
-                 phi=main.phi, converged=all(r.converged for r in finished),
-                 wall_s=sum(r.wall_s for r in finished), iterations=None, residual=None,
-                 patches=tuple(finished), extra=extra)
+    out = Result.combined(finished, "conformal", extra)
     return out, problems[int(np.argmax([r.FN for r in finished]))]
 
 

@@ -131,7 +131,7 @@ def solve_wheel_rail_fe_contact(scene) -> Result:
 def solve_scene_with_run(scene) -> tuple[Result, FEContactRun]:
     """theory = "fe_contact" for any scene (wheel-rail or quadratic), returning the run as well
     (the meshed bodies, for :func:`conformal.fe_contact.problems.write_vtu`: ``conformal solve
-    --vtu``).  The result is :func:`conformal.solve.solve_scene`'s, with ``wall_s``."""
+    --vtu``).  The result is :func:`conformal.dispatch.solve_scene`'s, with ``wall_s``."""
     import time
     from dataclasses import replace
 

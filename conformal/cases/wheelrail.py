@@ -744,12 +744,7 @@ def combine_patches(results: list[Result], problems: list[ContactProblem], theor
     ext.update(FX_track=float(F[0]), FY_track=float(F[1]), FZ_track=float(F[2]), n_patches=len(patches),
                contact_angle=main.extra["contact_angle"], y_rail=main.extra["y_rail"],
                penetration=main.approach)
-    return Result(theory=theory, FN=sum(r.FN for r in patches), FX=sum(r.FX for r in patches),
-                  FY=sum(r.FY for r in patches), MZ=sum(r.MZ for r in patches), a=main.a, b=main.b,
-                  pmax=max(r.pmax for r in patches), approach=main.approach, xi=main.xi, eta=main.eta,
-                  phi=main.phi, converged=all(r.converged for r in patches),
-                  wall_s=sum(r.wall_s for r in patches), iterations=None, residual=None,
-                  patches=tuple(patches), extra=ext)
+    return Result.combined(patches, theory, ext)
 
 
 def _geometry_extra(scene: Scene, pl: Placement) -> dict:

@@ -265,7 +265,7 @@ def cmd_stresses(args) -> int:
     import json
     import sys
 
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     args.check_output(args.json, "--json", (".json",))
     args.check_output(args.plot, "--plot", args.plot_suffixes)
