@@ -268,10 +268,3 @@ def _line_problem(scene: Scene, common: dict) -> ContactProblem:
         grid = PlanarGrid(g.n, 1, 2.0 * g.scale * a / g.n, 1.0, -g.scale * a, -0.5)
     X, _ = grid.mesh()
     return ContactProblem(grid=grid, h=geo.A * X**2, line_contact=True, **common)
-
-
-def with_grid(problem: ContactProblem, grid: PlanarGrid) -> ContactProblem:
-    """The same quadratic problem sampled on another grid (for convergence studies)."""
-    hz = problem.require_hertz("with_grid")
-    X, Y = grid.mesh()
-    return replace(problem, grid=grid, h=hz.A * X**2 + hz.B * Y**2)

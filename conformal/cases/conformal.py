@@ -26,8 +26,6 @@ from conformal.cases.wheelrail import (curved_creepages, loaded_state, patch_inf
 from conformal.errors import ConvergenceError, InputError
 from conformal.geometry.patches import Patch, curved_grid_for_patch
 from conformal.geometry.wheelrail import profile_curves
-from conformal.influence.curved import CurvedInfluence
-from conformal.influence.fe import settings_from_options, wheel_rail_kernel
 from conformal.result import EXTERIOR, Result
 from conformal.solvers.conformal import (MAX_ELEMENTS, CurvedProblem, approach_weights, column_creepages,
                                         solve_curved)
@@ -41,18 +39,6 @@ def scene_profiles(scene) -> tuple[np.ndarray | None, np.ndarray | None]:
     except (AttributeError, TypeError):
         return None, None
     return rc.sample(0.1)[1], wc.sample(0.1)[1]
-
-
-def influence_for_grid(scene, grid, *, cache=None):
-    """The FE influence operator (CurvedInfluence) of a wheel-rail scene's curved grid, with the
-    scene's [model] fe_* settings, through the cache (``conformal precompute`` fills the same
-    entries).  Returns (operator, info)."""
-    rail_pts, wheel_pts = scene_profiles(scene)
-    geo = scene.geometry
-    kernel, info = wheel_rail_kernel(grid, scene.material, settings_from_options(scene.model.options),
-                                     cache=cache, rail_points=rail_pts, wheel_points=wheel_pts,
-                                     names=(str(geo.rail_profile), str(geo.wheel_profile)))
-    return CurvedInfluence.from_kernel(kernel), info
 
 
 CREEPAGES = ("surface", "reference", "wheel_surface")
