@@ -25,7 +25,7 @@ from typing import Any, Mapping
 from conformal.errors import InputError
 from conformal.materials import Material
 from conformal.registry import (APPROACH_ALONG, HISTORY, INFLUENCE_FILE, LOAD_ANGLE, MODELS, MU_TABLE,
-                                PLANAR_HALFSPACE, RIGID_SLIP, flatten_model_table)
+                                PLANAR_HALFSPACE, RIGID_SLIP, Registry, flatten_model_table)
 from conformal.specs import Friction, HistoryStep, Kinematics, ModelSpec  # noqa: F401  (part of the scene API)
 
 #: the theory names (conformal.registry.MODELS: each model's declaration)
@@ -42,8 +42,12 @@ INFLUENCES = ("halfspace", "halfspace_planar", "fe")
 #: with the theories that read them, from the registry (conformal.registry).  Any other key is
 #: rejected (a misspelt key would otherwise be ignored silently and the default model would run).
 #: Keys of a method may also be nested: ``[model.fe] order`` is ``[model] fe_order``.
-MODEL_OPTIONS = {key: f"{', '.join(MODELS.readers(key)) or opt.group}: {opt.doc}"
-                 for key, opt in MODELS.options().items()}
+def model_options(models: Registry = MODELS) -> dict[str, str]:
+    """The ``[model]`` keys of ``models`` (flat spelling) -> "readers: what it sets"."""
+    return {key: f"{', '.join(models.readers(key)) or opt.group}: {opt.doc}" for key, opt in models.options().items()}
+
+
+MODEL_OPTIONS = model_options()
 
 #: the largest [model] tol: the iterations stop when the tractions change by less than tol (relative);
 #: tol = 10 was reported converged with FX 35 % off (issue 22); the default is 1e-6
@@ -688,22 +692,22 @@ def _grid(data: Any) -> GridSpec:
                     strips=sec.choice("strips", ("coupled", "separate"), "coupled"))
 
 
-def _model(data: Any, base_dir: Path = Path(".")) -> ModelSpec:
+def _model(data: Any, base_dir: Path = Path("."), models: Registry = MODELS) -> ModelSpec:
     if data is not None and not isinstance(data, Mapping):
         raise InputError(f"[model] must be a table, got {type(data).__name__} {data!r}")
-    raw = flatten_model_table(dict(data or {}))     # [model.fe] order -> fe_order, ...
+    raw = flatten_model_table(dict(data or {}), models)     # [model.fe] order -> fe_order, ...
     core = {f.name for f in fields(ModelSpec)} - {"options"}
-    _Section("model", raw, core | set(MODEL_OPTIONS))      # unknown keys (with the closest known one)
+    _Section("model", raw, core | set(models.options()))      # unknown keys (with the closest known one)
     sec = _Section("model", {k: v for k, v in raw.items() if k in core})
     options = {k: v for k, v in raw.items() if k not in core}
-    _check_model_options(sec, options)
+    _check_model_options(sec, options, models)
     if options.get("table") not in (None, "default"):   # a creep-force table: relative to the scene's folder
         options["table"] = str(_input_file(_Section("model", options), "table", base_dir).resolve())
     tol = sec.number("tol", 1e-6, positive=True)
     if tol > MAX_TOL:
         raise sec.error("tol", f"the solvers' relative stopping tolerance must be <= {MAX_TOL:g}, got {tol:g} "
                         "(a larger one stops before the tractions are found; the default is 1e-6)")
-    return ModelSpec(theory=sec.choice("theory", THEORIES, "fastsim"),
+    return ModelSpec(theory=sec.choice("theory", models.names, "fastsim"),
                      bound=sec.choice("bound", ("parabolic", "elliptic"), "parabolic"),
                      influence=sec.choice("influence", INFLUENCES, "halfspace"),
                      tol=tol,
@@ -712,15 +716,15 @@ def _model(data: Any, base_dir: Path = Path(".")) -> ModelSpec:
                      options=options)
 
 
-def _check_model_options(sec: "_Section", options: Mapping[str, Any]) -> None:
+def _check_model_options(sec: "_Section", options: Mapping[str, Any], models: Registry = MODELS) -> None:
     """Refuse a bad value of a [model] option (InputError naming the key), checked against its
     declaration in the registry when the scene is read, so that a bad value is refused whatever the
     theory (it was ignored where the theory did not read it)."""
-    declared = MODELS.options()
+    declared = models.options()
     for key, v in options.items():
         problem = declared[key].problem(v) if key in declared else None
         if problem:
-            raise sec.error(key, f"{problem} ({MODEL_OPTIONS[key]})")
+            raise sec.error(key, f"{problem} ({model_options(models)[key]})")
 
 
 SECTIONS = ("name", "material", "friction", "geometry", "load", "kinematics", "grid", "model")
@@ -748,22 +752,24 @@ def available_memory() -> float | None:
         return None
 
 
-def grid_bytes(mx: int, my: int, theory: str) -> float:
-    """An estimate of the memory (bytes) an mx x my grid needs with ``theory``."""
-    return MODELS.grid_bytes(mx, my, theory)
+def grid_bytes(mx: int, my: int, theory: str, models: Registry = MODELS) -> float:
+    """An estimate of the memory (bytes) an mx x my grid needs with ``theory`` (its declaration in
+    the registry: :meth:`conformal.registry.Model.grid_bytes`)."""
+    return models.grid_bytes(mx, my, theory)
 
 
-def check_grid_memory(mx: int, my: int, theory: str, key: str, hint: str = "use a coarser grid") -> None:
+def check_grid_memory(mx: int, my: int, theory: str, key: str, hint: str = "use a coarser grid",
+                      models: Registry = MODELS) -> None:
     """Refuse (InputError naming ``key``) an mx x my grid whose estimated memory with ``theory``
     (:func:`grid_bytes`) exceeds 80 % of the memory available, before anything is allocated."""
-    need = grid_bytes(mx, my, theory)
+    need = grid_bytes(mx, my, theory, models)
     avail = available_memory()
     if avail is not None and need > 0.8 * avail:
         raise InputError(f"{key}: a {mx} x {my} grid needs about {need / 2**30:.3g} GiB with theory "
                          f"{theory!r}, more than the {avail / 2**30:.3g} GiB available; {hint}")
 
 
-def grid_memory(scene: "Scene") -> tuple[int, int, float]:
+def grid_memory(scene: "Scene", models: Registry = MODELS) -> tuple[int, int, float]:
     """(mx, my, bytes): an estimate of the memory the scene's grid needs with its theory, before
     anything is allocated.  Wheel-rail grids sized by ``element_size`` are not known here: (0, 0, 0)
     (they are checked where their size becomes known: conformal.geometry.patches)."""
@@ -774,17 +780,18 @@ def grid_memory(scene: "Scene") -> tuple[int, int, float]:
         return 0, 0, 0.0
     else:
         mx = my = int(g.n)
-    return mx, my, grid_bytes(mx, my, theory)
+    return mx, my, grid_bytes(mx, my, theory, models)
 
 
-def validate(scene: "Scene") -> "Scene":
+def validate(scene: "Scene", models: Registry = MODELS) -> "Scene":
     """Checks that need several sections (a grid too large for the memory of this machine, the
-    ranges of changed keys); raises :class:`InputError` naming the key.  Returns the scene."""
+    ranges of changed keys, what the theory accepts: its declaration in ``models``); raises
+    :class:`InputError` naming the key.  Returns the scene."""
     theory = scene.model.theory
-    if theory not in MODELS:
-        raise InputError(f"[model] theory: must be one of {', '.join(THEORIES)}, got {theory!r}"
-                         f"{_did_you_mean(theory, THEORIES)}")
-    model = MODELS[theory]
+    if theory not in models:
+        raise InputError(f"[model] theory: must be one of {', '.join(models.names)}, got {theory!r}"
+                         f"{_did_you_mean(theory, models.names)}")
+    model = models[theory]
     geo = scene.geometry
     kin, fr = scene.kinematics, scene.friction
     for key, given, cap in (("[kinematics] direction", kin.direction == -1, None),
@@ -794,33 +801,34 @@ def validate(scene: "Scene") -> "Scene":
         if given and isinstance(geo, WheelRailGeometry):
             raise InputError(f"{key}: for planar scenes (kind quadratic, hertz, table); not yet for wheel_rail scenes")
         if given and cap is not None and not model.accepts(cap):
-            raise InputError(f"{key}: only theory {MODELS.quoted(cap)} uses it (got theory {theory!r}); "
+            raise InputError(f"{key}: only theory {models.quoted(cap)} uses it (got theory {theory!r}); "
                              "other theories would ignore it")
     if scene.history:
         if isinstance(geo, WheelRailGeometry):
             raise InputError("[[history]]: load histories are for planar scenes (kind quadratic, hertz, table)")
         if not model.accepts(HISTORY):
-            raise InputError(f"[[history]]: a load history is solved by theory {MODELS.quoted(HISTORY)}, got {theory!r}")
+            raise InputError(f"[[history]]: a load history is solved by theory {models.quoted(HISTORY)}, got {theory!r}")
         if kin.direction == -1 or kin.rigid_slip is not None or fr.mu_table is not None \
                 or "influence_file" in scene.model.options:
             raise InputError("[[history]]: not combined with direction = -1, rigid_slip, mu_table or influence_file")
     if scene.model.influence == "halfspace_planar" and not model.accepts(PLANAR_HALFSPACE):
         raise InputError(f"[model] influence: \"halfspace_planar\" (CONTACT's conformal approach) is for theory "
-                         f"{MODELS.quoted(PLANAR_HALFSPACE)}, got theory {theory!r}")
+                         f"{models.quoted(PLANAR_HALFSPACE)}, got theory {theory!r}")
     if scene.load.approach_along is not None and not model.accepts(APPROACH_ALONG):
         raise InputError(f"[load] approach_along: an approach along the load direction needs [model] theory = "
-                         f"{MODELS.quoted(APPROACH_ALONG)}, got {theory!r}")
+                         f"{models.quoted(APPROACH_ALONG)}, got {theory!r}")
     if scene.load.load_angle != 0.0 and not model.accepts(LOAD_ANGLE):
         raise InputError(f"[load] load_angle: a load direction other than vertical needs [model] theory = "
-                         f"{MODELS.quoted(LOAD_ANGLE)} (the {theory!r} model balances the vertical load)")
+                         f"{models.quoted(LOAD_ANGLE)} (the {theory!r} model balances the vertical load)")
     if isinstance(geo, WheelRailGeometry):
         if abs(geo.yaw) > MAX_YAW:
             raise InputError(f"[geometry] yaw: the wheelset yaw must lie within +-{MAX_YAW:g} rad, got {geo.yaw:g}")
         if abs(geo.rail_cant) > MAX_CANT:
             raise InputError(f"[geometry] rail_cant: must lie within +-{MAX_CANT:g} rad, got {geo.rail_cant:g}")
-    mx, my, _ = grid_memory(scene)
+    mx, my, _ = grid_memory(scene, models)
     if mx:
-        check_grid_memory(mx, my, scene.model.theory, "[grid] mx" if scene.grid.explicit else "[grid] n")
+        check_grid_memory(mx, my, scene.model.theory, "[grid] mx" if scene.grid.explicit else "[grid] n",
+                          models=models)
     return scene
 
 
@@ -844,7 +852,8 @@ def scene_warnings(scene: "Scene") -> list[str]:
     return out
 
 
-def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: str = "scene") -> Scene:
+def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: str = "scene",
+                    models: Registry = MODELS) -> Scene:
     """Build a validated :class:`Scene` from a parsed TOML mapping.
 
     Every section is checked: unknown keys are refused with the closest known one, values are
@@ -859,6 +868,9 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: s
         Folder that relative file names (profiles, tables) are taken from.
     name : str, optional
         Name of the scene when ``data`` has none.
+    models : Registry, optional
+        The models the scene may name (:data:`conformal.registry.MODELS`, or one extended by
+        :meth:`~conformal.registry.Registry.with_model`).
 
     Returns
     -------
@@ -897,9 +909,9 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: s
     scene = Scene(material=_material(data.get("material")), friction=_friction(data.get("friction"), base_dir),
                   geometry=geometry, load=_load(data.get("load"), geometry),
                   kinematics=_kinematics(data.get("kinematics"), base_dir), grid=_grid(data.get("grid")),
-                  model=_model(data.get("model"), base_dir), name=str(data.get("name", name)), base_dir=base_dir,
+                  model=_model(data.get("model"), base_dir, models), name=str(data.get("name", name)), base_dir=base_dir,
                   history=_history(data.get("history")))
-    return validate(scene)
+    return validate(scene, models)
 
 
 def as_scene(source: "Scene | str | Path | Mapping[str, Any]", **overrides: Any) -> Scene:
