@@ -267,6 +267,9 @@ class Scene:
         kinematics = plain(self.kinematics)
         if kinematics.get("direction") == 1:       # the default: not written (older readers)
             kinematics.pop("direction")
+        for creep, force in (("xi", "fx_rel"), ("eta", "fy_rel")):   # a prescribed force, not both
+            if force in kinematics:
+                kinematics.pop(creep, None)
         if "rigid_slip" in kinematics:
             kinematics["rigid_slip"] = str(Path(kinematics["rigid_slip"]).resolve())
         out = {"name": self.name, "material": material, "friction": friction, "geometry": geometry,
