@@ -35,7 +35,6 @@ import csv
 import math
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -118,7 +117,7 @@ def _slug(pair: str) -> str:
 def run_pair(scene, shifts, pair: str, models, out: Path, showcase=(), vtu: bool = False) -> list[dict]:
     rows = []
     for y in shifts:
-        sc = replace(scene, geometry=replace(scene.geometry, lateral_shift=float(y)))
+        sc = scene.with_("geometry.lateral_shift", float(y))
         results = {}
         for theory, influence, label in models:
             try:

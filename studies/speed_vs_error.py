@@ -25,7 +25,6 @@ import argparse
 import csv
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -62,7 +61,7 @@ def configs(quick: bool):
 def run(scene, theory, influence, n) -> dict:
     sc = scene.with_model(theory=theory, influence=influence)
     if n is not None:
-        sc = replace(sc, grid=replace(sc.grid, n=n))
+        sc = sc.with_("grid.n", n)
     t0 = time.perf_counter()
     r = solve_scene(sc)
     wall = time.perf_counter() - t0
@@ -93,7 +92,7 @@ def main(argv=None):
     runs, ref_cfg = configs(args.quick)
     rows = []
     for scene_label, y in (SCENES[1:2] if args.quick else SCENES):
-        sc = replace(base, geometry=replace(base.geometry, lateral_shift=y))
+        sc = base.with_("geometry.lateral_shift", y)
         ref_label = ref_cfg[0]
         try:
             ref = run(sc, *ref_cfg[1:])

@@ -9,14 +9,13 @@ import subprocess
 import sys
 import textwrap
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
 from conformal.cli import main
 from conformal.errors import InputError
-from conformal.scene import Load, load_scene, scene_from_dict
+from conformal.scene import load_scene, scene_from_dict
 
 from test_scene_cli import scene_file
 
@@ -166,7 +165,7 @@ def test_reported_approach_gives_back_the_wheel_load(theory, n):
     r = solve_scene(sc)
     assert r.extra["FZ_track"] == pytest.approx(10000.0, rel=1e-4)
     assert 0.02 < r.approach < 0.05
-    r2 = solve_scene(replace(sc, load=Load(approach=r.approach)))
+    r2 = solve_scene(sc.with_("load.approach", r.approach))
     assert r2.approach == pytest.approx(r.approach, rel=1e-12)
     assert r2.extra["FZ_track"] == pytest.approx(10000.0, rel=1e-3)
     assert r2.FN == pytest.approx(r.FN, rel=1e-3)

@@ -347,13 +347,12 @@ def test_scene_theory_table(tiny):
     assert r.theory == "table" and math.isclose(r.FN, FN)
     assert abs(r.FX - ex.FX) / (MU * FN) < 1e-4 and abs(r.FY - ex.FY) / (MU * FN) < 1e-4
     with pytest.raises(InputError, match="prescribed forces"):
-        from dataclasses import replace
 
         from conformal.problem import problems_from_scene
         from conformal.tables.model import solve
 
         p = problems_from_scene(_scene(xi, eta, phi, theory="table", table=tiny.path))[0]
-        solve(replace(p, kinematics=replace(p.kinematics, fx_rel=0.5)))
+        solve(p.with_("kinematics.fx_rel", 0.5))
 
 
 def test_scene_table_path_is_relative_to_the_scene_file(tiny, tmp_path, monkeypatch):
