@@ -2,6 +2,8 @@
 
 Sign convention (CONTACT, module 3): tractions and forces act on body 1 (the body the normal n
 points into); creepages are those of body 1 relative to body 2, so a positive xi gives FX < 0.
+The fields of the JSON summary and the keys of ``Result.extra``, with their units, are listed in
+:mod:`conformal.schema`.
 """
 from __future__ import annotations
 
