@@ -946,3 +946,96 @@ def load_scene(path: str | Path) -> Scene:
     """Read and validate a TOML scene file."""
     path = Path(path)
     return scene_from_dict(read_scene_file(path), base_dir=path.parent, name=path.stem)
+
+
+# ----------------------------------------------------------------------------- reference documentation
+#: unit and meaning of the scene keys outside [model] (whose keys are declared in conformal.registry)
+_KEY_DOCS: dict[str, dict[str, tuple[str, str]]] = {
+    "material": {"G": ("N/mm²", "shear modulus (or E, Young's modulus); both bodies unless [material.body2]"),
+                 "E": ("N/mm²", "Young's modulus, instead of G"), "nu": ("", "Poisson's ratio"),
+                 "body2": ("", "a table with G (or E) and nu of body 2 (the wheel)")},
+    "friction": {"mu": ("", "friction coefficient (static = kinetic)"), "mu_static": ("", "static coefficient"),
+                 "mu_kinetic": ("", "kinetic coefficient (<= mu_static)"),
+                 "mu_table": ("", "file of rows 's mu': mu along y (theory exact)")},
+    "geometry": {"kind": ("", "quadratic | hertz | table | wheel_rail"),
+                 "A": ("1/mm", "quadratic: h = A x² + B y² (B = 0: line contact)"), "B": ("1/mm", "quadratic"),
+                 "a": ("mm", "hertz: semi-axis along x"), "b": ("mm", "hertz: semi-axis along y"),
+                 "file": ("", "table: the undeformed distance on the grid (mx rows of my numbers)"),
+                 "wheel_profile": ("", "built-in name or file"), "rail_profile": ("", "built-in name or file"),
+                 "side": ("", "right | left"), "placement": ("", "wheelset | single"),
+                 "lateral_shift": ("mm", "wheelset lateral displacement"), "yaw": ("rad", "wheelset yaw"),
+                 "roll": ("rad", "wheelset roll (default: found so that both wheels touch)"),
+                 "rail_cant": ("rad", "rail inclination"), "gauge": ("mm", "track gauge"),
+                 "gauge_height": ("mm", "below the top of rail where the gauge is measured"),
+                 "flange_back": ("mm", "distance of the flange backs"),
+                 "wheel_radius": ("mm", "nominal rolling radius"),
+                 "flange_back_pos": ("mm", "flange back in wheel-profile y (default: from the profile)"),
+                 "smoothing": ("mm", "profile smoothing wavelength (0: interpolate)"),
+                 "element_size": ("mm", "square grid elements per patch (CONTACT's DX = DS)"),
+                 "element_size_s": ("mm", "conformal strips: element length along s"),
+                 "patch_combine": ("mm", "overlap regions closer than this form one patch"),
+                 "wheel_z": ("", "up: the wheel file gives z upwards"), "rail_z": ("", "up: the rail file gives z "
+                                                                                     "upwards")},
+    "load": {"normal_force": ("N", "normal force (per mm for line contact)"),
+             "approach": ("mm", "approach (wheel-rail: lowering below first touch)"),
+             "wheel_load": ("N", "wheel-rail: vertical load balanced by the contact"),
+             "load_angle": ("rad", "wheel-rail, theory conformal: direction of the load, 0 = vertical"),
+             "approach_along": ("mm", "wheel-rail, theory conformal: approach along the load direction")},
+    "kinematics": {"xi": ("", "longitudinal creepage (rolling = shift: shift in mm)"),
+                   "eta": ("", "lateral creepage (shift: mm)"), "phi": ("rad/mm", "spin creepage (shift: rad)"),
+                   "rolling": ("", "steady | shift"), "fx_rel": ("", "prescribed FX / (mu FN) instead of xi"),
+                   "fy_rel": ("", "prescribed FY / (mu FN) instead of eta"),
+                   "velocity": ("mm/s", "rolling speed (frictional power)"),
+                   "speed": ("mm/s", "wheel-rail: wheelset speed; the creepages follow per patch"),
+                   "pitch_velocity": ("rad/s", "wheel-rail: about the axle (default: pure rolling)"),
+                   "yaw_rate": ("rad/s", "wheel-rail"), "roll_rate": ("rad/s", "wheel-rail"),
+                   "lateral_velocity": ("mm/s", "wheel-rail"), "direction": ("", "rolling direction +1 | -1"),
+                   "rigid_slip": ("", "file: rigid slip per element (theory exact)")},
+    "grid": {"mx": ("", "elements along x (explicit grid)"), "my": ("", "elements along y"),
+             "dx": ("mm", "element size along x"), "dy": ("mm", "element size along y"),
+             "xl": ("mm", "grid corner x (default: centred)"), "yl": ("mm", "grid corner y"),
+             "n": ("", "automatic grid: elements along each axis"),
+             "scale": ("", "automatic grid: extent over the Hertz patch"),
+             "strips": ("", "conformal wheel-rail: coupled | separate")},
+}
+
+
+def reference_markdown(models: Registry = MODELS) -> str:
+    """Every scene key with its type, default, unit and meaning as markdown (for the documentation
+    site): the sections from the scene's dataclasses, ``[model]`` and each theory from the registry
+    (:func:`conformal.registry.reference_markdown`).
+
+    >>> md = reference_markdown()
+    >>> "| `wheel_load` | number | -- | N |" in md, "### theory `conformal`" in md
+    (True, True)
+    """
+    from conformal.registry import reference_markdown as model_reference
+
+    defaults = {"material": {"G": 82000.0, "nu": 0.28}, "friction": {"mu": 0.3}}
+    for sec, cls in (("geometry", WheelRailGeometry), ("load", Load), ("kinematics", Kinematics), ("grid", GridSpec)):
+        defaults[sec] = {f.name: f.default for f in fields(cls)}
+    for cls in (QuadraticGeometry, HertzGeometry):
+        defaults["geometry"].update({f.name: None for f in fields(cls) if f.name != "kind"})
+    defaults["geometry"]["file"] = None
+
+    types = {"mu_static": "number", "mu_kinetic": "number", "fx_rel": "number", "fy_rel": "number",
+             "body2": "table", "file": "file", "mu_table": "file", "rigid_slip": "file", "mx": "whole number",
+             "my": "whole number"}
+    defaults["geometry"]["kind"] = None          # required
+
+    def kind(v, key) -> str:
+        if key in types:
+            return types[key]
+        if isinstance(v, bool):
+            return "true \\| false"
+        if isinstance(v, int) and not isinstance(v, bool):
+            return "whole number"
+        if isinstance(v, float) or (v is None and _KEY_DOCS[sec][key][0]):
+            return "number"
+        return "string"
+
+    sections = {}
+    for sec, docs in _KEY_DOCS.items():
+        sections[sec] = [(k, kind(defaults.get(sec, {}).get(k), k), defaults.get(sec, {}).get(k), unit, doc)
+                         for k, (unit, doc) in docs.items()]
+    return model_reference(models, sections)

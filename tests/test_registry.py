@@ -188,3 +188,21 @@ def test_option_checks():
     assert o.problem(40) is None and o.problem(3) == "must be >= 4, got 3" and "whole number" in o.problem(True)
     f = Option("L", "floats", None, "mm³/N", "flexibilities", length=3, minimum=0)
     assert f.problem([1.0, 2.0, 3.0]) is None and f.problem([1.0, 2.0]) and f.problem([1.0, -2.0, 3.0])
+
+
+def test_scene_reference_lists_every_key_of_the_scene_sections():
+    from conformal import scene as S
+    from conformal.specs import Kinematics
+
+    docs = S._KEY_DOCS
+    assert set(docs["kinematics"]) == {f.name for f in dataclasses.fields(Kinematics)}
+    assert set(docs["load"]) == {f.name for f in dataclasses.fields(S.Load)}
+    assert set(docs["grid"]) == {f.name for f in dataclasses.fields(S.GridSpec)}
+    geometry = set()
+    for cls in (S.QuadraticGeometry, S.HertzGeometry, S.TableGeometry, S.WheelRailGeometry):
+        geometry |= {f.name for f in dataclasses.fields(cls)}
+    assert set(docs["geometry"]) == geometry
+    md = S.reference_markdown()
+    assert "| `rail_cant` | number | 0.0249948 | rad |" in md and "| `fec_n` |" not in md
+    for name in MODELS.names:
+        assert f"### theory `{name}`" in md
