@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -352,7 +353,7 @@ def test_scene_theory_table(tiny):
         from conformal.tables.model import solve
 
         p = problems_from_scene(_scene(xi, eta, phi, theory="table", table=tiny.path))[0]
-        solve(p.with_("kinematics.fx_rel", 0.5))
+        solve(replace(p, kinematics=replace(p.kinematics, fx_rel=0.5)))
 
 
 def test_scene_table_path_is_relative_to_the_scene_file(tiny, tmp_path, monkeypatch):
