@@ -18,12 +18,19 @@ __version__ = "0.1.0"
 __all__ = ["ConformalError", "InputError", "NoContactError", "ConvergenceError", "Material", "Result",
            "Scene", "load_scene", "solve", "sweep", "__version__"]
 
-# numpy, scipy and the solvers load on first use (issue 23: ``import conformal`` stays light):
-# ``conformal.solve`` is the module conformal/solve.py made callable (conformal.solve(scene, **overrides)
-# is conformal.api.solve, and ``from conformal.solve import solve_scene`` keeps working)
+# numpy, scipy and the solvers load on first use (issue 23: ``import conformal`` stays light)
 _LAZY = {"Material": ("conformal.materials", "Material"), "load_scene": ("conformal.api", "load_scene"),
          "Result": ("conformal.result", "Result"), "Scene": ("conformal.scene", "Scene"),
-         "sweep": ("conformal.api", "sweep"), "solve": ("conformal.solve", None)}
+         "sweep": ("conformal.api", "sweep")}
+
+
+def solve(scene, **overrides):
+    """Solve a scene (a :class:`Scene`, a TOML path or a dict, with ``section__key=value``
+    overrides) and return its :class:`Result`: :func:`conformal.api.solve`, loaded on first use.
+    (The dispatch of a scene to its model is :mod:`conformal.dispatch`.)"""
+    import importlib
+
+    return importlib.import_module("conformal.api").solve(scene, **overrides)
 
 
 def __getattr__(name: str):
@@ -32,8 +39,7 @@ def __getattr__(name: str):
     import importlib
 
     module, attr = _LAZY[name]
-    mod = importlib.import_module(module)
-    value = mod if attr is None else getattr(mod, attr)
+    value = getattr(importlib.import_module(module), attr)
     globals()[name] = value
     return value
 

@@ -74,7 +74,7 @@ def solve(scene: Scene | str | Path | Mapping[str, Any], **overrides: Any) -> Re
     >>> round(r.pmax, 1), round(r.a, 3)     # Hertz: a = (3 F R / 4 E*)^(1/3), R = 500 mm
     (464.8, 3.205)
     """
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     return solve_scene(as_scene(scene, **overrides))
 

@@ -24,6 +24,7 @@ from pathlib import Path
 
 from conformal.errors import ConformalError, InputError
 from conformal.files import check_output_path, write_text
+from conformal.registry import CURVED_STRIP, FE_BODIES, MODELS, VTU
 
 #: file types ``--plot`` can write (matplotlib's raster and vector formats)
 PLOT_SUFFIXES = (".png", ".jpg", ".jpeg", ".pdf", ".svg", ".eps", ".ps", ".tif", ".tiff", ".webp")
@@ -47,17 +48,17 @@ def _solve_and_report(scene, json_path: str | None, plot_path: str | None, vtu_p
     conformal.plots.Render3D started before the solve (the demo) for the plot's 3-D view.  A
     result that did not converge is reported on stderr and ends with EXIT_UNCONVERGED unless
     ``allow_unconverged``."""
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     check_output_path(json_path, "--json")
     check_output_path(plot_path, "--plot", PLOT_SUFFIXES)
     check_output_path(vtu_path, "--vtu", (".vtu",))
-    if vtu_path and scene.model.theory not in ("conformal", "fe_contact"):
+    if vtu_path and not MODELS.accepts(scene.model.theory, VTU):
         raise InputError(f"--vtu: needs [model] theory = \"conformal\" (tractions on the curved surfaces) or "
                          f"\"fe_contact\" (contact pressure on the meshed bodies); this scene's theory is "
                          f"{scene.model.theory!r}")
     fe_run = None
-    if vtu_path and scene.model.theory == "fe_contact":   # the VTU needs the meshed bodies
+    if vtu_path and MODELS.accepts(scene.model.theory, FE_BODIES):   # the VTU needs the meshed bodies
         from conformal.cases.fe_contact import solve_scene_with_run
 
         result, fe_run = solve_scene_with_run(scene)
@@ -102,10 +103,8 @@ def cmd_solve(args) -> int:
 
     scene = load_scene(args.scene)
     if args.theory:
-        from conformal.scene import THEORIES
-
-        if args.theory not in THEORIES:
-            raise InputError(f"--theory: must be one of {', '.join(THEORIES)}, got {args.theory!r}")
+        if args.theory not in MODELS:
+            raise InputError(f"--theory: must be one of {', '.join(MODELS.names)}, got {args.theory!r}")
         scene = scene.with_model(theory=args.theory)
     return _solve_and_report(scene, args.json, args.plot, args.vtu, allow_unconverged=args.allow_unconverged)
 
@@ -125,7 +124,7 @@ def cmd_demo(args) -> int:
     # while the solve runs: the demo's wall time on two cores drops by about a second
     from conformal.plots import WINDOW_3D, Render3D
 
-    render = Render3D(WINDOW_3D) if scene.model.theory == "conformal" else None
+    render = Render3D(WINDOW_3D) if MODELS.accepts(scene.model.theory, CURVED_STRIP) else None
     try:
         code = _solve_and_report(scene, str(out / "demo.json"), str(out / "demo.png"), render=render)
     finally:
@@ -200,7 +199,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("scene", help="scene file (TOML)")
     s.add_argument("--json", metavar="OUT.json", help="also write the JSON summary to this file")
     s.add_argument("--plot", metavar="OUT.png", help="write a PNG of the tractions")
-    s.add_argument("--theory", help="override [model] theory")
+    s.add_argument("--theory", help=MODELS.theory_help())
     s.add_argument("--vtu", metavar="OUT.vtu", help="write the tractions on the curved surfaces for ParaView "
                    "(theory \"conformal\"; also OUT_rail.vtu, OUT_wheel.vtu) or the contact pressure on "
                    "the meshed rail (theory \"fe_contact\"; also OUT_body2.vtu)")

@@ -307,40 +307,6 @@ def export_vtu(path: str | Path, points: np.ndarray, cell_data: dict[str, np.nda
     return path
 
 
-def plot_surfaces_3d(path: str | Path, contact: "object", *, bodies: list | None = None,
-                     scalar: str = "pn", vectors: np.ndarray | None = None, boundary: "object" = None,
-                     title: str = "", window: tuple[int, int] = (1200, 900)) -> Path:
-    """Off-screen pyvista PNG: body surfaces (grey, translucent), the contact strip coloured by
-    ``scalar``, traction vectors (glyphs at element centres) and a slip/adhesion boundary line.
-
-    ``contact`` is a StructuredGrid from :func:`strip_mesh`; ``bodies`` more meshes to show;
-    ``vectors`` (mx*ms, 3) traction vectors at cell centres in 3-D; ``boundary`` a PolyData line.
-    """
-    plotter = _offscreen_plotter(window)
-    for body in bodies or []:
-        plotter.add_mesh(body, color="lightgrey", opacity=0.35, show_edges=False)
-    plotter.add_mesh(contact, scalars=scalar, cmap="viridis", show_edges=True, edge_color="#555555",
-                     scalar_bar_args={"title": scalar})
-    if vectors is not None:
-        centres = contact.cell_centers()
-        centres["traction"] = np.asarray(vectors)
-        scale = 0.3 * max(contact.length / 10, 1e-9) / max(np.abs(vectors).max(), 1e-300)
-        plotter.add_mesh(centres.glyph(orient="traction", scale="traction", factor=scale), color="white")
-    if boundary is not None:
-        plotter.add_mesh(boundary, color="red", line_width=4)
-    if title:
-        plotter.add_text(title, font_size=10)
-    plotter.view_isometric()
-    path = Path(path)
-    try:
-        with atomic_path(path, keep_suffix=True) as tmp:
-            plotter.screenshot(str(tmp))
-    finally:
-        plotter.close()
-    return path
-
-
-# ----------------------------------------------------------------------------- conformal results (curved grids)
 def _curved_field(result):
     """The CurvedTractionField of a conformal result, or None."""
     f = result.field

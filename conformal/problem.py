@@ -23,6 +23,17 @@ if TYPE_CHECKING:   # problems_from_scene reads a scene's sections; the problem 
     from conformal.scene import Scene
 
 
+#: the inputs of a problem that are typed fields and, for older readers, also keys of ``info``
+INPUT_FIELDS = ("line_contact", "influence_file", "rigid_slip", "mu_scale")
+
+
+class ProblemInfo(dict):
+    """``ContactProblem.info`` as the problem keeps it: the free keys plus the typed inputs
+    (:data:`INPUT_FIELDS`, mirrored for readers of ``info["rigid_slip"]``).  A plain mapping
+    given as ``info`` (``dict(problem.info)`` changed and passed to :func:`dataclasses.replace`)
+    sets the typed inputs it holds; the problem's own ProblemInfo leaves them to the fields."""
+
+
 @dataclass(frozen=True, eq=False)
 class ContactProblem:
     """One contact problem.
@@ -31,6 +42,27 @@ class ContactProblem:
     subtracted: the deformed gap is h - approach + u_n.  ``hertz`` is the Hertz solution of the
     quadratic part (None where the geometry is not quadratic).  Exactly one of ``normal_force``
     and ``approach`` is set.
+
+    Per-element inputs (typed; also in ``info`` under the same names for older readers):
+
+    ``line_contact``
+        ``[geometry] B = 0``: plane strain on a row of elements (conformal.solvers.line).
+    ``influence_file``
+        ``[model] influence_file``: the path of the influence numbers (theory exact).
+    ``rigid_slip``
+        ``[kinematics] rigid_slip``: (2, mx, my) rigid slip added per element (seed Eq. 47).
+    ``mu_scale``
+        ``[friction] mu_table``: (mx, my) factor on the friction coefficients per element.
+
+    >>> from conformal.specs import Friction, Kinematics, ModelSpec
+    >>> from conformal.materials import Material
+    >>> p = ContactProblem(Material(82000.0, 0.28, 82000.0, 0.28), Friction(0.3, 0.3), Kinematics(), ModelSpec(),
+    ...                    normal_force=1.0, info={"line_contact": True, "position": 3.0})
+    >>> p.line_contact, p.info["line_contact"], p.info["position"]
+    (True, True, 3.0)
+    >>> q = replace(p, line_contact=False)
+    >>> q.line_contact, q.info.get("line_contact"), q.info["position"]
+    (False, None, 3.0)
     """
 
     material: Material
@@ -48,6 +80,22 @@ class ContactProblem:
     #: the previous pass of a wheel-rail balance; px, py may be None); the solution is the same to the
     #: solver's tolerance
     start: tuple[np.ndarray, np.ndarray | None, np.ndarray | None] | None = None
+    line_contact: bool = False
+    influence_file: Path | None = None
+    rigid_slip: np.ndarray | None = None
+    mu_scale: np.ndarray | None = None
+
+    def __post_init__(self):
+        info = self.info
+        if not isinstance(info, ProblemInfo):       # a mapping from the caller: its typed keys set the fields
+            for name in INPUT_FIELDS:
+                if name in info:
+                    object.__setattr__(self, name, info[name])
+        mirrored = {name: getattr(self, name) for name in INPUT_FIELDS
+                    if getattr(self, name) is not None and getattr(self, name) is not False}
+        free = {k: v for k, v in info.items() if k not in INPUT_FIELDS}
+        object.__setattr__(self, "line_contact", bool(self.line_contact))
+        object.__setattr__(self, "info", ProblemInfo(free, **mirrored))
 
     def require_hertz(self, who: str) -> HertzContact:
         if self.hertz is None:
@@ -178,26 +226,26 @@ def _with_inputs(scene: Scene, problem: ContactProblem) -> ContactProblem:
     ifile = dict(scene.model.options).get("influence_file")
     if kin.rigid_slip is None and fr.mu_table is None and ifile is None:
         return problem
-    info = dict(problem.info)
+    inputs: dict[str, Any] = {}
     if ifile is not None:
         if not isinstance(ifile, str) or not ifile:
             raise InputError(f"[model] influence_file: a file name, got {ifile!r}")
         path = Path(ifile) if Path(ifile).is_absolute() else Path(scene.base_dir) / ifile
         if not path.is_file():
             raise InputError(f"[model] influence_file: no such file: {path}")
-        if info.get("line_contact"):
+        if problem.line_contact:
             raise InputError("[model] influence_file: not for line contact ([geometry] B = 0)")
-        info["influence_file"] = path
+        inputs["influence_file"] = path
     if kin.rigid_slip is not None:
-        info["rigid_slip"] = read_rigid_slip(kin.rigid_slip, problem.grid)
+        inputs["rigid_slip"] = read_rigid_slip(kin.rigid_slip, problem.grid)
     if fr.mu_table is not None:
         if kin.fx_rel is not None or kin.fy_rel is not None:
             raise InputError("[friction] mu_table: prescribed forces (fx_rel, fy_rel) are relative to one mu; "
                              "give the creepages xi, eta with a friction table")
         s, mu = read_mu_table(fr.mu_table)
         mu_y = np.interp(problem.grid.y, s, mu)
-        info["mu_scale"] = np.broadcast_to(mu_y / fr.mu_static, problem.grid.shape).copy()
-    return replace(problem, info=info)
+        inputs["mu_scale"] = np.broadcast_to(mu_y / fr.mu_static, problem.grid.shape).copy()
+    return replace(problem, **inputs)
 
 
 def _line_problem(scene: Scene, common: dict) -> ContactProblem:
@@ -219,11 +267,4 @@ def _line_problem(scene: Scene, common: dict) -> ContactProblem:
         a, _ = hertz_2d(load.normal_force, 1.0 / (2.0 * geo.A), scene.material.E_star)
         grid = PlanarGrid(g.n, 1, 2.0 * g.scale * a / g.n, 1.0, -g.scale * a, -0.5)
     X, _ = grid.mesh()
-    return ContactProblem(grid=grid, h=geo.A * X**2, info={"line_contact": True}, **common)
-
-
-def with_grid(problem: ContactProblem, grid: PlanarGrid) -> ContactProblem:
-    """The same quadratic problem sampled on another grid (for convergence studies)."""
-    hz = problem.require_hertz("with_grid")
-    X, Y = grid.mesh()
-    return replace(problem, grid=grid, h=hz.A * X**2 + hz.B * Y**2)
+    return ContactProblem(grid=grid, h=geo.A * X**2, line_contact=True, **common)

@@ -2,6 +2,8 @@
 
 Sign convention (CONTACT, module 3): tractions and forces act on body 1 (the body the normal n
 points into); creepages are those of body 1 relative to body 2, so a positive xi gives FX < 0.
+The fields of the JSON summary and the keys of ``Result.extra``, with their units, are listed in
+:mod:`conformal.schema`.
 """
 from __future__ import annotations
 
@@ -104,6 +106,27 @@ class Result:
     field: TractionField | None = None
     patches: tuple["Result", ...] = ()
     extra: Mapping[str, Any] = dc_field(default_factory=dict)
+
+    @classmethod
+    def combined(cls, results: "list[Result] | tuple[Result, ...]", theory: str,
+                 extra: Mapping[str, Any] | None = None) -> "Result":
+        """The totals over several patches (or strips) as one Result: FN, FX, FY, MZ and wall_s
+        add, pmax is the largest, converged all; a, b, approach and the creepages are those of the
+        most loaded patch; ``patches`` lists the parts.  Forces are summed as given, i.e. all parts
+        must report forces in one common frame.
+
+        >>> p = Result("exact", FN=2.0, FX=-1.0, FY=0.5, MZ=0.0, a=3.0, b=2.0, pmax=9.0, approach=0.1)
+        >>> q = Result("exact", FN=1.0, FX=-0.5, FY=0.0, MZ=1.0, a=1.0, b=1.0, pmax=12.0, approach=0.2)
+        >>> r = Result.combined([p, q], "exact")
+        >>> r.FN, r.FX, r.MZ, r.pmax, r.a, r.approach, len(r.patches)
+        (3.0, -1.5, 1.0, 12.0, 3.0, 0.1, 2)
+        """
+        main = max(results, key=lambda r: r.FN)
+        return cls(theory=theory, FN=sum(r.FN for r in results), FX=sum(r.FX for r in results),
+                   FY=sum(r.FY for r in results), MZ=sum(r.MZ for r in results), a=main.a, b=main.b,
+                   pmax=max(r.pmax for r in results), approach=main.approach, xi=main.xi, eta=main.eta,
+                   phi=main.phi, converged=all(r.converged for r in results),
+                   wall_s=sum(r.wall_s for r in results), patches=tuple(results), extra=dict(extra or {}))
 
     @property
     def n_contact(self) -> int | None:

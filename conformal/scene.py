@@ -18,17 +18,20 @@ import difflib
 import math
 import os
 import tomllib
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, Mapping
 
 from conformal.errors import InputError
 from conformal.materials import Material
+from conformal.registry import (APPROACH_ALONG, HISTORY, INFLUENCE_FILE, LOAD_ANGLE, MODELS, MU_TABLE,
+                                PLANAR_HALFSPACE, RIGID_SLIP, Registry, flatten_model_table)
 from conformal.specs import Friction, HistoryStep, Kinematics, ModelSpec  # noqa: F401  (part of the scene API)
 
-THEORIES = ("hertz", "linear", "empirical", "johnson_vermeulen", "fastsim", "exact", "conformal", "table", "fe_contact")
+#: the theory names (conformal.registry.MODELS: each model's declaration)
+THEORIES = MODELS.names
 #: theories that solve the normal problem only (no tangential tractions)
-NORMAL_ONLY_THEORIES = ("hertz", "fe_contact")
+NORMAL_ONLY_THEORIES = tuple(m.name for m in MODELS if m.normal_only)
 GEOMETRY_KINDS = ("quadratic", "hertz", "table", "wheel_rail")
 #: ``[model] influence``: half-space numbers with the element frames turned by the contact angles (the
 #: default), without that turn ("halfspace_planar": CONTACT's conformal approach, its D = 4 with
@@ -36,29 +39,15 @@ GEOMETRY_KINDS = ("quadratic", "hertz", "table", "wheel_rail")
 INFLUENCES = ("halfspace", "halfspace_planar", "fe")
 
 #: model-specific ``[model]`` keys (besides theory, bound, influence, tol, maxit, layer_flexibility),
-#: with the module that reads them.  Any other key is rejected (a misspelt key would otherwise be
-#: ignored silently and the default model would run).
-MODEL_OPTIONS = {
-    "maxout": "outer (normal-tangential) iterations of the exact and conformal solvers",
-    "max_mx": "conformal: largest number of strip elements along x",
-    "max_ms": "conformal: largest number of strip elements along s",
-    "creepage": "conformal: \"surface\" | \"reference\" | \"wheel_surface\" (CONTACT's rigid slip) creepages on the strip",
-    "creep_coefficients": "empirical: \"kalker\" | \"elliptic\"",
-    "n": "fastsim: number of strips",
-    "flexibilities": "fastsim: the flexibilities L1, L2, L3",
-    "discretisation": "fastsim: \"midpoint\" | \"contact\"",
-    "require_c33": "linear: compute C33 also without spin",
-    "table": "table: the creep-force table file",
-    "fe_method": "FE: \"split\" | \"direct\"", "fe_order": "FE: element order 1 | 2",
-    "fe_h_patch": "FE: element size on the patch (mm)", "fe_h_load": "FE: element size of the loaded column",
-    "fe_growth": "FE: element growth rate", "fe_h_max": "FE: largest element (mm)",
-    "fe_conform": "FE: conforming mesh", "fe_body_size": "FE: body size over the patch",
-    "fe_solver": "FE: linear solver", "fe_collocation": "FE: collocation rule",
-    "fe_far_field": "FE: far-field boundary condition",
-    "fe_closure": "FE: a profile ending inside the body: \"extend\" (straight, slabs limited; default) | \"straight\" | \"cut\"",
-    "influence_file": "exact: influence numbers read from a file (conformal.influence.contact_file)",
-    **{k: "fe_contact: see conformal.fe_contact.problems" for k in ("fec_n", "fec_h", "fec_order", "fec_growth", "fec_h_max", "fec_body_size", "fec_patch", "fec_far_field", "fec_solver", "fec_estimate")},
-}
+#: with the theories that read them, from the registry (conformal.registry).  Any other key is
+#: rejected (a misspelt key would otherwise be ignored silently and the default model would run).
+#: Keys of a method may also be nested: ``[model.fe] order`` is ``[model] fe_order``.
+def model_options(models: Registry = MODELS) -> dict[str, str]:
+    """The ``[model]`` keys of ``models`` (flat spelling) -> "readers: what it sets"."""
+    return {key: f"{', '.join(models.readers(key)) or opt.group}: {opt.doc}" for key, opt in models.options().items()}
+
+
+MODEL_OPTIONS = model_options()
 
 #: the largest [model] tol: the iterations stop when the tractions change by less than tol (relative);
 #: tol = 10 was reported converged with FX 35 % off (issue 22); the default is 1e-6
@@ -190,8 +179,21 @@ class Scene:
     history: tuple = ()        # HistoryStepSpec per [[history]] step (empty: one solve, no history)
 
     def with_model(self, **changes) -> "Scene":
-        """The scene with other ``[model]`` values, e.g. ``scene.with_model(theory="exact")``."""
-        return replace(self, model=replace(self.model, **changes))
+        """The scene with other ``[model]`` values, e.g. ``scene.with_model(theory="exact")``,
+        validated again as :meth:`with_`; ``options=`` replaces all model-specific keys.
+
+        >>> s = scene_from_dict({"geometry": {"kind": "quadratic", "A": 0.001, "B": 0.001},
+        ...                      "load": {"normal_force": 1e4}, "model": {"maxout": 3}})
+        >>> s.with_model(theory="exact").model.options, s.with_model(options={"n": 20}).model.options
+        ({'maxout': 3}, {'n': 20})
+        """
+        data = self.to_dict()
+        if "options" in changes:
+            core = {f.name for f in fields(ModelSpec)} - {"options"}
+            data["model"] = {k: v for k, v in data["model"].items() if k in core}
+            data["model"].update(dict(changes.pop("options") or {}))
+        data["model"].update(changes)
+        return scene_from_dict(data, base_dir=self.base_dir, name=self.name)
 
     def with_(self, key: str | None = None, value: Any = None, /, **changes) -> "Scene":
         """The scene with one or more keys changed, without nested :func:`dataclasses.replace`.
@@ -265,6 +267,9 @@ class Scene:
         kinematics = plain(self.kinematics)
         if kinematics.get("direction") == 1:       # the default: not written (older readers)
             kinematics.pop("direction")
+        for creep, force in (("xi", "fx_rel"), ("eta", "fy_rel")):   # a prescribed force, not both
+            if force in kinematics:
+                kinematics.pop(creep, None)
         if "rigid_slip" in kinematics:
             kinematics["rigid_slip"] = str(Path(kinematics["rigid_slip"]).resolve())
         out = {"name": self.name, "material": material, "friction": friction, "geometry": geometry,
@@ -301,6 +306,9 @@ def _set_toml_key(data: dict, path: str, value: Any) -> None:
     if sec == "material":
         _set_material_key(table, parts[1:], value, path)
         return
+    if sec == "model" and len(parts) == 3 and parts[1] in {me.name for me in MODELS.methods}:
+        (flat,) = flatten_model_table({parts[1]: {parts[2]: value}})     # an unknown key: InputError
+        parts = [sec, flat]
     if len(parts) != 2:
         raise InputError(f"{path}: expected section.key, e.g. \"model.theory\"")
     key = parts[1]
@@ -318,6 +326,9 @@ def _set_toml_key(data: dict, path: str, value: Any) -> None:
         table.pop("normal_force", None), table.pop("wheel_load", None)   # first touch or [load] approach
     elif sec == "load" and key in ("normal_force", "approach", "wheel_load"):
         table.pop("approach_along", None)
+    if value is None:           # TOML has no null: None removes the key (its default applies)
+        table.pop(key, None)
+        return
     table[key] = value
 
 
@@ -684,22 +695,22 @@ def _grid(data: Any) -> GridSpec:
                     strips=sec.choice("strips", ("coupled", "separate"), "coupled"))
 
 
-def _model(data: Any, base_dir: Path = Path(".")) -> ModelSpec:
+def _model(data: Any, base_dir: Path = Path("."), models: Registry = MODELS) -> ModelSpec:
     if data is not None and not isinstance(data, Mapping):
         raise InputError(f"[model] must be a table, got {type(data).__name__} {data!r}")
-    raw = dict(data or {})
+    raw = flatten_model_table(dict(data or {}), models)     # [model.fe] order -> fe_order, ...
     core = {f.name for f in fields(ModelSpec)} - {"options"}
-    _Section("model", raw, core | set(MODEL_OPTIONS))      # unknown keys (with the closest known one)
+    _Section("model", raw, core | set(models.options()))      # unknown keys (with the closest known one)
     sec = _Section("model", {k: v for k, v in raw.items() if k in core})
     options = {k: v for k, v in raw.items() if k not in core}
-    _check_model_options(sec, options)
+    _check_model_options(sec, options, models)
     if options.get("table") not in (None, "default"):   # a creep-force table: relative to the scene's folder
         options["table"] = str(_input_file(_Section("model", options), "table", base_dir).resolve())
     tol = sec.number("tol", 1e-6, positive=True)
     if tol > MAX_TOL:
         raise sec.error("tol", f"the solvers' relative stopping tolerance must be <= {MAX_TOL:g}, got {tol:g} "
                         "(a larger one stops before the tractions are found; the default is 1e-6)")
-    return ModelSpec(theory=sec.choice("theory", THEORIES, "fastsim"),
+    return ModelSpec(theory=sec.choice("theory", models.names, "fastsim"),
                      bound=sec.choice("bound", ("parabolic", "elliptic"), "parabolic"),
                      influence=sec.choice("influence", INFLUENCES, "halfspace"),
                      tol=tol,
@@ -708,56 +719,24 @@ def _model(data: Any, base_dir: Path = Path(".")) -> ModelSpec:
                      options=options)
 
 
-def _whole(minimum: int):
-    def check(v):
-        if isinstance(v, bool) or not isinstance(v, int):
-            return f"must be a whole number >= {minimum}, got {v!r}"
-        return None if v >= minimum else f"must be >= {minimum}, got {v}"
-    return check
-
-
-def _one_of(*choices):
-    def check(v):
-        return None if v in choices else f"must be one of {', '.join(repr(c) for c in choices)}, got {v!r}"
-    return check
-
-
-def _flexibilities(v):
-    ok = (isinstance(v, (list, tuple)) and len(v) == 3 and all(
-        isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and x > 0 for x in v))
-    return None if ok else f"must be three numbers > 0 (L1, L2, L3 in mm³/N), got {v!r}"
-
-
-def _boolean(v):
-    return None if isinstance(v, bool) else f"must be true or false, got {v!r}"
-
-
-#: checks of the [model] options' values (None: fine, else the problem), read when the scene is read
-#: so that a bad value is refused whatever the theory (it was ignored where the theory did not read it)
-_OPTION_CHECKS = {
-    "maxout": _whole(1), "max_mx": _whole(4), "max_ms": _whole(4), "n": _whole(4),
-    "creepage": _one_of("surface", "reference"), "creep_coefficients": _one_of("kalker", "elliptic"),
-    "discretisation": _one_of("midpoint", "contact"), "flexibilities": _flexibilities,
-    "require_c33": _boolean,
-}
-
-
-def _check_model_options(sec: "_Section", options: Mapping[str, Any]) -> None:
-    """Refuse a bad value of a [model] option (InputError naming the key)."""
+def _check_model_options(sec: "_Section", options: Mapping[str, Any], models: Registry = MODELS) -> None:
+    """Refuse a bad value of a [model] option (InputError naming the key), checked against its
+    declaration in the registry when the scene is read, so that a bad value is refused whatever the
+    theory (it was ignored where the theory did not read it)."""
+    declared = models.options()
     for key, v in options.items():
-        check = _OPTION_CHECKS.get(key)
-        problem = check(v) if check is not None else None
+        problem = declared[key].problem(v) if key in declared else None
         if problem:
-            raise sec.error(key, f"{problem} ({MODEL_OPTIONS[key]})")
+            raise sec.error(key, f"{problem} ({model_options(models)[key]})")
 
 
 SECTIONS = ("name", "material", "friction", "geometry", "load", "kinematics", "grid", "model")
 
 
 #: bytes per grid element a theory needs (arrays it allocates; the exact theory: zero-padded FFTs of
-#: the 3 x 3 influence kernel and its working arrays).  The conformal theory adds dense blocks along s.
-_BYTES_PER_ELEMENT = {"hertz": 48, "linear": 48, "empirical": 48, "johnson_vermeulen": 48, "fastsim": 240,
-                      "exact": 900, "conformal": 900, "table": 48}
+#: the 3 x 3 influence kernel and its working arrays), from the registry.  The conformal theory adds
+#: dense blocks along s (conformal.registry.Model.bytes_dense_y).
+_BYTES_PER_ELEMENT = {m.name: m.bytes_per_element for m in MODELS}
 
 
 def available_memory() -> float | None:
@@ -776,26 +755,24 @@ def available_memory() -> float | None:
         return None
 
 
-def grid_bytes(mx: int, my: int, theory: str) -> float:
-    """An estimate of the memory (bytes) an mx x my grid needs with ``theory``."""
-    n = float(mx) * float(my)
-    need = n * _BYTES_PER_ELEMENT.get(theory, 900)
-    if theory == "conformal":        # (2mx-1) x ms x ms x 3 x 3 kernel and its FFT along x
-        need += 2.0 * float(mx) * float(my) ** 2 * 9 * 16
-    return need
+def grid_bytes(mx: int, my: int, theory: str, models: Registry = MODELS) -> float:
+    """An estimate of the memory (bytes) an mx x my grid needs with ``theory`` (its declaration in
+    the registry: :meth:`conformal.registry.Model.grid_bytes`)."""
+    return models.grid_bytes(mx, my, theory)
 
 
-def check_grid_memory(mx: int, my: int, theory: str, key: str, hint: str = "use a coarser grid") -> None:
+def check_grid_memory(mx: int, my: int, theory: str, key: str, hint: str = "use a coarser grid",
+                      models: Registry = MODELS) -> None:
     """Refuse (InputError naming ``key``) an mx x my grid whose estimated memory with ``theory``
     (:func:`grid_bytes`) exceeds 80 % of the memory available, before anything is allocated."""
-    need = grid_bytes(mx, my, theory)
+    need = grid_bytes(mx, my, theory, models)
     avail = available_memory()
     if avail is not None and need > 0.8 * avail:
         raise InputError(f"{key}: a {mx} x {my} grid needs about {need / 2**30:.3g} GiB with theory "
                          f"{theory!r}, more than the {avail / 2**30:.3g} GiB available; {hint}")
 
 
-def grid_memory(scene: "Scene") -> tuple[int, int, float]:
+def grid_memory(scene: "Scene", models: Registry = MODELS) -> tuple[int, int, float]:
     """(mx, my, bytes): an estimate of the memory the scene's grid needs with its theory, before
     anything is allocated.  Wheel-rail grids sized by ``element_size`` are not known here: (0, 0, 0)
     (they are checked where their size becomes known: conformal.geometry.patches)."""
@@ -806,50 +783,55 @@ def grid_memory(scene: "Scene") -> tuple[int, int, float]:
         return 0, 0, 0.0
     else:
         mx = my = int(g.n)
-    return mx, my, grid_bytes(mx, my, theory)
+    return mx, my, grid_bytes(mx, my, theory, models)
 
 
-def validate(scene: "Scene") -> "Scene":
+def validate(scene: "Scene", models: Registry = MODELS) -> "Scene":
     """Checks that need several sections (a grid too large for the memory of this machine, the
-    ranges of changed keys); raises :class:`InputError` naming the key.  Returns the scene."""
-    if scene.model.theory not in THEORIES:
-        raise InputError(f"[model] theory: must be one of {', '.join(THEORIES)}, got {scene.model.theory!r}"
-                         f"{_did_you_mean(scene.model.theory, THEORIES)}")
+    ranges of changed keys, what the theory accepts: its declaration in ``models``); raises
+    :class:`InputError` naming the key.  Returns the scene."""
+    theory = scene.model.theory
+    if theory not in models:
+        raise InputError(f"[model] theory: must be one of {', '.join(models.names)}, got {theory!r}"
+                         f"{_did_you_mean(theory, models.names)}")
+    model = models[theory]
     geo = scene.geometry
     kin, fr = scene.kinematics, scene.friction
-    for key, given in (("[kinematics] direction", kin.direction == -1), ("[kinematics] rigid_slip", kin.rigid_slip is not None),
-                       ("[friction] mu_table", fr.mu_table is not None),
-                       ("[model] influence_file", "influence_file" in scene.model.options)):
+    for key, given, cap in (("[kinematics] direction", kin.direction == -1, None),
+                            ("[kinematics] rigid_slip", kin.rigid_slip is not None, RIGID_SLIP),
+                            ("[friction] mu_table", fr.mu_table is not None, MU_TABLE),
+                            ("[model] influence_file", "influence_file" in scene.model.options, INFLUENCE_FILE)):
         if given and isinstance(geo, WheelRailGeometry):
             raise InputError(f"{key}: for planar scenes (kind quadratic, hertz, table); not yet for wheel_rail scenes")
-        if given and key != "[kinematics] direction" and scene.model.theory != "exact":
-            raise InputError(f"{key}: only theory \"exact\" uses it (got theory {scene.model.theory!r}); "
+        if given and cap is not None and not model.accepts(cap):
+            raise InputError(f"{key}: only theory {models.quoted(cap)} uses it (got theory {theory!r}); "
                              "other theories would ignore it")
     if scene.history:
         if isinstance(geo, WheelRailGeometry):
             raise InputError("[[history]]: load histories are for planar scenes (kind quadratic, hertz, table)")
-        if scene.model.theory != "exact":
-            raise InputError(f"[[history]]: a load history is solved by theory \"exact\", got {scene.model.theory!r}")
+        if not model.accepts(HISTORY):
+            raise InputError(f"[[history]]: a load history is solved by theory {models.quoted(HISTORY)}, got {theory!r}")
         if kin.direction == -1 or kin.rigid_slip is not None or fr.mu_table is not None \
                 or "influence_file" in scene.model.options:
             raise InputError("[[history]]: not combined with direction = -1, rigid_slip, mu_table or influence_file")
-    if scene.model.influence == "halfspace_planar" and scene.model.theory != "conformal":
+    if scene.model.influence == "halfspace_planar" and not model.accepts(PLANAR_HALFSPACE):
         raise InputError(f"[model] influence: \"halfspace_planar\" (CONTACT's conformal approach) is for theory "
-                         f"\"conformal\", got theory {scene.model.theory!r}")
-    if scene.load.approach_along is not None and scene.model.theory != "conformal":
+                         f"{models.quoted(PLANAR_HALFSPACE)}, got theory {theory!r}")
+    if scene.load.approach_along is not None and not model.accepts(APPROACH_ALONG):
         raise InputError(f"[load] approach_along: an approach along the load direction needs [model] theory = "
-                         f"\"conformal\", got {scene.model.theory!r}")
-    if scene.load.load_angle != 0.0 and scene.model.theory != "conformal":
+                         f"{models.quoted(APPROACH_ALONG)}, got {theory!r}")
+    if scene.load.load_angle != 0.0 and not model.accepts(LOAD_ANGLE):
         raise InputError(f"[load] load_angle: a load direction other than vertical needs [model] theory = "
-                         f"\"conformal\" (the {scene.model.theory!r} model balances the vertical load)")
+                         f"{models.quoted(LOAD_ANGLE)} (the {theory!r} model balances the vertical load)")
     if isinstance(geo, WheelRailGeometry):
         if abs(geo.yaw) > MAX_YAW:
             raise InputError(f"[geometry] yaw: the wheelset yaw must lie within +-{MAX_YAW:g} rad, got {geo.yaw:g}")
         if abs(geo.rail_cant) > MAX_CANT:
             raise InputError(f"[geometry] rail_cant: must lie within +-{MAX_CANT:g} rad, got {geo.rail_cant:g}")
-    mx, my, _ = grid_memory(scene)
+    mx, my, _ = grid_memory(scene, models)
     if mx:
-        check_grid_memory(mx, my, scene.model.theory, "[grid] mx" if scene.grid.explicit else "[grid] n")
+        check_grid_memory(mx, my, scene.model.theory, "[grid] mx" if scene.grid.explicit else "[grid] n",
+                          models=models)
     return scene
 
 
@@ -860,7 +842,7 @@ def scene_warnings(scene: "Scene") -> list[str]:
     out = []
     geo = scene.geometry
     kin = scene.kinematics
-    if scene.model.theory in NORMAL_ONLY_THEORIES:
+    if scene.model.theory in MODELS and MODELS[scene.model.theory].normal_only:
         given = [k for k in ("xi", "eta", "phi") if getattr(kin, k) != 0.0]
         given += [k for k in ("fx_rel", "fy_rel", "speed") if getattr(kin, k) is not None]
         if given:
@@ -873,7 +855,8 @@ def scene_warnings(scene: "Scene") -> list[str]:
     return out
 
 
-def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: str = "scene") -> Scene:
+def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: str = "scene",
+                    models: Registry = MODELS) -> Scene:
     """Build a validated :class:`Scene` from a parsed TOML mapping.
 
     Every section is checked: unknown keys are refused with the closest known one, values are
@@ -888,6 +871,9 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: s
         Folder that relative file names (profiles, tables) are taken from.
     name : str, optional
         Name of the scene when ``data`` has none.
+    models : Registry, optional
+        The models the scene may name (:data:`conformal.registry.MODELS`, or one extended by
+        :meth:`~conformal.registry.Registry.with_model`).
 
     Returns
     -------
@@ -926,9 +912,9 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: s
     scene = Scene(material=_material(data.get("material")), friction=_friction(data.get("friction"), base_dir),
                   geometry=geometry, load=_load(data.get("load"), geometry),
                   kinematics=_kinematics(data.get("kinematics"), base_dir), grid=_grid(data.get("grid")),
-                  model=_model(data.get("model"), base_dir), name=str(data.get("name", name)), base_dir=base_dir,
+                  model=_model(data.get("model"), base_dir, models), name=str(data.get("name", name)), base_dir=base_dir,
                   history=_history(data.get("history")))
-    return validate(scene)
+    return validate(scene, models)
 
 
 def as_scene(source: "Scene | str | Path | Mapping[str, Any]", **overrides: Any) -> Scene:
@@ -960,3 +946,96 @@ def load_scene(path: str | Path) -> Scene:
     """Read and validate a TOML scene file."""
     path = Path(path)
     return scene_from_dict(read_scene_file(path), base_dir=path.parent, name=path.stem)
+
+
+# ----------------------------------------------------------------------------- reference documentation
+#: unit and meaning of the scene keys outside [model] (whose keys are declared in conformal.registry)
+_KEY_DOCS: dict[str, dict[str, tuple[str, str]]] = {
+    "material": {"G": ("N/mm²", "shear modulus (or E, Young's modulus); both bodies unless [material.body2]"),
+                 "E": ("N/mm²", "Young's modulus, instead of G"), "nu": ("", "Poisson's ratio"),
+                 "body2": ("", "a table with G (or E) and nu of body 2 (the wheel)")},
+    "friction": {"mu": ("", "friction coefficient (static = kinetic)"), "mu_static": ("", "static coefficient"),
+                 "mu_kinetic": ("", "kinetic coefficient (<= mu_static)"),
+                 "mu_table": ("", "file of rows 's mu': mu along y (theory exact)")},
+    "geometry": {"kind": ("", "quadratic | hertz | table | wheel_rail"),
+                 "A": ("1/mm", "quadratic: h = A x² + B y² (B = 0: line contact)"), "B": ("1/mm", "quadratic"),
+                 "a": ("mm", "hertz: semi-axis along x"), "b": ("mm", "hertz: semi-axis along y"),
+                 "file": ("", "table: the undeformed distance on the grid (mx rows of my numbers)"),
+                 "wheel_profile": ("", "built-in name or file"), "rail_profile": ("", "built-in name or file"),
+                 "side": ("", "right | left"), "placement": ("", "wheelset | single"),
+                 "lateral_shift": ("mm", "wheelset lateral displacement"), "yaw": ("rad", "wheelset yaw"),
+                 "roll": ("rad", "wheelset roll (default: found so that both wheels touch)"),
+                 "rail_cant": ("rad", "rail inclination"), "gauge": ("mm", "track gauge"),
+                 "gauge_height": ("mm", "below the top of rail where the gauge is measured"),
+                 "flange_back": ("mm", "distance of the flange backs"),
+                 "wheel_radius": ("mm", "nominal rolling radius"),
+                 "flange_back_pos": ("mm", "flange back in wheel-profile y (default: from the profile)"),
+                 "smoothing": ("mm", "profile smoothing wavelength (0: interpolate)"),
+                 "element_size": ("mm", "square grid elements per patch (CONTACT's DX = DS)"),
+                 "element_size_s": ("mm", "conformal strips: element length along s"),
+                 "patch_combine": ("mm", "overlap regions closer than this form one patch"),
+                 "wheel_z": ("", "up: the wheel file gives z upwards"), "rail_z": ("", "up: the rail file gives z "
+                                                                                     "upwards")},
+    "load": {"normal_force": ("N", "normal force (per mm for line contact)"),
+             "approach": ("mm", "approach (wheel-rail: lowering below first touch)"),
+             "wheel_load": ("N", "wheel-rail: vertical load balanced by the contact"),
+             "load_angle": ("rad", "wheel-rail, theory conformal: direction of the load, 0 = vertical"),
+             "approach_along": ("mm", "wheel-rail, theory conformal: approach along the load direction")},
+    "kinematics": {"xi": ("", "longitudinal creepage (rolling = shift: shift in mm)"),
+                   "eta": ("", "lateral creepage (shift: mm)"), "phi": ("rad/mm", "spin creepage (shift: rad)"),
+                   "rolling": ("", "steady | shift"), "fx_rel": ("", "prescribed FX / (mu FN) instead of xi"),
+                   "fy_rel": ("", "prescribed FY / (mu FN) instead of eta"),
+                   "velocity": ("mm/s", "rolling speed (frictional power)"),
+                   "speed": ("mm/s", "wheel-rail: wheelset speed; the creepages follow per patch"),
+                   "pitch_velocity": ("rad/s", "wheel-rail: about the axle (default: pure rolling)"),
+                   "yaw_rate": ("rad/s", "wheel-rail"), "roll_rate": ("rad/s", "wheel-rail"),
+                   "lateral_velocity": ("mm/s", "wheel-rail"), "direction": ("", "rolling direction +1 | -1"),
+                   "rigid_slip": ("", "file: rigid slip per element (theory exact)")},
+    "grid": {"mx": ("", "elements along x (explicit grid)"), "my": ("", "elements along y"),
+             "dx": ("mm", "element size along x"), "dy": ("mm", "element size along y"),
+             "xl": ("mm", "grid corner x (default: centred)"), "yl": ("mm", "grid corner y"),
+             "n": ("", "automatic grid: elements along each axis"),
+             "scale": ("", "automatic grid: extent over the Hertz patch"),
+             "strips": ("", "conformal wheel-rail: coupled | separate")},
+}
+
+
+def reference_markdown(models: Registry = MODELS) -> str:
+    """Every scene key with its type, default, unit and meaning as markdown (for the documentation
+    site): the sections from the scene's dataclasses, ``[model]`` and each theory from the registry
+    (:func:`conformal.registry.reference_markdown`).
+
+    >>> md = reference_markdown()
+    >>> "| `wheel_load` | number | -- | N |" in md, "### theory `conformal`" in md
+    (True, True)
+    """
+    from conformal.registry import reference_markdown as model_reference
+
+    defaults = {"material": {"G": 82000.0, "nu": 0.28}, "friction": {"mu": 0.3}}
+    for sec, cls in (("geometry", WheelRailGeometry), ("load", Load), ("kinematics", Kinematics), ("grid", GridSpec)):
+        defaults[sec] = {f.name: f.default for f in fields(cls)}
+    for cls in (QuadraticGeometry, HertzGeometry):
+        defaults["geometry"].update({f.name: None for f in fields(cls) if f.name != "kind"})
+    defaults["geometry"]["file"] = None
+
+    types = {"mu_static": "number", "mu_kinetic": "number", "fx_rel": "number", "fy_rel": "number",
+             "body2": "table", "file": "file", "mu_table": "file", "rigid_slip": "file", "mx": "whole number",
+             "my": "whole number"}
+    defaults["geometry"]["kind"] = None          # required
+
+    def kind(v, key) -> str:
+        if key in types:
+            return types[key]
+        if isinstance(v, bool):
+            return "true \\| false"
+        if isinstance(v, int) and not isinstance(v, bool):
+            return "whole number"
+        if isinstance(v, float) or (v is None and _KEY_DOCS[sec][key][0]):
+            return "number"
+        return "string"
+
+    sections = {}
+    for sec, docs in _KEY_DOCS.items():
+        sections[sec] = [(k, kind(defaults.get(sec, {}).get(k), k), defaults.get(sec, {}).get(k), unit, doc)
+                         for k, (unit, doc) in docs.items()]
+    return model_reference(models, sections)

@@ -42,7 +42,6 @@ import os
 import sys
 import tempfile
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -69,13 +68,13 @@ from conformal.errors import ConformalError  # noqa: E402
 
 
 def solve_at(scene_file: str, approach: float, influence: str, **fe) -> dict:
-    from conformal.scene import Load, load_scene
-    from conformal.solve import solve_scene
+    from conformal.scene import load_scene
+    from conformal.dispatch import solve_scene
 
     scene = load_scene(SCENES / scene_file)
     options = dict(scene.model.options)
     options.update({f"fe_{k}": v for k, v in fe.items()})
-    scene = replace(scene, load=Load(approach=approach))
+    scene = scene.with_("load.approach", approach)
     scene = scene.with_model(theory="conformal", influence=influence, options=options)
     t0 = time.perf_counter()
     r = solve_scene(scene)

@@ -162,12 +162,12 @@ def _scenes(quick: bool):
     groove = load_scene(ROOT / "meshes/scenes/groove_conformal.toml")
     out = []
     for shift in ([6.2] if quick else [0.0, 6.2, 6.25]):
-        out.append((f"flange_y{shift:g}", replace(flange, geometry=replace(flange.geometry, lateral_shift=shift))))
+        out.append((f"flange_y{shift:g}", flange.with_("geometry.lateral_shift", shift)))
     if not quick:
         out.append(("groove", groove))
     # frictionless comparison: no creepage, so that every model solves the normal problem alone
-    return [(name, replace(sc, kinematics=replace(sc.kinematics, speed=None, xi=0.0, eta=0.0, phi=0.0,
-                                                  fx_rel=None, fy_rel=None))) for name, sc in out]
+    return [(name, sc.with_(kinematics__speed=None, kinematics__xi=0.0, kinematics__eta=0.0,
+                                 kinematics__phi=0.0, kinematics__fx_rel=None, kinematics__fy_rel=None)) for name, sc in out]
 
 
 def _area(r) -> float:
@@ -194,7 +194,7 @@ def _profile(r):
 
 
 def _solve(scene, theory: str, options: dict, influence: str = "halfspace"):
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     opts = dict(scene.model.options)
     opts.update(options)
@@ -236,8 +236,7 @@ def compare_scene(name: str, scene, out: Path, fec_opts: dict, fe_influence: boo
     for mode in ("load", "approach"):
         # [load] approach counts the wheelset height from first touch: the height the conformal
         # half-space model finds for the wheel load, so that every model sees the same overlap
-        sc = scene if mode == "load" else replace(scene, load=replace(scene.load, wheel_load=None,
-                                                                        approach=float(ref.approach)))
+        sc = scene if mode == "load" else scene.with_("load.approach", float(ref.approach))
         models = [("fe_contact", "fe_contact", fec_opts, "halfspace"),
                   ("conformal_fe", "conformal", {}, "fe"),
                   ("conformal_hs", "conformal", {}, "halfspace"),
@@ -389,7 +388,7 @@ def mesh_study(out: Path, name: str, fec_list: list, grid_list: list, fe_influen
     path = out / f"mesh_study_{name}.json"
     data = json.loads(path.read_text()) if path.exists() else {"runs": []}
     ref, _ = _solve(scene, "conformal", {})
-    app_scene = replace(scene, load=replace(scene.load, wheel_load=None, approach=float(ref.approach)))
+    app_scene = scene.with_("load.approach", float(ref.approach))
 
     def record(run: dict) -> None:
         nonlocal data      # read again: another mesh study of the same scene may have appended meanwhile
@@ -428,7 +427,7 @@ def mesh_study(out: Path, name: str, fec_list: list, grid_list: list, fe_influen
                 continue
             res = {}
             for mode, sc in (("load", scene), ("approach", app_scene)):
-                sc = replace(sc, grid=replace(sc.grid, n=int(n)))
+                sc = sc.with_("grid.n", int(n))
                 r, wall = _solve(sc, "conformal", {}, infl)
                 res[mode] = {"FN": r.FN, "pmax": r.pmax, "area": _area(r), "wall_s": wall}
             record({"model": label, "grid_n": int(n), **res})

@@ -128,16 +128,16 @@ class Case:
         from conformal.cases.conformal import curved_problem_from_wheel_rail
         from conformal.influence.curved import curved_halfspace_kernel
         from conformal.influence.fe import rail_body_from_grid, wheel_body_from_grid
-        from conformal.scene import Load, load_scene
+        from conformal.scene import load_scene
         from conformal.solvers.conformal import influence_operator, solve_curved
 
         self.key = key
         label, scene, approach = CASES[key]
         self.label = label
         sc = scene(tmp) if callable(scene) else load_scene(SCENES / scene)
-        sc = replace(sc, load=Load(approach=approach)).with_model(theory="conformal", influence="halfspace")
+        sc = sc.with_("load.approach", approach).with_model(theory="conformal", influence="halfspace")
         if n is not None:
-            sc = replace(sc, grid=replace(sc.grid, n=n))
+            sc = sc.with_("grid.n", n)
         self.problem = curved_problem_from_wheel_rail(sc)
         grid = self.problem.grid
         op, info = influence_operator(grid, sc.material, sc.model)

@@ -34,7 +34,6 @@ import os
 import resource
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -61,12 +60,12 @@ def scenes(quick: bool):
 
     flange = load_scene(ROOT / "meshes/scenes/flange_s1002_uic60.toml")
     deep = load_scene(ROOT / "meshes/scenes/deep_conformal_pair.toml")
-    out = [(f"flange_y{s:g}", replace(flange, geometry=replace(flange.geometry, lateral_shift=s)))
+    out = [(f"flange_y{s:g}", flange.with_("geometry.lateral_shift", s))
            for s in ([6.2] if quick else [6.2, 6.25])]
     if not quick:
-        out.append(("deep_pair", replace(deep, load=replace(deep.load, approach=None, wheel_load=DEEP_LOAD))))
-    return [(n, replace(sc, kinematics=replace(sc.kinematics, speed=None, xi=0.0, eta=0.0, phi=0.0,
-                                                fx_rel=None, fy_rel=None))) for n, sc in out]
+        out.append(("deep_pair", deep.with_(load__approach=None, load__wheel_load=DEEP_LOAD)))
+    return [(n, sc.with_(kinematics__speed=None, kinematics__xi=0.0, kinematics__eta=0.0,
+                                 kinematics__phi=0.0, kinematics__fx_rel=None, kinematics__fy_rel=None)) for n, sc in out]
 
 
 def _rss_gib() -> float:
@@ -113,7 +112,7 @@ def _slave_edge(run) -> bool:
 
 
 def _conformal(scene, influence: str) -> dict:
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     sc = scene.with_model(theory="conformal", influence=influence, options=dict(scene.model.options))
     t0 = time.perf_counter()

@@ -35,7 +35,6 @@ import csv
 import math
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -48,7 +47,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _provenance import output_dir, write_sidecar  # noqa: E402
 from conformal.errors import ConformalError  # noqa: E402
 from conformal.scene import load_scene  # noqa: E402
-from conformal.solve import solve_scene  # noqa: E402
+from conformal.dispatch import solve_scene  # noqa: E402
 
 SCENE = ROOT / "meshes" / "scenes" / "flange_s1002_uic60.toml"
 WORN = ROOT / "meshes" / "scenes" / "flange_worn.toml"
@@ -118,7 +117,7 @@ def _slug(pair: str) -> str:
 def run_pair(scene, shifts, pair: str, models, out: Path, showcase=(), vtu: bool = False) -> list[dict]:
     rows = []
     for y in shifts:
-        sc = replace(scene, geometry=replace(scene.geometry, lateral_shift=float(y)))
+        sc = scene.with_("geometry.lateral_shift", float(y))
         results = {}
         for theory, influence, label in models:
             try:

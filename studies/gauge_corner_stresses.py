@@ -51,7 +51,7 @@ from _provenance import output_dir, write_sidecar  # noqa: E402
 from conformal.errors import ConformalError  # noqa: E402
 from conformal.result import TractionField  # noqa: E402
 from conformal.scene import load_scene  # noqa: E402
-from conformal.solve import solve_scene  # noqa: E402
+from conformal.dispatch import solve_scene  # noqa: E402
 from conformal.stresses.fatigue import FatigueParameters, surface_index  # noqa: E402
 from conformal.stresses.field import StressField, default_depths, stress_field  # noqa: E402
 from conformal.stresses.halfspace import planar_planes  # noqa: E402

@@ -46,7 +46,6 @@ import json
 import math
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -76,10 +75,9 @@ SCENE = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"
 def scene_for(side, case, element_size, theory="exact"):
     inp = case["inputs"]
     s = load_scene(SCENE)
-    geo = replace(s.geometry, side=side, lateral_shift=inp["Y_WS_mm"], yaw=inp["YAW_WS_rad"],
-                  roll=inp["ROLL_WS_rad"], element_size=element_size)
-    kin = replace(s.kinematics, pitch_velocity=inp["VPITCH_rad_per_s"])
-    return replace(s, geometry=geo, kinematics=kin).with_model(theory=theory)
+    return s.with_(geometry__side=side, geometry__lateral_shift=inp["Y_WS_mm"], geometry__yaw=inp["YAW_WS_rad"],
+                   geometry__roll=inp["ROLL_WS_rad"], geometry__element_size=element_size,
+                   kinematics__pitch_velocity=inp["VPITCH_rad_per_s"], model__theory=theory)
 
 
 def main(argv=None):

@@ -25,7 +25,6 @@ import argparse
 import csv
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -38,7 +37,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _provenance import output_dir, write_sidecar  # noqa: E402
 from conformal.errors import ConformalError  # noqa: E402
 from conformal.scene import load_scene  # noqa: E402
-from conformal.solve import solve_scene  # noqa: E402
+from conformal.dispatch import solve_scene  # noqa: E402
 
 SCENE = ROOT / "meshes" / "scenes" / "flange_s1002_uic60.toml"
 SCENES = (("tread, y = 0", 0.0), ("flange root, y = 6.2", 6.2), ("flange flank, y = 6.3", 6.3))
@@ -62,7 +61,7 @@ def configs(quick: bool):
 def run(scene, theory, influence, n) -> dict:
     sc = scene.with_model(theory=theory, influence=influence)
     if n is not None:
-        sc = replace(sc, grid=replace(sc.grid, n=n))
+        sc = sc.with_("grid.n", n)
     t0 = time.perf_counter()
     r = solve_scene(sc)
     wall = time.perf_counter() - t0
@@ -93,7 +92,7 @@ def main(argv=None):
     runs, ref_cfg = configs(args.quick)
     rows = []
     for scene_label, y in (SCENES[1:2] if args.quick else SCENES):
-        sc = replace(base, geometry=replace(base.geometry, lateral_shift=y))
+        sc = base.with_("geometry.lateral_shift", y)
         ref_label = ref_cfg[0]
         try:
             ref = run(sc, *ref_cfg[1:])

@@ -125,7 +125,7 @@ def test_a_single_threaded_blas_inside_a_solve(monkeypatch):
 
     for k in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS", "BLIS_NUM_THREADS"):
         monkeypatch.delenv(k, raising=False)
-    monkeypatch.setattr("conformal.solve.solve_problem", spy)
+    monkeypatch.setattr("conformal.dispatch.solve_problem", spy)
     conformal.solve(CIRCLE, model__theory="fastsim")
     assert seen and all(n == 1 for n in seen)
 

@@ -14,7 +14,7 @@ from conformal.grid import PlanarGrid
 from conformal.materials import Material
 from conformal.result import SLIP
 from conformal.scene import load_scene, scene_from_dict
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 from conformal.cases import conformal as CC
 from conformal.solvers import conformal as C
 from conformal.solvers.normal import solve_normal
@@ -36,7 +36,7 @@ def flange():
     """S1002/UIC60 (1:40) at the lateral shift where the flange root meets the gauge corner, a
     coarse grid (20 x 20 on the patch)."""
     sc = load_scene(SCENES / "flange_s1002_uic60.toml")
-    sc = replace(sc, grid=replace(sc.grid, n=20))
+    sc = sc.with_("grid.n", 20)
     problem = CC.curved_problem_from_wheel_rail(sc)
     return sc, problem, C.solve_curved(problem)
 
@@ -88,7 +88,7 @@ def test_column_creepages_are_a_rigid_motion():
     projected on each column's tangents (independent 3-D vector algebra), gives the column
     creepages; the spin follows the local normal, phi n_ref . n(s)."""
     sc = load_scene(SCENES / "flange_s1002_uic60.toml")
-    g = CC.curved_problem_from_wheel_rail(replace(sc, grid=replace(sc.grid, n=10))).grid
+    g = CC.curved_problem_from_wheel_rail(sc.with_("grid.n", 10)).grid
     xi, eta, phi = 2e-3, -1e-3, 3e-3
     xs, es, ps = C.column_creepages(g, xi, eta, phi)
     (y0, z0), n0 = C.reference_point(g)
@@ -178,8 +178,8 @@ def test_near_total_conformity_groove():
     at 2 kN the contact wraps round the groove (> 50 degrees of contact angle), the normal force
     exceeds the vertical load by the inclination, and the solver converges."""
     sc = load_scene(SCENES / "groove_conformal.toml")
-    sc = replace(sc, grid=replace(sc.grid, n=30))
-    small = solve_scene(replace(sc, load=replace(sc.load, wheel_load=20.0)))
+    sc = sc.with_("grid.n", 30)
+    small = solve_scene(sc.with_("load.wheel_load", 20.0))
     hz = hertz_from_curvatures(small.extra["curvature_A"], small.extra["curvature_B"], STEEL, normal_force=small.FN)
     assert small.converged and small.extra["contact_angle_spread_deg"] < 20
     assert small.pmax == pytest.approx(hz.pmax, rel=0.01) and small.b == pytest.approx(hz.b, rel=0.05)
@@ -192,7 +192,7 @@ def test_flange_flank_at_70_degrees():
     """Contact angles of -66 to -73 degrees: the normal force is about W / cos(70 deg) = 2.9 W
     (less the vertical share of the creep forces); converges."""
     sc = load_scene(SCENES / "flange_s1002_uic60_70deg.toml")
-    r = solve_scene(replace(sc, grid=replace(sc.grid, n=20)))
+    r = solve_scene(sc.with_("grid.n", 20))
     assert r.converged and -75 < math.degrees(r.extra["contact_angle_min"]) < -66
     assert r.extra["FZ_track"] == pytest.approx(10000.0, rel=1e-6) and 2.5 < r.FN / 10000.0 < 3.2
 
@@ -201,7 +201,7 @@ def test_tread_and_flange_at_once():
     """The worn pair on a test rig (9.93 mm): tread, flange root and flange flank carry the load
     together on one strip (-3, -34 and -73 degrees); the vertical loads add up to the wheel load."""
     sc = load_scene(SCENES / "flange_worn_three_patches.toml")
-    sc = replace(sc, grid=replace(sc.grid, n=16)).with_model(options={"max_ms": 120})
+    sc = sc.with_("grid.n", 16).with_model(options={"max_ms": 120})
     r = solve_scene(sc)
     angles = sorted(round(math.degrees(g["contact_angle"])) for g in r.extra["regions"])
     assert r.converged and len(angles) == 3
@@ -214,7 +214,7 @@ def test_full_slip_and_large_spin():
     the tangential force is mu FN in magnitude (Coulomb, exactly); the spin of the rolling wheel
     varies across the patch with the contact angle."""
     sc = load_scene(SCENES / "flange_s1002_uic60.toml")
-    sc = replace(sc, grid=replace(sc.grid, n=16), kinematics=replace(sc.kinematics, pitch_velocity=-2000.0 / 420.0))
+    sc = sc.with_(grid__n=16, kinematics__pitch_velocity=-2000.0 / 420.0)
     r = solve_scene(sc)
     f = r.field
     c = f.status > 0
@@ -231,7 +231,7 @@ def test_nadal_limit_stops_with_a_clear_message():
     the load with a smaller normal force, W / (cos delta + mu |sin delta|) (within 10 %: the
     longitudinal part of the slip)."""
     sc = load_scene(SCENES / "flange_s1002_uic60_70deg.toml")
-    sc = replace(sc, grid=replace(sc.grid, n=12), friction=replace(sc.friction, mu_static=0.5, mu_kinetic=0.5))
+    sc = sc.with_(grid__n=12, friction__mu=0.5)
     p = CC.curved_problem_from_wheel_rail(sc)
     with pytest.raises(ConvergenceError, match="climbs the flange"):
         C.solve_curved(replace(p, eta_s=np.full(p.grid.ms, -0.05)))
@@ -245,7 +245,7 @@ def test_nadal_limit_stops_with_a_clear_message():
 def test_very_fine_grid_converges():
     """120 x 120 elements on the flange-root patch: both stages converge in a few outer iterations."""
     sc = load_scene(SCENES / "flange_s1002_uic60.toml")
-    r = solve_scene(replace(sc, grid=replace(sc.grid, n=120)))
+    r = solve_scene(sc.with_("grid.n", 120))
     assert r.converged and r.n_contact > 4000 and r.extra["outer_iterations"] <= 8
 
 
@@ -257,7 +257,7 @@ def test_fe_influence_numbers_end_to_end(monkeypatch, tmp_path):
     solve reads the numbers from the cache and gives the same answer."""
     monkeypatch.setenv("CONFORMAL_CACHE", str(tmp_path))
     sc = load_scene(SCENES / "flange_s1002_uic60_fe.toml")
-    sc = replace(sc, grid=replace(sc.grid, n=12)).with_model(options={"fe_order": 1})
+    sc = sc.with_("grid.n", 12).with_model(options={"fe_order": 1})
     fe1 = solve_scene(sc)
     hs = solve_scene(sc.with_model(influence="halfspace", options={}))
     assert fe1.converged and fe1.extra["influence"] == "fe"

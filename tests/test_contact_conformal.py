@@ -22,7 +22,7 @@ from conformal.cases import solve_wheel_rail
 from conformal.cases.conformal import solve_wheel_rail_conformal
 from conformal.errors import InputError
 from conformal.scene import load_scene, scene_from_dict
-from conformal.solve import solve
+from conformal.dispatch import solve
 
 ROOT = Path(__file__).resolve().parents[1]
 TB = ROOT / "tests" / "reference" / "contact_testbank"

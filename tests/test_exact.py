@@ -13,7 +13,7 @@ from conformal.cli import main
 from conformal.materials import Material
 from conformal.result import ADHESION, EXTERIOR
 from conformal.scene import load_scene, scene_from_dict
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 from conformal.theories import c33 as c33mod
 from conformal.theories.hertz import hertz_from_curvatures
 

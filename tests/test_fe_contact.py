@@ -24,7 +24,7 @@ from conformal.fe_contact.problems import settings_from_options, write_vtu
 from conformal.fe_contact.solver import _subdivided_rule
 from conformal.influence.fe_halfspace3d import point_displacement
 from conformal.scene import scene_from_dict
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 from conformal.theories.hertz import hertz_from_curvatures
 
 ROOT = Path(__file__).resolve().parents[1]

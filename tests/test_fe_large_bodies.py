@@ -6,7 +6,6 @@ rail, and the direct FE method (plain P2, unit loads) for the split method on a 
 """
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +17,7 @@ from conformal.materials import Material
 from conformal.meshing.bodies import BodyModel, Profile2D, StripPatch
 from conformal.meshing.gmsh_body import MeshSpec
 from conformal.scene import load_scene
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 from conformal.theories.hertz import hertz_from_curvatures
 
 SCENES = Path(__file__).parents[1] / "meshes" / "scenes"
@@ -83,7 +82,7 @@ def test_fe_for_profiles_that_are_not_graphs_over_y(tmp_path, monkeypatch):
     asks 0.984-0.997.  The JSON reports each body's size and closure."""
     monkeypatch.setenv("CONFORMAL_CACHE", str(tmp_path))
     sc = load_scene(SCENES / "deep_conformal_pair.toml")
-    sc = replace(sc, grid=replace(sc.grid, n=16))
+    sc = sc.with_("grid.n", 16)
     fe = solve_scene(sc)
     hs = solve_scene(sc.with_model(influence="halfspace"))
     assert fe.converged and 0.984 < fe.FN / hs.FN < 0.997, fe.FN / hs.FN
@@ -102,7 +101,7 @@ def test_sphere_on_flat_block_gives_hertz(tmp_path, monkeypatch):
     on a flat FE block: Hertz FN within 1 % at the prescribed approach (default FE settings)."""
     monkeypatch.setenv("CONFORMAL_CACHE", str(tmp_path))
     sc = load_scene(SCENES / "hertz_crowned_wheel.toml")
-    sc = replace(sc, geometry=replace(sc.geometry, wheel_radius=300.0))
+    sc = sc.with_("geometry.wheel_radius", 300.0)
     hz = hertz_from_curvatures(1 / 600.0, 1 / 600.0, Material.identical(G, NU), approach=0.05)
     r = solve_scene(sc)
     assert r.FN == pytest.approx(hz.FN, rel=0.01) and r.pmax == pytest.approx(hz.pmax, rel=0.02)
@@ -117,7 +116,7 @@ def test_fn_converges_with_body_size(tmp_path, monkeypatch):
     half-space at sizes 0.5, 1, 2, 4; fitted order 1.06)."""
     monkeypatch.setenv("CONFORMAL_CACHE", str(tmp_path))
     sc = load_scene(SCENES / "hertz_crowned_wheel.toml")
-    sc = replace(sc, grid=replace(sc.grid, n=16))
+    sc = sc.with_("grid.n", 16)
 
     def fn(size, far):
         return solve_scene(sc.with_model(options={"fe_body_size": size, "fe_far_field": far})).FN

@@ -2,7 +2,6 @@
 were also looked at, see docs/validation/reliability.md)."""
 from __future__ import annotations
 
-from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -83,7 +82,7 @@ def test_3d_view_has_orientation_scale_and_a_readable_number_of_arrows():
     from conformal.scene import load_scene
 
     sc = load_scene(SCENES / "flange_s1002_uic60.toml")
-    r = conformal.solve(replace(sc, grid=replace(sc.grid, n=30)))
+    r = conformal.solve(sc.with_("grid.n", 30))
     pl = _offscreen_plotter((400, 300))
     plot3d(r, pl)
     assert pl.renderer.axes_widget is not None                       # the x, y, z triad

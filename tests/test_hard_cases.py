@@ -131,7 +131,7 @@ def test_pure_spin_at_large_spin(tmp_path, capsys):
     f.write_text(BASE.format(geometry=CIRCLE, load="normal_force = 10000.0", grid="n = 24",
                              kinematics="phi = 1.0", friction="mu = 0.3"))
     from conformal.scene import load_scene
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     r = solve_scene(load_scene(f))
     assert r.converged and r.n_slip == r.n_contact

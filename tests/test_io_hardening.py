@@ -9,14 +9,13 @@ import subprocess
 import sys
 import textwrap
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
 from conformal.cli import main
 from conformal.errors import InputError
-from conformal.scene import Load, load_scene, scene_from_dict
+from conformal.scene import load_scene, scene_from_dict
 
 from test_scene_cli import scene_file
 
@@ -113,7 +112,7 @@ def test_output_paths_are_checked_before_solving(tmp_path, capsys, monkeypatch, 
     def no_solve(scene):
         raise AssertionError("solved before checking the output path")
 
-    monkeypatch.setattr("conformal.solve.solve_scene", no_solve)
+    monkeypatch.setattr("conformal.dispatch.solve_scene", no_solve)
     code, out, err = run_cli(capsys, "solve", scene_file(tmp_path), option, tmp_path / name)
     assert code == 2 and message in one_line_error(err)
 
@@ -160,13 +159,13 @@ def test_a_steep_rail_cant_warns(tmp_path, capsys):
 def test_reported_approach_gives_back_the_wheel_load(theory, n):
     """The JSON's ``approach`` of a wheel-load solve is the wheelset's lowering below the height where
     its first wheel touches, as ``[load] approach``: solving at it gives back the same forces."""
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     sc = load_scene(DEMO).with_(model__theory=theory, grid__n=n)
     r = solve_scene(sc)
     assert r.extra["FZ_track"] == pytest.approx(10000.0, rel=1e-4)
     assert 0.02 < r.approach < 0.05
-    r2 = solve_scene(replace(sc, load=Load(approach=r.approach)))
+    r2 = solve_scene(sc.with_("load.approach", r.approach))
     assert r2.approach == pytest.approx(r.approach, rel=1e-12)
     assert r2.extra["FZ_track"] == pytest.approx(10000.0, rel=1e-3)
     assert r2.FN == pytest.approx(r.FN, rel=1e-3)

@@ -112,18 +112,16 @@ def test_precompute_fills_the_conformal_strip_of_a_multi_patch_scene(tmp_path, m
     ONE strip (conformal.cases.conformal.curved_problem_from_wheel_rail).  precompute must plan
     that strip (rail + wheel: 2 bodies, not 2 per patch), and a conformal solve afterwards must
     find both bodies in the cache (the check fails if plan() builds per-patch grids)."""
-    from dataclasses import replace
     from pathlib import Path
 
     from conformal.scene import load_scene
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     scene = load_scene(Path(__file__).parents[1] / "meshes" / "scenes" / "flange_worn_three_patches.toml")
     # at 9.93 mm (the scene's shift: three patches) the strip turns past the vertical gauge face
     # and the rail is no FE body (not a graph over y); at 9.9 mm two patches, tread and flange root
     opts = dict(scene.model.options, max_mx=6, max_ms=14, fe_body_size=0.3, fe_h_patch=4.0)
-    scene = replace(scene.with_model(influence="fe", options=opts),
-                    geometry=replace(scene.geometry, lateral_shift=9.9))
+    scene = scene.with_model(influence="fe", options=opts).with_("geometry.lateral_shift", 9.9)
     cache = Cache(tmp_path / "cache")
     sweep = parse_sweep(f"shift={scene.geometry.lateral_shift}")
     items, failed = plan(scene, sweep, cache=cache)

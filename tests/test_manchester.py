@@ -2,7 +2,6 @@
 
 The full table (every shift, both wheels, 0.2 mm elements) is studies/manchester_a22.py.
 """
-from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -27,10 +26,9 @@ def ref():
 def scene_for(side, case, theory="exact", element_size=0.4):
     inp = case["inputs"]
     s = load_scene(SCENE)
-    geo = replace(s.geometry, side=side, lateral_shift=inp["Y_WS_mm"], yaw=inp["YAW_WS_rad"],
-                  roll=inp["ROLL_WS_rad"], element_size=element_size)
-    kin = replace(s.kinematics, pitch_velocity=inp["VPITCH_rad_per_s"])
-    return replace(s, geometry=geo, kinematics=kin).with_model(theory=theory)
+    return s.with_(geometry__side=side, geometry__lateral_shift=inp["Y_WS_mm"], geometry__yaw=inp["YAW_WS_rad"],
+                   geometry__roll=inp["ROLL_WS_rad"], geometry__element_size=element_size,
+                   kinematics__pitch_velocity=inp["VPITCH_rad_per_s"], model__theory=theory)
 
 
 @pytest.mark.slow

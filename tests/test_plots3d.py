@@ -1,6 +1,5 @@
 """3-D output of conformal results: the pyvista off-screen view, the PNG of `conformal solve --plot`,
 and the VTU files for ParaView (read back with meshio and checked against the result)."""
-from dataclasses import replace
 from pathlib import Path
 
 import meshio
@@ -10,7 +9,7 @@ import pytest
 from conformal.cli import main
 from conformal.plots import curved_strip_points, export_conformal_vtu, render_conformal_3d
 from conformal.scene import load_scene
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 
 SCENES = Path(__file__).resolve().parents[1] / "meshes" / "scenes"
 
@@ -18,7 +17,7 @@ SCENES = Path(__file__).resolve().parents[1] / "meshes" / "scenes"
 @pytest.fixture(scope="module")
 def flange_result():
     sc = load_scene(SCENES / "flange_s1002_uic60.toml")
-    return solve_scene(replace(sc, grid=replace(sc.grid, n=12)))
+    return solve_scene(sc.with_("grid.n", 12))
 
 
 def _quad_areas(points: np.ndarray, quads: np.ndarray) -> np.ndarray:

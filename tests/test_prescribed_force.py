@@ -11,7 +11,7 @@ import pytest
 from scipy.optimize import brentq
 
 from conformal.scene import scene_from_dict
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 
 DISSIMILAR = {"G": 26000.0, "nu": 0.33, "body2": {"G": 82000.0, "nu": 0.28}}
 MU = 1e-4

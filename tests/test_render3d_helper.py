@@ -1,6 +1,5 @@
 """The demo's 3-D view drawn by a helper process (conformal.plots.Render3D, issue 13: the pyvista
 import and window open while the solve runs) is the picture drawn in this process."""
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -8,7 +7,7 @@ import pytest
 
 from conformal.plots import Render3D, render_conformal_3d
 from conformal.scene import load_scene
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 
 SCENES = Path(__file__).resolve().parents[1] / "meshes" / "scenes"
 
@@ -17,7 +16,7 @@ SCENES = Path(__file__).resolve().parents[1] / "meshes" / "scenes"
 def test_helper_process_draws_the_same_picture():
     render = Render3D((320, 240))            # started before the solve, as in `conformal demo`
     sc = load_scene(SCENES / "flange_s1002_uic60.toml")
-    r = solve_scene(replace(sc, grid=replace(sc.grid, n=12)))
+    r = solve_scene(sc.with_("grid.n", 12))
     render.send(r)
     img = render.image()
     here = render_conformal_3d(r, window=(320, 240))

@@ -3,7 +3,6 @@ import csv
 import json
 import subprocess
 import sys
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +12,7 @@ from conformal.cases.wheelrail import (BALANCE_TOL, BalanceCounts, WarmStart, ba
                                        balance_height_bracketing, place_scene, solve_wheel_rail)
 from conformal.cli import main
 from conformal.scene import load_scene
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 MBENCH = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"
@@ -22,8 +21,7 @@ WORN = ROOT / "meshes" / "scenes" / "flange_worn_three_patches.toml"
 
 def mbench(y, theory="exact", element_size=0.4):
     s = load_scene(MBENCH)
-    return replace(s, geometry=replace(s.geometry, lateral_shift=y, yaw=0.0024 * y,
-                                       element_size=element_size)).with_model(theory=theory)
+    return s.with_(geometry__lateral_shift=y, geometry__yaw=0.0024 * y, geometry__element_size=element_size).with_model(theory=theory)
 
 
 @pytest.mark.parametrize("y,theory", [(0.0, "exact"), (3.0, "exact"), (7.0, "exact"), (3.0, "hertz")])
@@ -51,7 +49,7 @@ def test_balance_three_patches_equals_bracketing_search():
     the secant on the common lowering with the geometry reused gives the bracketing search's
     height and the force of every patch."""
     sc = load_scene(WORN).with_model(theory="exact")
-    sc = replace(sc, geometry=replace(sc.geometry, element_size=0.4))
+    sc = sc.with_("geometry.element_size", 0.4)
     pl = place_scene(sc)
     counts = []
     z, st, fns = balance_height(pl, sc, counts_out=counts)
@@ -100,7 +98,7 @@ def test_sweep_solve_equals_per_position_solve(tmp_path):
     W = 10000.0
     for row, json_row in zip(rows[1:], data["rows"]):
         y = float(row[0])
-        ref = solve_scene(replace(base, geometry=replace(base.geometry, lateral_shift=y)))
+        ref = solve_scene(base.with_("geometry.lateral_shift", y))
         got = dict(zip(head, row))
         for key, val in (("FN [N]", ref.FN), ("FX [N]", ref.FX), ("FS [N]", ref.FY),
                          ("FY_track [N]", ref.extra["FY_track"]), ("FZ_track [N]", ref.extra["FZ_track"])):

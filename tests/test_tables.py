@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -78,7 +79,7 @@ def test_symmetry_reduction_and_node_inverse():
 def test_node_values_equal_direct_exact_solves_at_another_scale(tiny):
     """A table built at ab = 1 mm², G, mu, FN of build.py reproduces a direct exact solve of a
     6 mm circle with other mu and FN at the nodes (dimensional analysis of Eqs. T1-T2)."""
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     for s, th, q in ((tiny.spec.s_max / 2, 0.0, 0.0), (tiny.spec.s_max / 2, math.pi / 2, tiny.spec.q_max),
                      (tiny.spec.s_max / 2, 0.0, -tiny.spec.q_max)):
@@ -91,7 +92,7 @@ def test_node_values_equal_direct_exact_solves_at_another_scale(tiny):
 
 def test_symmetries_against_exact_solves(tiny):
     """Reversed and mirrored creepages (Eq. T3) against exact solves of those problems."""
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     xi, eta, phi = _creepages_at(*creepages_of_node(tiny.spec.s_max / 2, math.pi / 2, tiny.spec.q_max))
     for sx, sy in ((-1, -1), (1, -1)):
@@ -338,7 +339,7 @@ def test_refine_adds_exact_nodes_in_a_box(tiny, tmp_path, capsys):
 
 # ----------------------------------------------------------------------------- model and shipped table
 def test_scene_theory_table(tiny):
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     xi, eta, phi = _creepages_at(*creepages_of_node(tiny.spec.s_max / 2, 0.0, tiny.spec.q_max))
     r = solve_scene(_scene(xi, eta, phi, theory="table", table=tiny.path))
@@ -347,7 +348,6 @@ def test_scene_theory_table(tiny):
     assert r.theory == "table" and math.isclose(r.FN, FN)
     assert abs(r.FX - ex.FX) / (MU * FN) < 1e-4 and abs(r.FY - ex.FY) / (MU * FN) < 1e-4
     with pytest.raises(InputError, match="prescribed forces"):
-        from dataclasses import replace
 
         from conformal.problem import problems_from_scene
         from conformal.tables.model import solve
@@ -364,7 +364,7 @@ def test_scene_table_path_is_relative_to_the_scene_file(tiny, tmp_path, monkeypa
     import shutil
 
     from conformal.scene import load_scene, scene_from_dict
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     folder = tmp_path / "scenes"
     (folder / "tables").mkdir(parents=True)

@@ -2,7 +2,6 @@
 import csv
 import json
 import math
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +14,7 @@ from conformal.geometry.patches import find_patches, planar_distance
 from conformal.cases.wheelrail import (curved_problems_from_wheel_rail, place_scene,
                                           problems_from_wheel_rail, solve_wheel_rail, state_at)
 from conformal.scene import load_scene
-from conformal.solve import solve_scene
+from conformal.dispatch import solve_scene
 from conftest import reference_cases
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -26,8 +25,8 @@ REF = ROOT / "tests" / "reference" / "contact_cases.json"
 
 def mbench_scene(y=5.0, side="right", theory="hertz", element_size=0.5, **geo):
     s = load_scene(MBENCH)
-    g = replace(s.geometry, lateral_shift=y, yaw=0.0024 * y, side=side, element_size=element_size, **geo)
-    return replace(s, geometry=g).with_model(theory=theory)
+    changes = dict(lateral_shift=y, yaw=0.0024 * y, side=side, element_size=element_size, **geo)
+    return s.with_(model__theory=theory, **{f"geometry__{k}": v for k, v in changes.items()})
 
 
 def test_planar_h_from_true_profiles():
@@ -135,7 +134,7 @@ def test_creepages_match_contact():
             case = ref[side][k]
             inp, out = case["inputs"], case["outputs"]["patches"][0]
             sc = mbench_scene(inp["Y_WS_mm"], side, roll=inp["ROLL_WS_rad"])
-            sc = replace(sc, geometry=replace(sc.geometry, yaw=inp["YAW_WS_rad"]))
+            sc = sc.with_("geometry.yaw", inp["YAW_WS_rad"])
             pl = place_scene(sc)
             patch = find_patches(pl.pair.wheel(case["outputs"]["Z_WS"]), pl.pair.rail, pl.top)[0]
             m = pl.pair.mirror
@@ -168,8 +167,7 @@ def test_lifted_off_wheel_in_a_rolled_wheelset():
     distance of wheel-surface samples to the rail curve (the closest approach is on the flange,
     where the normal is nearly horizontal, not below the tread)."""
     sc = load_scene(SWEEP)
-    sc = replace(sc, geometry=replace(sc.geometry, roll=-0.002),
-                 load=replace(sc.load, wheel_load=None, approach=0.02))
+    sc = sc.with_(geometry__roll=-0.002, load__approach=0.02)     # the approach replaces the wheel load
     pl = place_scene(sc)
     assert pl.z_first < pl.z_touch
     with pytest.raises(NoContactError, match="lifted off") as e:
@@ -188,9 +186,9 @@ def test_lifted_off_wheel_in_a_rolled_wheelset():
 def test_shift_beyond_profile_range():
     sc = load_scene(SWEEP)
     with pytest.raises(InputError, match=r"\[geometry\] lateral_shift: .*end of a profile"):
-        problems_from_wheel_rail(replace(sc, geometry=replace(sc.geometry, lateral_shift=-80.0, roll=0.0)))
+        problems_from_wheel_rail(sc.with_(geometry__lateral_shift=-80.0, geometry__roll=0.0))
     with pytest.raises(InputError, match=r"\[geometry\] lateral_shift: .*does not lie over its rail"):
-        problems_from_wheel_rail(replace(sc, geometry=replace(sc.geometry, lateral_shift=-200.0, roll=0.0)))
+        problems_from_wheel_rail(sc.with_(geometry__lateral_shift=-200.0, geometry__roll=0.0))
 
 
 def test_curved_grid_and_spin_along_the_profile():
@@ -198,8 +196,7 @@ def test_curved_grid_and_spin_along_the_profile():
     h >= 0 measured along the local normals, and the spin following the contact angle:
     phi(s) = -omega . n(s) / V with omega the wheelset's pitch about the axle (pure rolling, no yaw)."""
     sc = mbench_scene(5.5, theory="hertz", element_size=0.25, roll=-0.0004777)
-    sc = replace(sc, geometry=replace(sc.geometry, yaw=0.0),
-                 kinematics=replace(sc.kinematics, pitch_velocity=-2000.0 / 460.0))
+    sc = sc.with_(geometry__yaw=0.0, kinematics__pitch_velocity=-2000.0 / 460.0)
     (grid, h, approach, info), = curved_problems_from_wheel_rail(sc)
     assert np.allclose(np.linalg.norm(grid.normal, axis=1), 1.0)
     assert np.allclose(grid.delta, np.arctan2(-grid.normal[:, 0], grid.normal[:, 1]), atol=1e-12)  # no cant
@@ -241,7 +238,7 @@ def test_curved_grid_fields_rebuild_the_wheel():
     revolution given by wheel_centre, wheel_axle and wheel_profile (within the 1e-3 mm of linear
     interpolation in the sampled profile), in the rail-profile frame."""
     sc = mbench_scene(8.0, theory="hertz", element_size=0.4, roll=-0.008606)
-    sc = replace(sc, geometry=replace(sc.geometry, rail_profile="UIC60", rail_cant=0.024995))
+    sc = sc.with_(geometry__rail_profile="UIC60", geometry__rail_cant=0.024995)
     (grid, h, approach, info), = curved_problems_from_wheel_rail(sc)
     X, S = grid.mesh()
     rail = np.stack([X, np.broadcast_to(grid.y, X.shape), np.broadcast_to(grid.z, X.shape)], axis=-1)

@@ -7,6 +7,7 @@ the geometry, influence and solver layers below.  :mod:`conformal.cases.precompu
 influence numbers a sweep of wheel-rail positions will need.
 """
 from conformal.cases.conformal import solve_wheel_rail_conformal
+from conformal.registry import CURVED_STRIP, FE_BODIES, MODELS
 from conformal.cases.wheelrail import problems_from_wheel_rail
 from conformal.cases.wheelrail import solve_wheel_rail as solve_wheel_rail_planar
 
@@ -42,9 +43,9 @@ def solve_wheel_rail(scene, *, warm=None):
     >>> round(r.extra["FZ_track"]), r.theory           # the 10 kN wheel load, balanced vertically
     (10000, 'hertz')
     """
-    if scene.model.theory == "fe_contact":   # direct FE contact of the meshed wheel and rail
+    if MODELS.accepts(scene.model.theory, FE_BODIES):   # direct FE contact of the meshed wheel and rail
         from conformal.cases.fe_contact import solve_wheel_rail_fe_contact
         return solve_wheel_rail_fe_contact(scene)
-    if scene.model.theory == "conformal":
+    if MODELS.accepts(scene.model.theory, CURVED_STRIP):
         return solve_wheel_rail_conformal(scene, warm=warm)
     return solve_wheel_rail_planar(scene, warm=warm)

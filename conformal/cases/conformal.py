@@ -26,8 +26,6 @@ from conformal.cases.wheelrail import (curved_creepages, loaded_state, patch_inf
 from conformal.errors import ConvergenceError, InputError
 from conformal.geometry.patches import Patch, curved_grid_for_patch
 from conformal.geometry.wheelrail import profile_curves
-from conformal.influence.curved import CurvedInfluence
-from conformal.influence.fe import settings_from_options, wheel_rail_kernel
 from conformal.result import EXTERIOR, Result
 from conformal.solvers.conformal import (MAX_ELEMENTS, CurvedProblem, approach_weights, column_creepages,
                                         solve_curved)
@@ -41,18 +39,6 @@ def scene_profiles(scene) -> tuple[np.ndarray | None, np.ndarray | None]:
     except (AttributeError, TypeError):
         return None, None
     return rc.sample(0.1)[1], wc.sample(0.1)[1]
-
-
-def influence_for_grid(scene, grid, *, cache=None):
-    """The FE influence operator (CurvedInfluence) of a wheel-rail scene's curved grid, with the
-    scene's [model] fe_* settings, through the cache (``conformal precompute`` fills the same
-    entries).  Returns (operator, info)."""
-    rail_pts, wheel_pts = scene_profiles(scene)
-    geo = scene.geometry
-    kernel, info = wheel_rail_kernel(grid, scene.material, settings_from_options(scene.model.options),
-                                     cache=cache, rail_points=rail_pts, wheel_points=wheel_pts,
-                                     names=(str(geo.rail_profile), str(geo.wheel_profile)))
-    return CurvedInfluence.from_kernel(kernel), info
 
 
 CREEPAGES = ("surface", "reference", "wheel_surface")
@@ -339,7 +325,7 @@ def _solve_pitch(scene, *, max_enlarge: int, max_pitch: int) -> Result:
     ``pitch_creepage_solved`` (the reference column's xi, the JSON ``xi``),
     ``reference_rolling_radius`` and, for fx_rel = 0, ``pitch_creepage_free``."""
     target = float(scene.kinematics.fx_rel)
-    plain = replace(scene, kinematics=replace(scene.kinematics, fx_rel=None))
+    plain = scene.with_("kinematics.fx_rel", None)
     state = loaded_state(scene, grids=False)[:2]       # the pitch does not move the planar balance
     motion0 = wheelset_motion(scene)
     solves: dict[float, tuple] = {}
@@ -349,7 +335,7 @@ def _solve_pitch(scene, *, max_enlarge: int, max_pitch: int) -> Result:
         if xi not in solves:
             if ref:
                 pitch, _ = _pitch_for_reference_creepage(ref["problem"], ref["motion"], xi)
-                sc = replace(plain, kinematics=replace(plain.kinematics, pitch_velocity=pitch))
+                sc = plain.with_("kinematics.pitch_velocity", pitch)
             else:
                 sc = plain
             res, prob = _solve_conformal(sc, max_enlarge=max_enlarge, with_problem=True, state=state)
@@ -545,12 +531,7 @@ def _solve_separate(scene, builder: StripBuilder, coupled_problem: CurvedProblem
     all_warn = warnings + [w for r in finished for w in r.extra.get("warnings", [])]
     if all_warn:
         extra["warnings"] = list(dict.fromkeys(all_warn))
-    out = Result(theory="conformal", FN=sum(r.FN for r in finished), FX=sum(r.FX for r in finished),
-                 FY=sum(r.FY for r in finished), MZ=sum(r.MZ for r in finished), a=main.a, b=main.b,
-                 pmax=max(r.pmax for r in finished), approach=main.approach, xi=main.xi, eta=main.eta,
-                 phi=main.phi, converged=all(r.converged for r in finished),
-                 wall_s=sum(r.wall_s for r in finished), iterations=None, residual=None,
-                 patches=tuple(finished), extra=extra)
+    out = Result.combined(finished, "conformal", extra)
     return out, problems[int(np.argmax([r.FN for r in finished]))]
 
 

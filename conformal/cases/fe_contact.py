@@ -34,6 +34,7 @@ from conformal.fe_contact.problems import (FEContactRun, common_extra, extent, l
                                            pressure_along_profile, settings_from_options)
 from conformal.fe_contact.solver import prepare_contact
 from conformal.influence.fe import rail_body_from_grid
+from conformal.registry import FE_BODIES, MODELS
 from conformal.result import Result
 
 
@@ -130,7 +131,7 @@ def solve_wheel_rail_fe_contact(scene) -> Result:
 def solve_scene_with_run(scene) -> tuple[Result, FEContactRun]:
     """theory = "fe_contact" for any scene (wheel-rail or quadratic), returning the run as well
     (the meshed bodies, for :func:`conformal.fe_contact.problems.write_vtu`: ``conformal solve
-    --vtu``).  The result is :func:`conformal.solve.solve_scene`'s, with ``wall_s``."""
+    --vtu``).  The result is :func:`conformal.dispatch.solve_scene`'s, with ``wall_s``."""
     import time
     from dataclasses import replace
 
@@ -140,8 +141,8 @@ def solve_scene_with_run(scene) -> tuple[Result, FEContactRun]:
     from conformal.problem import problems_from_scene
     from conformal.scene import scene_warnings
 
-    if scene.model.theory != "fe_contact":
-        raise InputError(f"[model] theory: needs \"fe_contact\", got {scene.model.theory!r}")
+    if not MODELS.accepts(scene.model.theory, FE_BODIES):
+        raise InputError(f"[model] theory: needs {MODELS.quoted(FE_BODIES)}, got {scene.model.theory!r}")
     t0 = time.perf_counter()
     with single_threaded_blas():
         if scene.geometry.kind == "wheel_rail":

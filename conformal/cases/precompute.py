@@ -10,7 +10,6 @@ Dask).  Items already in the cache are skipped, so an interrupted job only redoe
 from __future__ import annotations
 
 import os
-from dataclasses import replace
 from typing import Callable
 
 from conformal.cases.conformal import curved_problem_from_wheel_rail, scene_profiles
@@ -19,6 +18,7 @@ from conformal.errors import ConformalError, InputError
 from conformal.influence.cache import Cache
 from conformal.influence.fe import body_key, rail_body_from_grid, settings_from_options, wheel_body_from_grid
 from conformal.jobs import SWEEP_KEYS, Item, JobReport, Sweep, run
+from conformal.registry import CURVED_STRIP, MODELS
 
 __all__ = ["plan", "precompute"]
 
@@ -27,7 +27,7 @@ def _scene_at(scene, key: str, value: float):
     geo = scene.geometry
     if geo.kind != "wheel_rail":
         raise InputError("precompute: the scene's [geometry] kind must be \"wheel_rail\"")
-    return replace(scene, geometry=replace(geo, **{SWEEP_KEYS[key]: value}))
+    return scene.with_(f"geometry.{SWEEP_KEYS[key]}", value)
 
 
 def _solver_grids(scene, per_patch) -> list[tuple]:
@@ -35,7 +35,7 @@ def _solver_grids(scene, per_patch) -> list[tuple]:
     conformal theory ONE strip over every patch of the wheel
     (conformal.cases.conformal.curved_problem_from_wheel_rail; per-patch grids would fill the
     cache with kernels it never asks for), else one grid per patch (``per_patch(scene)``)."""
-    if scene.model.theory == "conformal":
+    if MODELS.accepts(scene.model.theory, CURVED_STRIP):
         return [(curved_problem_from_wheel_rail(scene).grid,)]
     return list(per_patch(scene))
 

@@ -20,7 +20,7 @@ import csv
 import io
 import json
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -28,6 +28,7 @@ import numpy as np
 
 from conformal.errors import ConformalError, InputError
 from conformal.files import save_figure, write_text
+from conformal.registry import CURVED_STRIP, FE_INFLUENCE, MODELS
 
 #: totals per position: (column, unit, description)
 TOTALS = (
@@ -158,7 +159,7 @@ class SweepTable:
         fig = Figure(figsize=(14, 4.4))
         ax = fig.subplots(1, 3)
         colours = ("C0", "C1", "C2", "C3", "C4")
-        pos_key = "y_rail" if self.theory != "conformal" else "s_rail"
+        pos_key = "s_rail" if MODELS.accepts(self.theory, CURVED_STRIP) else "y_rail"
 
         def draw(a, values, where, style, colour, label):
             first = True
@@ -261,7 +262,7 @@ def solve_sweep(scene, shifts: Sequence[float], *, workers: int | None = None, c
     if not shifts:
         raise InputError("--shift: no lateral shifts")
     influence = getattr(scene.model, "influence", "halfspace") or "halfspace"
-    if scene.model.theory == "conformal" and influence == "fe":
+    if MODELS.accepts(scene.model.theory, FE_INFLUENCE) and influence == "fe":
         from conformal.cases.precompute import precompute
         from conformal.jobs import Sweep
 
@@ -274,7 +275,7 @@ def solve_sweep(scene, shifts: Sequence[float], *, workers: int | None = None, c
     base_warn = scene_warnings(scene)
     with single_threaded_blas():
         for y in shifts:
-            sc = replace(scene, geometry=replace(scene.geometry, lateral_shift=y))
+            sc = scene.with_("geometry.lateral_shift", y)
             try:
                 r = solve_wheel_rail(sc, warm=warm)
             except ConformalError as exc:

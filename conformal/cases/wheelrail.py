@@ -42,13 +42,14 @@ from conformal.geometry.wheelrail import build_pair, first_touch, profile_curves
 from conformal.grid import PlanarGrid
 from conformal.models import solve_problem
 from conformal.problem import ContactProblem
+from conformal.registry import CONFORMAL_GEOMETRY, CURVED_STRIP, GRID, MODELS, WARM_START
 from conformal.result import Result
 from conformal.scene import Scene, WheelRailGeometry
 from conformal.solvers.conformal import DELTA_SPREAD_WARN
 from conformal.solvers.normal import solve_normal
 from conformal.theories.hertz import hertz_from_curvatures
 
-GRID_THEORIES = ("exact", "conformal")   # theories whose normal problem is solved on the grid
+GRID_THEORIES = MODELS.accepting(GRID)   # theories whose normal problem is solved on the grid
 BALANCE_TOL = 1e-4                       # relative tolerance of the vertical force balance
 
 
@@ -159,8 +160,7 @@ def placement_warnings(scene: Scene, pl: "Placement", st: PairState) -> list[str
                "rail top)")
         geo = scene.geometry
         try:
-            other = place_scene(replace(scene, geometry=replace(geo, lateral_shift=geo.lateral_shift - 0.1)),
-                                touch_only=True)
+            other = place_scene(scene.with_("geometry.lateral_shift", geo.lateral_shift - 0.1), touch_only=True)
             jump = pl.z_touch - other.z_touch
             if abs(jump) > JUMP_WARN:
                 msg += (f", and {abs(jump):.2f} mm {'higher' if jump < 0 else 'lower'} than at 0.1 mm less "
@@ -206,7 +206,7 @@ def state_at(pair: WheelRailPair, top: RailTop, z: float, roll: float, scene: Sc
 def _normal_force(pg: PatchGeometry, scene: Scene, warnings: list | None = None) -> float:
     """Normal force of a patch at its approach: the grid's half-space normal problem for grid
     theories, Hertz otherwise (the normal problem does not depend on friction for K = 0)."""
-    if scene.model.theory in GRID_THEORIES:
+    if MODELS.accepts(scene.model.theory, GRID):
         sol = solve_normal(None, pg.grid, pg.h, approach=pg.approach, material=scene.material,
                            tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit)
         if not sol.converged and warnings is not None:
@@ -288,7 +288,7 @@ def _fn_at(pg: PatchGeometry, scene: Scene, approach: float, warnings: list, cou
     grid and undeformed distance of the patch's geometry (0 when it no longer touches)."""
     if approach <= 0:
         return 0.0
-    if scene.model.theory in GRID_THEORIES:
+    if MODELS.accepts(scene.model.theory, GRID):
         counts[0] += 1
         start = None if p_start is None else p_start.get(key)
         try:
@@ -333,7 +333,7 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
     pgs = st.patches
     c = [math.cos(pg.patch.delta) for pg in pgs]
     w = [ci + _ratio(ratios, pg) * math.sin(pg.patch.delta) for ci, pg in zip(c, pgs)]
-    on_grid = scene.model.theory in GRID_THEORIES
+    on_grid = MODELS.accepts(scene.model.theory, GRID)
     if len(pgs) == 1 and w[0] > 0:
         pg, fn = pgs[0], (normal_force if normal_force is not None and normal_force > 0 else W / w[0])
         if on_grid:
@@ -403,7 +403,7 @@ def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float 
     search on the vertical force (:func:`balance_height_bracketing`) when the searches do not
     settle in MAX_SEARCHES.  ``counts_out`` receives a :class:`BalanceCounts`."""
     W = scene.load.wheel_load
-    on_grid = scene.model.theory in GRID_THEORIES
+    on_grid = MODELS.accepts(scene.model.theory, GRID)
     warnings: list[str] = []
     counts = [0]
     searches = 0
@@ -482,7 +482,7 @@ def balance_height_bracketing(pl: Placement, scene: Scene, ratios=None) -> tuple
     W = scene.load.wheel_load
     cache: dict[float, tuple[PairState, list[float]]] = {}
     warnings: list[str] = []
-    on_grid = scene.model.theory in GRID_THEORIES
+    on_grid = MODELS.accepts(scene.model.theory, GRID)
 
     def fz(z):
         if z not in cache:
@@ -608,7 +608,7 @@ def contact_angle_spread(pair: WheelRailPair, s_ref: float, half_width: float, s
 def planar_theory_warning(theory: str, spread: float) -> str | None:
     """The warning of a planar (half-space, tangent-plane) theory on a patch whose contact angle
     varies by more than DELTA_SPREAD_WARN degrees: a conformal contact, for theory "conformal"."""
-    if theory in ("conformal", "fe_contact") or not spread > DELTA_SPREAD_WARN:
+    if MODELS.accepts(theory, CONFORMAL_GEOMETRY) or not spread > DELTA_SPREAD_WARN:
         return None
     return (f"the contact angle varies by {spread:.1f} degrees over a contact patch: the half-space "
             f"(planar) theory {theory!r} is questionable here; this is a conformal contact "
@@ -744,12 +744,7 @@ def combine_patches(results: list[Result], problems: list[ContactProblem], theor
     ext.update(FX_track=float(F[0]), FY_track=float(F[1]), FZ_track=float(F[2]), n_patches=len(patches),
                contact_angle=main.extra["contact_angle"], y_rail=main.extra["y_rail"],
                penetration=main.approach)
-    return Result(theory=theory, FN=sum(r.FN for r in patches), FX=sum(r.FX for r in patches),
-                  FY=sum(r.FY for r in patches), MZ=sum(r.MZ for r in patches), a=main.a, b=main.b,
-                  pmax=max(r.pmax for r in patches), approach=main.approach, xi=main.xi, eta=main.eta,
-                  phi=main.phi, converged=all(r.converged for r in patches),
-                  wall_s=sum(r.wall_s for r in patches), iterations=None, residual=None,
-                  patches=tuple(patches), extra=ext)
+    return Result.combined(patches, theory, ext)
 
 
 def _geometry_extra(scene: Scene, pl: Placement) -> dict:
@@ -765,7 +760,7 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | Non
     :class:`WarmStart` of a neighbouring solve (a sweep's previous position); ``extra["balance"]``
     counts the geometry searches, normal and tangential solves of the balance and carries the
     next position's warm start."""
-    if scene.model.theory == "conformal":   # one curved grid per wheel: conformal.cases.conformal
+    if MODELS.accepts(scene.model.theory, CURVED_STRIP):   # one curved grid per wheel: conformal.cases.conformal
         raise InputError("[model] theory: the conformal theory solves a wheel on ONE curved strip: "
                          "conformal.cases.solve_wheel_rail (or conformal.solve) dispatches it")
     pl = place_scene(scene)
@@ -795,7 +790,7 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | Non
     for outer in range(1, max_outer + 1):
         z = st.z
         problems = problems_at(scene, pl, st, fns)
-        if scene.model.theory == "exact":   # the previous pass on the same grid starts the iterations
+        if MODELS.accepts(scene.model.theory, WARM_START):   # the previous pass on the same grid starts the iterations
             problems = [replace(p, start=_start_for(pg.grid, starts, pressures, pl.pair.side))
                         for p, pg in zip(problems, st.patches)]
         results = [solve_problem(p) for p in problems]

@@ -137,7 +137,7 @@ def solve_case(case: Module1Case, raw: dict, base_dir: Path):
     first guess was another), else refuse naming the digit."""
     from conformal.contact_inp.module3 import Unsupported
     from conformal.scene import scene_from_dict
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     def run(d):
         return solve_scene(scene_from_dict(d, base_dir=base_dir, name=d["name"]))

@@ -2,7 +2,7 @@
 
 * Quadratic (Hertzian) problems (``[geometry] kind = "quadratic" | "hertz"``): a flat block and a
   crowned wheel whose undeformed distance is A x² + B y² (:func:`solve`, the module's model entry
-  point, registered in :mod:`conformal.solve`).
+  point, registered in :mod:`conformal.models`).
 * Wheel-rail scenes: :mod:`conformal.cases.fe_contact` (placement and the curved grid belong to
   the cases layer) meshes the rail and the wheel with :func:`conformal.fe_contact.bodies.wheel_rail_pair`.
 
@@ -143,7 +143,7 @@ def solve(problem) -> Result:
     crowned wheel with the undeformed distance A x² + B y² (see the module docstring).
 
     >>> from conformal.scene import scene_from_dict
-    >>> from conformal.solve import solve_scene
+    >>> from conformal.dispatch import solve_scene
     >>> scene = scene_from_dict({"geometry": {"kind": "quadratic", "A": 0.01, "B": 0.01},
     ...     "load": {"approach": 0.08}, "model": {"theory": "fe_contact", "fec_n": 2}})
     >>> r = solve_scene(scene)                      # doctest: +SKIP

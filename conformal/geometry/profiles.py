@@ -1,7 +1,7 @@
 """Wheel and rail cross-section profiles: reading, checking, built-in names.
 
 A profile is a list of points (y, z) in mm in CONTACT's *right-side* form (see
-``meshes/profiles/README.md``):
+``meshes/profiles/README.md``; the files are the package's, ``conformal/data/profiles/``):
 
 * rail: y lateral, positive towards the field side, z positive **downwards**; the rail body lies
   below the curve (larger z);
@@ -281,13 +281,23 @@ def _check_orientation(p: np.ndarray, kind: str, name: str) -> None:
 
 # ----------------------------------------------------------------------------- public
 def resolve_profile(spec: str, base_dir: str | Path = ".") -> tuple[Path, BuiltinProfile | None]:
-    """A built-in name or a file path (relative to base_dir) -> (path, builtin entry or None)."""
+    """A built-in name or a file path (relative to base_dir) -> (path, builtin entry or None).
+
+    A path to a ``profiles/`` folder that does not hold the file, but names one of the package's
+    profile files, is the package's copy (the files once also lay in the repository's
+    ``meshes/profiles/``; scene files naming them there keep working).
+
+    >>> resolve_profile("meshes/profiles/s1002_analytic.csv")[0] == builtin_dir() / "s1002_analytic.csv"
+    True
+    """
     entry = BUILTIN.get(str(spec).upper())
     if entry is not None:
         return builtin_dir() / entry.file, entry
     path = Path(spec)
     if not path.is_absolute():
         path = Path(base_dir) / path
+    if not path.is_file() and path.parent.name == "profiles" and (builtin_dir() / path.name).is_file():
+        path = builtin_dir() / path.name       # the one copy: conformal/data/profiles
     if not path.is_file():
         names = ", ".join(sorted(BUILTIN))
         raise InputError(f"profile {spec!r}: neither a built-in name ({names}) nor an existing file ({path})")

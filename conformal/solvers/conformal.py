@@ -503,7 +503,7 @@ def planar_as_curved(problem: ContactProblem) -> CurvedProblem:
 
 
 def solve(problem: ContactProblem) -> Result:
-    """The model entry (conformal.solve.MODELS): a planar problem solved as a flat conformal strip.
+    """The model entry (conformal.models.SOLVE): a planar problem solved as a flat conformal strip.
     Wheel-rail scenes take conformal.cases.conformal.solve_wheel_rail_conformal (curved grids) instead."""
     cp = planar_as_curved(problem)
     op, info = influence_operator(cp.grid, cp.material, cp.model, planar=True)

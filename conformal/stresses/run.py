@@ -26,6 +26,7 @@ import numpy as np
 
 from conformal.errors import InputError
 from conformal.files import write_text
+from conformal.registry import FE_INFLUENCE, MODELS
 from conformal.result import _jsonable
 from conformal.scene import read_scene_file, scene_from_dict
 from conformal.stresses.fatigue import (ALPHA_DV, K_SHEAR, TAU_E, FatigueParameters, surface_index,
@@ -154,7 +155,7 @@ def _fe_bodies(scene, result, opts, body: int) -> tuple[int, ...]:
     choices = {True: (body,), False: (), "rail": (1,), "wheel": (2,), "both": (1, 2)}
     if want is not None and (not isinstance(want, (bool, str)) or want not in choices):
         raise InputError(f"[stresses] fe_body: must be true, false, \"rail\", \"wheel\" or \"both\", got {want!r}")
-    fe = result.theory == "conformal" and scene.model.influence == "fe"
+    fe = MODELS.accepts(result.theory, FE_INFLUENCE) and scene.model.influence == "fe"
     if want not in (None, False) and not fe:
         raise InputError("[stresses] fe_body: needs [model] theory = \"conformal\" with influence = \"fe\"")
     if want is None:
@@ -264,7 +265,7 @@ def cmd_stresses(args) -> int:
     import json
     import sys
 
-    from conformal.solve import solve_scene
+    from conformal.dispatch import solve_scene
 
     args.check_output(args.json, "--json", (".json",))
     args.check_output(args.plot, "--plot", args.plot_suffixes)

@@ -33,7 +33,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
 import platform
 import shutil
 import time
@@ -42,6 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
+from conformal._threads import single_threaded_blas
 from conformal.errors import ConformalError, InputError
 from conformal.files import read_npz, save_npz_atomic
 from conformal.tables.spec import N_OUT, TableSpec, creepages_of_node, saturation_scales
@@ -162,8 +162,14 @@ class SliceSolver:
 
 def solve_chunk(chunk: Chunk) -> dict:
     """Worker: solve every node of a chunk.  Returns {"values": (n, 3), "converged": (n,),
-    "wall_s": total solve time, "host": worker host name}."""
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    "wall_s": total solve time, "host": worker host name}.  BLAS runs on one thread in the worker
+    (threadpoolctl, :func:`conformal._threads.single_threaded_blas`: numpy is loaded by then, so an
+    environment variable set here would have no effect)."""
+    with single_threaded_blas():
+        return _solve_chunk(chunk)
+
+
+def _solve_chunk(chunk: Chunk) -> dict:
     spec = chunk.spec
     axes = spec.axes()
     c11, c22, c23 = node_coefficients(spec)
@@ -343,8 +349,13 @@ class PatchSlice:
 
 def solve_patch_slice(task: PatchSlice) -> dict:
     """Worker: the extra q nodes of one (a/b, nu) inside the box (:class:`SliceSolver`).  Returns
-    {"values": (s1 - s0, th1 - th0, len(q), 3), "converged", "wall_s"}."""
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    {"values": (s1 - s0, th1 - th0, len(q), 3), "converged", "wall_s"}; BLAS on one thread as in
+    :func:`solve_chunk`."""
+    with single_threaded_blas():
+        return _solve_patch_slice(task)
+
+
+def _solve_patch_slice(task: PatchSlice) -> dict:
     spec = task.spec
     axes = spec.axes()
     c11, c22, c23 = node_coefficients(spec)

@@ -3,8 +3,9 @@
 Every model module exposes ``solve(problem: ContactProblem) -> Result``.  A scene with several
 contact patches returns the sum of the patches' forces with the patches listed in ``patches``.
 
-This module is also the API's ``conformal.solve``: calling it, ``conformal.solve(scene, **overrides)``,
-is :func:`conformal.api.solve` (a scene, a TOML path or a dict; ``section__key=value`` overrides).
+The API's ``conformal.solve(scene, **overrides)`` (a plain function of the package,
+:func:`conformal.api.solve`) is :func:`solve` here: a scene, a TOML path or a dict with
+``section__key=value`` overrides.  (Until version 0.1 this module was ``conformal.solve``.)
 
 >>> import conformal
 >>> r = conformal.solve({"geometry": {"kind": "quadratic", "A": 1e-3, "B": 1e-3},
@@ -14,9 +15,7 @@ is :func:`conformal.api.solve` (a scene, a TOML path or a dict; ``section__key=v
 """
 from __future__ import annotations
 
-import sys
 import time
-import types
 from dataclasses import replace
 from typing import Any
 
@@ -26,7 +25,7 @@ from conformal._threads import single_threaded_blas
 from conformal.scene import MIN_CONTACT_ELEMENTS, Scene, as_scene, scene_warnings
 
 # the models by name live in conformal.models (below the wheel-rail cases); kept here for callers
-from conformal.models import MODELS, combine, solve_problem  # noqa: E402,F401
+from conformal.models import SOLVE, combine, solve_problem  # noqa: E402,F401
 
 
 def solve_scene(scene: Scene) -> Result:
@@ -65,7 +64,7 @@ def solve_scene(scene: Scene) -> Result:
         else:
             problems = problems_from_scene(scene)
             results = [solve_problem(p) for p in problems]
-            out = results[0] if len(results) == 1 else combine(results, scene.model.theory)
+            out = results[0] if len(results) == 1 else Result.combined(results, scene.model.theory)
     warnings = scene_warnings(scene) + out.warnings + result_warnings(scene, out)
     if warnings:
         out = replace(out, extra=dict(out.extra, warnings=list(dict.fromkeys(warnings))))
@@ -117,14 +116,3 @@ def solve(scene: Any, **overrides: Any) -> Result:
     """``conformal.solve``: a validated scene (:func:`conformal.scene.as_scene`) solved by
     :func:`solve_scene`; see :func:`conformal.api.solve`."""
     return solve_scene(as_scene(scene, **overrides))
-
-
-class _CallableModule(types.ModuleType):
-    """``conformal.solve`` is this module (``from conformal.solve import solve_scene`` keeps working)
-    and the API function at once: calling the module calls :func:`solve`."""
-
-    def __call__(self, scene: Any, **overrides: Any) -> Result:
-        return solve(scene, **overrides)
-
-
-sys.modules[__name__].__class__ = _CallableModule
