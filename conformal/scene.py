@@ -997,6 +997,16 @@ _KEY_DOCS: dict[str, dict[str, tuple[str, str]]] = {
              "n": ("", "automatic grid: elements along each axis"),
              "scale": ("", "automatic grid: extent over the Hertz patch"),
              "strips": ("", "conformal wheel-rail: coupled | separate")},
+    "[history]": {"normal_force": ("N", "normal load of this step (none with approach: as the previous step)"),
+                  "approach": ("mm", "prescribed approach of this step, instead of normal_force"),
+                  "xi": ("", "shift: rigid shift increment (mm); transient/steady: longitudinal creepage"),
+                  "eta": ("", "shift: rigid shift increment (mm); transient/steady: lateral creepage"),
+                  "phi": ("rad/mm", "shift: rotation increment (rad); transient/steady: spin creepage"),
+                  "rolling": ("", "shift | transient | steady"),
+                  "distance": ("mm", "rolled distance of a transient step (default: one element)"),
+                  "fx_rel": ("", "prescribed FX/(mu_static FN) instead of xi"),
+                  "fy_rel": ("", "prescribed FY/(mu_static FN) instead of eta"),
+                  "repeat": ("", "the step is applied this many times")},
 }
 
 
@@ -1012,7 +1022,8 @@ def reference_markdown(models: Registry = MODELS) -> str:
     from conformal.registry import reference_markdown as model_reference
 
     defaults = {"material": {"G": 82000.0, "nu": 0.28}, "friction": {"mu": 0.3}}
-    for sec, cls in (("geometry", WheelRailGeometry), ("load", Load), ("kinematics", Kinematics), ("grid", GridSpec)):
+    for sec, cls in (("geometry", WheelRailGeometry), ("load", Load), ("kinematics", Kinematics), ("grid", GridSpec),
+                     ("[history]", HistoryStep)):
         defaults[sec] = {f.name: f.default for f in fields(cls)}
     for cls in (QuadraticGeometry, HertzGeometry):
         defaults["geometry"].update({f.name: None for f in fields(cls) if f.name != "kind"})

@@ -56,9 +56,12 @@ def test_scene_key_reference_covers_every_section_field():
             if f.name not in ("kind", "options"):
                 assert f"| `{f.name}` |" in text, (cls.__name__, f.name)
     for key in list(scene.MODEL_OPTIONS) + list(scene.THEORIES):
-        assert f"`{key}`" in text
+        # the flat keys fe_<key> / fec_<key> are listed by their nested names ([model.fe] <key>)
+        nested = key.split("_", 1)[1] if key in scene.MODEL_OPTIONS and key.startswith(("fe_", "fec_")) else key
+        assert f"`{nested}`" in text, key
+    assert "### [model.fe]" in text and "### [model.fe_contact]" in text and "flat spelling: `[model] fe_<key>`" in text
     # a default in the table is the default a scene gets
-    row = re.search(r"\| `gauge_height` \| (\S+) \| mm \|", text)
+    row = re.search(r"\| `gauge_height` \| number \| (\S+) \| mm \|", text)
     assert float(row.group(1)) == scene.WheelRailGeometry().gauge_height
 
 

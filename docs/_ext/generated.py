@@ -3,11 +3,8 @@
 Three generators, each a pure function from the package to Markdown text, and one Sphinx hook
 (``builder-inited``) that writes their output under ``docs/reference/_generated/`` (not tracked):
 
-* :func:`scene_keys_markdown`: the scene keys, with units and defaults, from the scene layer.
-  **This is the one place that knows where the model tables live**: it reads
-  ``conformal.scene`` (``THEORIES``, ``INFLUENCES``, ``GEOMETRY_KINDS``, ``MODEL_OPTIONS`` and the
-  frozen dataclasses of the sections) and ``conformal.specs``.  When a model registry replaces
-  those tables, only :func:`_scene_tables` changes.
+* :func:`scene_keys_markdown`: the scene keys, with units and defaults, from the model registry
+  (``conformal.registry``) through ``conformal.scene.reference_markdown``.
 * :func:`cli_markdown`: every command and option of ``conformal`` from the argparse parser
   (``conformal.cli.build_parser``).
 * :func:`api_pages`: one page per module group of the package, each an ``automodule`` directive
@@ -16,193 +13,37 @@ Three generators, each a pure function from the package to Markdown text, and on
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import importlib
-import inspect
-import math
 import pkgutil
-import re
 from pathlib import Path
 
 # --------------------------------------------------------------------------------------- scene keys
 
-#: units and one-line meanings of the keys whose dataclass field has no trailing comment, and of
-#: the TOML names that are not dataclass fields ([material], [friction]).  Everything else comes
-#: from the code: the field names, their defaults and the comment on the field's line.
-_KEY_NOTES = {
-    "material": {
-        "G": ("N/mm²", "shear modulus of both bodies (or E)"),
-        "E": ("N/mm²", "Young's modulus of both bodies (or G)"),
-        "nu": ("-", "Poisson's ratio, -1 < nu < 0.5"),
-        "body2": ("table", "[material.body2] with its own G or E and nu (dissimilar bodies)"),
-    },
-    "friction": {
-        "mu": ("-", "Coulomb coefficient, > 0 (static = kinetic)"),
-        "mu_static": ("-", "static coefficient (with mu_kinetic)"),
-        "mu_kinetic": ("-", "kinetic coefficient, <= mu_static"),
-        "mu_table": ("file", "rows s, mu: friction varying over the profile (theory exact)"),
-    },
-    "geometry": {
-        "A": ("1/mm", "quadratic: h = A x² + B y²"),
-        "B": ("1/mm", "quadratic: B = 0 is line contact (plane strain)"),
-        "a": ("mm", "hertz: semi-axis along x (rolling)"),
-        "b": ("mm", "hertz: semi-axis along y"),
-        "file": ("file", "table: undeformed distance, mx rows of my numbers"),
-        "wheel_profile": ("-", "file (CSV y,z or CONTACT .prw) or a built-in name"),
-        "rail_profile": ("-", "file (CSV y,z or CONTACT .prr) or a built-in name"),
-        "side": ("-", "\"left\" | \"right\""),
-    },
-    "load": {
-        "normal_force": ("N", "prescribed normal force (per mm of line in line contact)"),
-        "approach": ("mm", "prescribed approach; wheel-rail: lowering below the first touch"),
-        "wheel_load": ("N", "vertical wheel load (wheel-rail scenes)"),
-        "load_angle": ("rad", "direction of the wheel load, 0 = vertical (theory conformal)"),
-    },
-    "kinematics": {
-        "xi": ("- or mm", "longitudinal creepage (shift: rigid shift, mm)"),
-        "eta": ("- or mm", "lateral creepage (shift: rigid shift, mm)"),
-        "phi": ("rad/mm or rad", "spin creepage (shift: rotation, rad)"),
-        "rolling": ("-", "\"steady\" | \"shift\""),
-        "fx_rel": ("-", "prescribed FX/(mu FN) instead of xi"),
-        "fy_rel": ("-", "prescribed FY/(mu FN) instead of eta"),
-    },
-    "grid": {
-        "mx": ("-", "explicit grid: elements along x"), "my": ("-", "explicit grid: elements along y"),
-        "dx": ("mm", "explicit grid: element length along x"), "dy": ("mm", "explicit grid: element width"),
-        "xl": ("mm", "explicit grid: lower x corner"), "yl": ("mm", "explicit grid: lower y corner"),
-        "n": ("-", "automatic grid: elements along each axis"),
-        "scale": ("-", "automatic grid: extent over the Hertz patch"),
-    },
-    "model": {
-        "theory": ("-", "the model, one of the theories below"),
-        "tol": ("-", "relative stopping tolerance of the iterations, <= 1e-2"),
-        "maxit": ("-", "iteration limit"),
-    },
-    "history": {
-        "normal_force": ("N", "normal load of this step"), "approach": ("mm", "approach of this step"),
-        "xi": ("mm or -", "shift increment (shift) or creepage"), "eta": ("mm or -", "as xi, lateral"),
-        "phi": ("rad or rad/mm", "rotation increment or spin"),
-        "rolling": ("-", "\"shift\" | \"transient\" | \"steady\""),
-        "distance": ("mm", "rolled distance of a transient step"),
-        "fx_rel": ("-", "prescribed FX/(mu FN)"), "fy_rel": ("-", "prescribed FY/(mu FN)"),
-        "repeat": ("-", "the step applied this many times"),
-    },
-}
 
+def scene_keys_markdown() -> str:
+    """The scene keys as Markdown tables (one per TOML section), from the model registry.
 
-#: a unit at the start of a field comment ("mm, nominal rolling radius", "rad; None = ...")
-_UNIT = re.compile(r"^(mm/\(N/mm²\)|mm/s|rad/s|mm|rad|N)(?:[,;]\s*|\s+|$)(.*)$")
-
-
-def _field_comments(cls) -> dict[str, str]:
-    """The trailing ``# ...`` comment of each field line of a dataclass (its unit and meaning)."""
-    try:
-        lines, _ = inspect.getsourcelines(cls)
-    except (OSError, TypeError):
-        return {}
-    out = {}
-    for line in lines:
-        code, sep, comment = line.partition("#")
-        if not sep or ":" not in code:
-            continue
-        name = code.split(":")[0].strip()
-        if name.isidentifier():
-            out[name] = comment.strip().lstrip(":").strip()
-    return out
-
-
-def _default(f: dataclasses.Field):
-    if f.default is not dataclasses.MISSING:
-        return f.default
-    if f.default_factory is not dataclasses.MISSING:      # type: ignore[misc]
-        return f.default_factory()                        # type: ignore[misc]
-    return None
-
-
-def _fmt(v) -> str:
-    if v is None:
-        return "-"
-    if isinstance(v, float):
-        if v == math.atan(1 / 40):
-            return "atan(1/40)"
-        return f"{v:g}"
-    if isinstance(v, str):
-        return f'"{v}"'
-    return str(v)
-
-
-def _scene_tables():
-    """What the scene layer knows about its keys, in one structure.
-
-    Returns ``(sections, theories, influences, kinds, model_options)`` where ``sections`` maps a
-    TOML section to rows ``(key, default, unit, meaning)``.  Switch this function to the model
-    registry when it exists; the renderer below stays.
+    The text is :func:`conformal.scene.reference_markdown` (sections from the scene's dataclasses,
+    ``[model]`` and each theory's options from :mod:`conformal.registry`); this page only adds its
+    title and where it comes from.
     """
-    from conformal import scene, specs
+    from conformal import scene
 
-    sections: dict[str, list[tuple[str, str, str, str]]] = {}
+    body = scene.reference_markdown().split("\n", 1)[1]          # drop its own title
+    return "\n".join(["# Scene keys (generated)", "",
+                      "Generated from the model registry and the scene layer of the package when the "
+                      "documentation is built (`conformal.scene.reference_markdown`). Units: mm, N, N/mm², "
+                      "rad; a key that is not listed is refused with the closest known name. A `--` default "
+                      "means: not set (the key is optional or one of a set of alternatives; see "
+                      "[Scene files](../scene-files.md)).", "", body])
 
-    def rows(section: str, classes, skip=("kind", "options")):
-        seen, out = set(), []
-        notes = _KEY_NOTES.get(section, {})
-        for cls in classes:
-            comments = _field_comments(cls)
-            for f in dataclasses.fields(cls):
-                if f.name in skip or f.name in seen:
-                    continue
-                seen.add(f.name)
-                unit, meaning = notes.get(f.name, ("", ""))
-                comment = comments.get(f.name, "")
-                if comment and not meaning:
-                    m = _UNIT.match(comment)
-                    if m and not unit:
-                        unit, meaning = m.group(1), m.group(2)
-                    else:
-                        meaning = comment
-                out.append((f.name, _fmt(_default(f)), unit or "", meaning))
-        return out
 
-    sections["material"] = [(k, "-" if k in ("E", "body2") else "required", u, m)
-                            for k, (u, m) in _KEY_NOTES["material"].items()]
-    sections["friction"] = [(k, "0.3" if k == "mu" else "-", u, m) for k, (u, m) in _KEY_NOTES["friction"].items()]
-    sections["geometry"] = [("kind", "required", "-", " | ".join(f'"{k}"' for k in scene.GEOMETRY_KINDS))]
-    sections["geometry"] += rows("geometry", (scene.QuadraticGeometry, scene.HertzGeometry,
-                                              scene.TableGeometry, scene.WheelRailGeometry))
-    sections["load"] = rows("load", (scene.Load,))
-    sections["kinematics"] = rows("kinematics", (specs.Kinematics,))
-    sections["grid"] = rows("grid", (scene.GridSpec,))
-    sections["model"] = rows("model", (specs.ModelSpec,))
-    sections["[history]"] = rows("history", (specs.HistoryStep,))
-    return sections, scene.THEORIES, scene.INFLUENCES, scene.GEOMETRY_KINDS, dict(scene.MODEL_OPTIONS)
+# ----------------------------------------------------------------------------------------- the CLI
 
 
 def _cell(text: str) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
-
-def scene_keys_markdown() -> str:
-    """The scene keys as Markdown tables (one per TOML section)."""
-    sections, theories, influences, _kinds, options = _scene_tables()
-    out = ["# Scene keys (generated)", "",
-           "Generated from the scene layer of the package when the documentation is built "
-           "(`docs/_ext/generated.py`). Units: mm, N, N/mm², rad; a key that is not listed is refused "
-           "with the closest known name. A `-` default means: not set (the key is optional or one of "
-           "a set of alternatives; see [Scene files](../scene-files.md)).", ""]
-    for section, rows in sections.items():
-        out += [f"## `[{section}]`", "", "| key | default | unit | meaning |", "|---|---|---|---|"]
-        out += [f"| `{k}` | {_cell(d)} | {_cell(u)} | {_cell(m)} |" for k, d, u, m in rows]
-        out.append("")
-    out += ["## `[model] theory`", "", "One of: " + ", ".join(f"`{t}`" for t in theories) + ".", "",
-            "## `[model] influence`", "", "One of: " + ", ".join(f"`{t}`" for t in influences) + ".", "",
-            "## Model-specific `[model]` options", "",
-            "Checked on reading whatever the theory; any other key is refused.", "",
-            "| key | model and meaning |", "|---|---|"]
-    out += [f"| `{k}` | {_cell(v)} |" for k, v in sorted(options.items())]
-    out.append("")
-    return "\n".join(out)
-
-
-# ----------------------------------------------------------------------------------------- the CLI
 
 def _usage(parser: argparse.ArgumentParser) -> str:
     return " ".join(parser.format_usage().split())[len("usage: "):]
