@@ -129,6 +129,11 @@ class WheelRailGeometry:
     patch_combine: float = 8.0           # mm, overlap regions closer than this form one patch
     wheel_z: str = "down"                # "up": the wheel file gives z positive upwards (negated on reading)
     rail_z: str = "down"                 # "up": the rail file gives z positive upwards (negated on reading)
+    #: "auto" for wheel_z / rail_z: z mirrored where the side faces say so (CONTACT's MIRRORZ = 0)
+    wheel_mirror_y: bool = False         # y negated on reading (CONTACT's MIRRORY = 1)
+    rail_mirror_y: bool = False          # y negated on reading (CONTACT's MIRRORY = 1)
+    wheel_smoothing: float | None = None  # mm, the wheel's own smoothing wavelength (None: smoothing)
+    rail_smoothing: float | None = None   # mm, the rail's own smoothing wavelength (None: smoothing)
 
 
 Geometry = QuadraticGeometry | HertzGeometry | TableGeometry | WheelRailGeometry
@@ -552,9 +557,21 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
         smoothing=sec.number("smoothing", d.smoothing, nonnegative=True),
         element_size=sec.number("element_size", positive=True),
         patch_combine=sec.number("patch_combine", d.patch_combine, nonnegative=True),
-        wheel_z=sec.choice("wheel_z", ("down", "up"), d.wheel_z),
-        rail_z=sec.choice("rail_z", ("down", "up"), d.rail_z),
+        wheel_z=sec.choice("wheel_z", ("down", "up", "auto"), d.wheel_z),
+        rail_z=sec.choice("rail_z", ("down", "up", "auto"), d.rail_z),
+        wheel_mirror_y=_flag(sec, "wheel_mirror_y"),
+        rail_mirror_y=_flag(sec, "rail_mirror_y"),
+        wheel_smoothing=sec.number("wheel_smoothing", nonnegative=True),
+        rail_smoothing=sec.number("rail_smoothing", nonnegative=True),
     )
+
+
+def _flag(sec: "_Section", key: str) -> bool:
+    """A true/false key of a table (default false)."""
+    v = sec.data.get(key, False)
+    if not isinstance(v, bool):
+        raise sec.error(key, f"must be true or false, got {v!r}")
+    return v
 
 
 def _element_size_s(sec: "_Section") -> float | None:

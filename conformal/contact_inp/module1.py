@@ -89,13 +89,21 @@ class Module1Case:
 
 
 def _profile(deck: Deck, what: str) -> tuple:
+    """'FNAME' MIRRORY SCALEYZ SMOOTH {MIRRORZ PRFOPT} and the lines PRFOPT asks for, as the tuple
+    (FNAME, MIRRORY, SCALEYZ, SMOOTH, MIRRORZ, PRFOPT, ISMOOTH, ZIGTHRS) (CONTACT's defaults
+    MIRRORZ = 0, ISMOOTH = 0, ZIGTHRS = 150 degrees where not given)."""
+    from conformal.geometry.miniprof import ZIG_THRESHOLD
+
     v = deck.mixed("sirr", what, optional="ii")
+    mirrorz = v[4] if len(v) > 4 else 0
     prfopt = v[5] if len(v) > 5 else 0
+    ismooth, zig = 0, ZIG_THRESHOLD
     if prfopt >= 1:
-        deck.reals(5, "ISMOOTH ZIGTHRS KINKHIGH KINKLOW KINKWID", angle=True)
+        opts = deck.reals(5, "ISMOOTH ZIGTHRS KINKHIGH KINKLOW KINKWID", angle=True)
+        ismooth, zig = int(round(opts[0])), opts[1]
     if prfopt >= 2:
         deck.reals(2, "ERRHND MAXOMIT", angle=True)
-    return tuple(v)
+    return (v[0], v[1], v[2], v[3], mirrorz, prfopt, ismooth, zig)
 
 
 def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore_subsurface: bool = False,
@@ -159,7 +167,7 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
             state.friction_table = ()
         reason = None
         if d["V"] == 1 and L == 0 and all(r[1] == r[2] for r in state.friction_table):
-            reason = None            # accepted with D = 4 where constant over each patch (solve1)
+            reason = None            # accepted where constant over each patch (solve1)
         elif d["V"]:
             reason = f"module 1, control digit V = {d['V']} (friction varying over the profile)"
         elif L != 0:
@@ -247,17 +255,17 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
     if (gaught <= 0 and not single) or (gaught > 0 and gaugsq != 0) or (len(state.track) > 4 and state.track[4] != 0):
         geo.append("module 1, a track given by rail position (GAUGHT <= 0), GAUGSQ != 0 or a curved track")
     for name, prof in (("rail", state.rail), ("wheel", state.wheel)):
-        mirz = prof[4] if len(prof) > 4 else 0
-        if Path(prof[0]).suffix.lower() in (".slcs", ".slcw"):
+        suffix = Path(prof[0]).suffix.lower()
+        if suffix in (".slcs", ".slcw"):
             geo.append(f"module 1, a variable {name} profile (slices file {Path(prof[0]).name})")
-        elif Path(prof[0]).suffix.lower() not in (".prr", ".prw"):
-            geo.append(f"module 1, {name} profile {Path(prof[0]).name} (Miniprof and other formats not read)")
-        if prof[1] != 0 or prof[2] != 1.0 or prof[3] != 0.0 or mirz != 0:
-            geo.append(f"module 1, {name} profile options MIRRORY = {prof[1]}, SCALEYZ = {prof[2]:g}, "
-                       f"SMOOTH = {prof[3]:g}, MIRRORZ = {mirz} (only 0, 1, 0, 0)")
-    if state.friction_table and not conf:
-        geo.append("module 1, control digit V = 1 (friction varying over the profile; only with the conformal "
-                   "approach D = 4)")
+        elif suffix not in (".prr", ".prw", ".ban", ".whl"):
+            geo.append(f"module 1, {name} profile {Path(prof[0]).name} (a 2-column table: only .prr, .prw, "
+                       ".ban and .whl are read)")
+        if prof[2] != 1.0:
+            geo.append(f"module 1, {name} profile option SCALEYZ = {prof[2]:g} (only 1)")
+        if prof[3] > 0 and prof[6] not in (0, 1):
+            geo.append(f"module 1, {name} profile option ISMOOTH = {prof[6]} (smoothing spline with a third-order "
+                       "penalty)")
     if any(v != 0.0 for v in state.rail_dev):
         geo.append("module 1, rail deviations DYRAIL .. VROLLR")
     if len(state.wheelset) > 3 and state.wheelset[3] != 0:
