@@ -165,6 +165,11 @@ def test_conformal_deck_against_contact(name, case):
         assert "pitch_creepage" in dev and len(d["patches"]) == 1
     else:
         assert len(d["patches"]) == 2 and abs(dev["patch2.FN"]) < 2.0       # the flange patch (issue 21)
+        # each strip's reference point on the rail (CONTACT's YCP(R)): -35.128 / -42.233 against
+        # -35.163 / -42.229 mm (it was null for conformal strips)
+        ours = sorted((p["FN"], p["y_rail"]) for p in d["patches"])
+        theirs = sorted((float(p["TILDE_FN"]), float(p["YCP(R)"])) for p in ref[case]["patches"])
+        assert [y for _, y in ours] == pytest.approx([y for _, y in theirs], abs=0.05)
 
 
 def test_conformal_decks_map_their_digits():

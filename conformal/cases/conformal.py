@@ -192,6 +192,9 @@ class StripBuilder:
             xi_s, eta_s, phi_s = column_creepages(grid, k.xi, m * k.eta, m * k.phi)
             kin = k
         info = patch_info(pl.pair, st, st.patches[0], 0)
+        if patch is not None:     # a strip of its own: its reference point on the rail (CONTACT's YCP(R), ZCP(R))
+            y_own, z_own = (float(v) for v in pl.pair.rail.curve.point(target.s_ref))
+            info.update(s_rail=float(target.s_ref), y_rail=m * y_own, z_rail=z_own)
         info.update(n_geometric_patches=self.n_patches, z_ws_reference=st.z, z_first_touch=pl.z_first,
                     side=pl.pair.side)
         if st.warnings or size_warnings or st.placement_warnings:

@@ -207,7 +207,8 @@ def summary(case: Module1Case, r) -> dict:
             ncon = f.n_contact if f is not None else None
         angle, y_rail = p.extra.get("contact_angle"), p.extra.get("y_rail")
         if "contact_angle_min" in p.extra:     # a conformal strip: the middle of its band of angles
-            angle, y_rail = 0.5 * (p.extra["contact_angle_min"] + p.extra["contact_angle_max"]), None
+            angle = 0.5 * (p.extra["contact_angle_min"] + p.extra["contact_angle_max"])
+            y_rail = p.extra.get("y_rail")     # the strip's reference point on the rail (YCP(R))
         patches.append({"FN": p.FN, "FX": p.FX, "FS": p.FY, "MN": p.MZ, "pmax": p.pmax,
                         "n_contact": ncon,
                         "n_adhesion": f.n_adhesion if f is not None else None,
