@@ -32,8 +32,10 @@ NORMAL_ONLY_THEORIES = ("hertz", "fe_contact")
 GEOMETRY_KINDS = ("quadratic", "hertz", "table", "wheel_rail")
 #: ``[model] influence``: half-space numbers with the element frames turned by the contact angles (the
 #: default), without that turn ("halfspace_planar": CONTACT's conformal approach, its D = 4 with
-#: C3 = 2; theory conformal only) or the finite-element numbers of the real wheel and rail
-INFLUENCES = ("halfspace", "halfspace_planar", "fe")
+#: C3 = 2; theory conformal only), with Blanco-Lorenzo's angle correction ("halfspace_blanco": CONTACT's
+#: C3 = 4, variant and method in [model] blanco_variant / blanco_method; conformal only) or the
+#: finite-element numbers of the real wheel and rail
+INFLUENCES = ("halfspace", "halfspace_planar", "halfspace_blanco", "fe")
 
 #: model-specific ``[model]`` keys (besides theory, bound, influence, tol, maxit, layer_flexibility),
 #: with the module that reads them.  Any other key is rejected (a misspelt key would otherwise be
@@ -57,6 +59,8 @@ MODEL_OPTIONS = {
     "fe_far_field": "FE: far-field boundary condition",
     "fe_closure": "FE: a profile ending inside the body: \"extend\" (straight, slabs limited; default) | \"straight\" | \"cut\"",
     "influence_file": "exact: influence numbers read from a file (conformal.influence.contact_file)",
+    "blanco_variant": "conformal, influence = \"halfspace_blanco\": CONTACT's VARIANT 1-4 (default 3; conformal.influence.blanco)",
+    "blanco_method": "conformal, influence = \"halfspace_blanco\": \"full\" (CONTACT's IF_METH = 1, default) | \"linear\" (IF_METH = 0)",
     **{k: "fe_contact: see conformal.fe_contact.problems" for k in ("fec_n", "fec_h", "fec_order", "fec_growth", "fec_h_max", "fec_body_size", "fec_patch", "fec_far_field", "fec_solver", "fec_estimate")},
 }
 
@@ -756,6 +760,8 @@ _OPTION_CHECKS = {
     "creepage": _one_of("surface", "reference"), "creep_coefficients": _one_of("kalker", "elliptic"),
     "discretisation": _one_of("midpoint", "contact"), "flexibilities": _flexibilities,
     "require_c33": _boolean,
+    "blanco_method": _one_of("full", "linear"),
+    "blanco_variant": lambda v: None if v in (1, 2, 3, 4) and not isinstance(v, bool) else f"must be 1, 2, 3 or 4, got {v!r}",
 }
 
 
@@ -850,8 +856,8 @@ def validate(scene: "Scene") -> "Scene":
         if kin.direction == -1 or kin.rigid_slip is not None or fr.mu_table is not None \
                 or "influence_file" in scene.model.options:
             raise InputError("[[history]]: not combined with direction = -1, rigid_slip, mu_table or influence_file")
-    if scene.model.influence == "halfspace_planar" and scene.model.theory != "conformal":
-        raise InputError(f"[model] influence: \"halfspace_planar\" (CONTACT's conformal approach) is for theory "
+    if scene.model.influence in ("halfspace_planar", "halfspace_blanco") and scene.model.theory != "conformal":
+        raise InputError(f"[model] influence: \"{scene.model.influence}\" (CONTACT's conformal approach) is for theory "
                          f"\"conformal\", got theory {scene.model.theory!r}")
     if scene.load.approach_along is not None and scene.model.theory != "conformal":
         raise InputError(f"[load] approach_along: an approach along the load direction needs [model] theory = "

@@ -65,7 +65,7 @@ def creepage_option(model) -> str:
     theories' assumption) or "wheel_surface" (CONTACT's conformal rigid slip: the wheel's velocity at
     its own undeformed surface point of every element; the default of influence =
     "halfspace_planar")."""
-    default = "wheel_surface" if model.influence == "halfspace_planar" else "surface"
+    default = "wheel_surface" if model.influence in ("halfspace_planar", "halfspace_blanco") else "surface"
     creep = dict(model.options).get("creepage", default)
     if creep not in CREEPAGES:
         raise InputError(f"[model] creepage: must be one of {', '.join(CREEPAGES)}, got {creep!r}")
@@ -158,7 +158,7 @@ class StripBuilder:
         target = patch or self.patch
         # CONTACT's formulation (its kernel or its rigid slip): its grids put an element centre on the
         # reference point
-        centred = scene.model.influence == "halfspace_planar" or creepage_option(scene.model) == "wheel_surface"
+        centred = scene.model.influence in ("halfspace_planar", "halfspace_blanco") or creepage_option(scene.model) == "wheel_surface"
         if sizes is not None:
             grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, target, sizes=sizes, scale=scale,
                                                        side=pl.pair.side, centred=centred, theory=scene.model.theory)

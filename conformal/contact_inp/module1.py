@@ -53,6 +53,7 @@ class Module1State:
     case_count: int = 0
     conformal: bool = False                # the last discretisation had D = 4 (conformal approach)
     friction_table: tuple = ()             # V = 1: (ALPHA, FSTAT, FKIN) rows
+    blanco: tuple | None = None            # C = 4: (IF_METH, VARIANT) of Blanco's influence correction
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,6 +79,7 @@ class Module1Case:
     module: int = 1
     conformal: bool = False            # D = 4: CONTACT's conformal approach (conformal.contact_inp.solve1)
     friction_table: tuple = ()         # V = 1: (ALPHA, FSTAT, FKIN) per surface inclination (rad)
+    blanco: tuple | None = None        # C = 4: (IF_METH, VARIANT), Blanco's influence correction (D = 4 only)
 
     @property
     def rail_file(self) -> str:
@@ -182,8 +184,9 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
         raise InputError(f"{deck.name}, line {line}: L = 1 keeps the friction of a previous case; there is none")
     C, M = d["C"], d["M"]
     if C >= 2:
+        state.blanco = None
         if C == 4:
-            deck.ints(2, "IF_METH VARIANT")
+            state.blanco = tuple(deck.ints(2, "IF_METH VARIANT"))
         state.material = tuple(deck.reals(4, "POISS 1, 2  GG 1, 2", angle=True))
         if d["B"] == 1:
             deck.reals(1, "FLXZ", angle=True)
@@ -191,7 +194,9 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
         if nmat:
             deck.reals(nmat, "material model parameters", angle=True)
         reason = None
-        if C != 2:
+        if C == 4 and (state.blanco[0] not in (0, 1) or state.blanco[1] not in (1, 2, 3, 4)):
+            reason = f"module 1, C = 4 with IF_METH = {state.blanco[0]}, VARIANT = {state.blanco[1]} (0-1, 1-4)"
+        elif C not in (2, 4):
             reason = f"module 1, control digit C = {C} (influence coefficients)"
         elif M != 0:
             reason = f"module 1, control digit M = {M} (material model)"
@@ -266,6 +271,9 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
         if prof[3] > 0 and prof[6] not in (0, 1):
             geo.append(f"module 1, {name} profile option ISMOOTH = {prof[6]} (smoothing spline with a third-order "
                        "penalty)")
+    if state.blanco is not None and not conf:
+        geo.append("module 1, control digit C = 4 (Blanco's influence correction; only with the conformal approach "
+                   "D = 4)")
     if any(v != 0.0 for v in state.rail_dev):
         geo.append("module 1, rail deviations DYRAIL .. VROLLR")
     if len(state.wheelset) > 3 and state.wheelset[3] != 0:
@@ -282,4 +290,4 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
                        track=state.track, rail=state.rail, wheelset=state.wheelset, wheel=state.wheel,
                        position=state.position, velocity=state.velocity, rail_dev=state.rail_dev, eps=eps,
                        unsupported=tuple(own) + tuple(inh.values()) + tuple(geo), skipped=skipped,
-                       conformal=conf, friction_table=state.friction_table)
+                       conformal=conf, friction_table=state.friction_table, blanco=state.blanco)

@@ -149,6 +149,9 @@ def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None)
         "grid": {"strips": "separate"},
         "model": {"theory": "conformal", "influence": "halfspace_planar"},
     }
+    if case.blanco is not None:            # C = 4: Blanco's angle correction (conformal.influence.blanco)
+        raw["model"] = {"theory": "conformal", "influence": "halfspace_blanco",
+                        "blanco_method": "full" if case.blanco[0] == 1 else "linear", "blanco_variant": case.blanco[1]}
     if case.digits["N"] == 0:              # Z_WS prescribed: the approach from the first touch
         z_first = place_scene(scene_from_dict(raw, base_dir=base_dir)).z_first
         if z_inp - z_first <= 0.0:
