@@ -173,15 +173,17 @@ def test_conformal_deck_against_contact(name, case):
 
 
 def test_conformal_decks_map_their_digits():
-    """groove_li: D = 4 with C = 2 (cases 1-4) runs, Blanco's angle correction C = 4 (cases 5-8) is
-    refused by name; F = 1 becomes FX_WS / (mu FZ) with the pitch solved; mbench_conf: N = 0 becomes
-    the approach from the first touch, V = 1 the table of friction over the surface inclination."""
+    """groove_li: D = 4 with C = 2 (cases 1-4) and with Blanco's angle correction C = 4 (cases 5-8:
+    IF_METH = 1, VARIANT = 3, kept by C = 1 in cases 6-8); F = 1 becomes FX_WS / (mu FZ) with the
+    pitch solved; mbench_conf: N = 0 becomes the approach from the first touch, V = 1 the table of
+    friction over the surface inclination."""
     from conformal.contact_inp.solve1 import constant_friction, friction_at
 
     pl = plan(read_deck(DECKS / "groove_li.inp"))
-    assert [c.number for chain in pl.chains for c, _ in chain] == [1, 2, 3, 4]
-    assert {(c.number, r) for c, r in pl.unsupported} == {(n, "module 1, control digit C = 4 (influence coefficients)")
-                                                          for n in (5, 6, 7, 8)}
+    assert [c.number for chain in pl.chains for c, _ in chain] == [1, 2, 3, 4, 5, 6, 7, 8] and not pl.unsupported
+    for chain in pl.chains[4:]:
+        assert chain[0][1]["model"] == {"theory": "conformal", "influence": "halfspace_blanco", "blanco_method": "full",
+                                        "blanco_variant": 3}
     (c1, s1), = pl.chains[0]
     assert s1["model"] == {"theory": "conformal", "influence": "halfspace_planar"}
     assert s1["kinematics"]["fx_rel"] == 0.0 and s1["geometry"]["placement"] == "single"

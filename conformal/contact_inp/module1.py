@@ -32,6 +32,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from conformal.contact_inp.blocks import control_words, damping_and_heat, material_parameters, solver_parameters
 from conformal.contact_inp.module3 import _skip_subsurface, unsupported
 from conformal.contact_inp.tokens import Deck
 from conformal.errors import InputError
@@ -111,15 +112,7 @@ def _profile(deck: Deck, what: str) -> tuple:
 def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore_subsurface: bool = False,
               ignore_temperature: bool = False) -> Module1Case:
     """Read the case that follows a ``1`` module line (user guide, module-1 input), update ``state``."""
-    d1 = deck.digits("CPBTNFS")
-    d1["C1"] = d1.pop("C")          # CONFIG; "C" is the INFLCF digit of the second word
-    d2 = deck.digits("VLDCMZE")
-    ln2 = deck.lines[deck.pos - 1]
-    if len(ln2.tokens) > 1 and ln2.tokens[1].isdigit() and len(ln2.tokens[1]) == 1:
-        d2["M2"] = int(ln2.tokens[1])
-    d3 = deck.digits("XHGIAOWR")
-    d = {**d1, **d2, **d3}
-    d.setdefault("M2", 0)
+    d = control_words(deck, "CPBTNFS")
     for letter, ok in {"C1": (0, 1, 4, 5), "C": (0, 1, 2, 3, 4, 9), "L": (0, 1, 2, 3, 4, 6), "M": (0, 1, 2, 3, 4, 5), "V": (0, 1, 2),
                        "H": (0, 1, 3), "G": (0, 1, 2, 3, 4, 5), "S": (0, 1, 2, 3), "Z": (0, 1, 2, 3),
                        "E": (0, 1, 2, 3, 4, 5), "M2": (0, 1, 2)}.items():
@@ -141,18 +134,7 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
     if d["S"] and not ignore_subsurface:
         own.append(f"control digit S = {d['S']} (subsurface stresses; --ignore-subsurface skips them)")
     inh = state.reasons
-    if d["X"] == 1:
-        deck.ints(1, "PSFLCIN debug digits", optional=1)
-    eps = None
-    if d["G"] != 1:
-        g = deck.reals(5, "MAXGS MAXIN MAXNR MAXOUT EPS", optional=1, angle=True)
-        eps = g[4]
-    if d["G"] in (2, 3):
-        deck.reals(4, "OMEGAH OMEGAS INISLP OMGSLP", angle=True)
-    elif d["G"] == 4:
-        deck.reals(2, "INISLP OMGSLP", angle=True)
-    elif d["G"] == 5:
-        deck.reals(8, "FDECAY BETATH KDOWFB D_IFC D_LIN D_CNS D_SLP POW_S", angle=True)
+    _, eps = solver_parameters(deck, d["G"], module=1, debug=d["X"] == 1)
     L = d["L"]
     nval = {0: 2, 2: 5, 3: 5, 4: 5, 6: 4}.get(L)
     if L != 1:
@@ -188,11 +170,7 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
         if C == 4:
             state.blanco = tuple(deck.ints(2, "IF_METH VARIANT"))
         state.material = tuple(deck.reals(4, "POISS 1, 2  GG 1, 2", angle=True))
-        if d["B"] == 1:
-            deck.reals(1, "FLXZ", angle=True)
-        nmat = {1: 4, 2: 4, 3: 3, 4: 4, 5: 3}.get(M, 0)
-        if nmat:
-            deck.reals(nmat, "material model parameters", angle=True)
+        material_parameters(deck, d["B"], M)
         reason = None
         if C == 4 and (state.blanco[0] not in (0, 1) or state.blanco[1] not in (1, 2, 3, 4)):
             reason = f"module 1, C = 4 with IF_METH = {state.blanco[0]}, VARIANT = {state.blanco[1]} (0-1, 1-4)"
@@ -206,12 +184,7 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
             inh.pop("material", None)
     elif state.material is None:
         raise InputError(f"{deck.name}, line {line}: C = {C} keeps the material of a previous case; there is none")
-    if d["M2"] == 2:
-        deck.reals(4, "CDAMPN CDAMPT DFNMAX DFTMAX", angle=True)
-    if d["H"] == 3:
-        deck.reals(8, "BKTEMP HEATCP LAMBDA DENS (bodies 1, 2)", angle=True)
-        if M == 4:
-            deck.reals(1, "BETAPL", angle=True)
+    damping_and_heat(deck, d["M2"], d["H"], M)
     if d["D"] >= 2:
         state.discretisation = tuple(deck.reals(6, "DX DS DQREL A_SEP D_SEP D_COMB", optional=2, angle=True))
         state.conformal = d["D"] == 4
