@@ -138,6 +138,7 @@ class WheelRailGeometry:
     rail_mirror_y: bool = False          # y negated on reading (CONTACT's MIRRORY = 1)
     wheel_smoothing: float | None = None  # mm, the wheel's own smoothing wavelength (None: smoothing)
     rail_smoothing: float | None = None   # mm, the rail's own smoothing wavelength (None: smoothing)
+    max_smoothing_error: float = 0.1     # mm, the farthest a profile point may lie from its smoothed curve
 
 
 Geometry = QuadraticGeometry | HertzGeometry | TableGeometry | WheelRailGeometry
@@ -567,6 +568,7 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
         rail_mirror_y=_flag(sec, "rail_mirror_y"),
         wheel_smoothing=sec.number("wheel_smoothing", nonnegative=True),
         rail_smoothing=sec.number("rail_smoothing", nonnegative=True),
+        max_smoothing_error=sec.number("max_smoothing_error", d.max_smoothing_error, positive=True),
     )
 
 

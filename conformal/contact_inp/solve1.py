@@ -51,6 +51,12 @@ def constant_friction(table, lo: float, hi: float) -> float | None:
     return values.pop() if len(values) == 1 else None
 
 
+#: mm, how far the smoothing may move a deck's profile points (``[geometry] max_smoothing_error``;
+#: a scene's default is 0.1 mm): CONTACT sets no limit, and its lambda = 10 on the measured profiles
+#: of its testbank moves them up to 1.0 mm at their corners, where CONTACT keeps a kink
+DECK_SMOOTHING_ERROR = 2.0
+
+
 def _profile_keys(case: Module1Case, base_dir: Path) -> dict:
     """``[geometry]`` keys of both profiles: the files, CONTACT's MIRRORY / MIRRORZ (``*_mirror_y``,
     ``*_z``; MIRRORZ = 0 detects the orientation of Miniprof files, SIMPACK files are taken as they
@@ -72,6 +78,7 @@ def _profile_keys(case: Module1Case, base_dir: Path) -> dict:
             dt = float(np.hypot(*np.diff(check_points(p, kind, path.name), axis=0).T).mean())
             smooth = 2.0 * np.pi * (smooth / dt) ** 0.25
         out[f"{kind}_smoothing"] = float(max(smooth, 0.0))
+    out["max_smoothing_error"] = DECK_SMOOTHING_ERROR
     return out
 
 
@@ -163,13 +170,25 @@ def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None)
 def solve_case(case: Module1Case, raw: dict, base_dir: Path):
     """Solve one case's scene; with friction varying over the profile (V = 1) check that it is
     constant over every patch's band of contact angles (solved once more with that value where the
-    first guess was another), else refuse naming the digit."""
+    first guess was another), else refuse naming the digit.  A case the project's wheel-rail
+    set-up cannot place (no contact point within the profiles, normals that miss a profile, a
+    ``[geometry]`` check) is refused naming that, as an unsupported case (one line, exit 2)."""
     from conformal.contact_inp.module3 import Unsupported
+    from conformal.errors import ConvergenceError, InputError, NoContactError
     from conformal.scene import scene_from_dict
     from conformal.solve import solve_scene
 
     def run(d):
-        return solve_scene(scene_from_dict(d, base_dir=base_dir, name=d["name"]))
+        try:
+            return solve_scene(scene_from_dict(d, base_dir=base_dir, name=d["name"]))
+        except (InputError, NoContactError, ConvergenceError) as exc:
+            text = str(exc)
+            if isinstance(exc, InputError) and not text.startswith("[geometry]"):
+                raise
+            if isinstance(exc, ConvergenceError) and not text.startswith(("wheel surface", "rail surface")):
+                raise
+            raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
+                              f"the project's wheel-rail set-up fails here ({text})") from None
 
     r = run(raw)
     if not case.friction_table:

@@ -59,12 +59,14 @@ def profile_curves(geo: WheelRailGeometry, base_dir: str | Path = ".") -> tuple[
                    _z_up(getattr(geo, "rail_z", "down")), bool(getattr(geo, "rail_mirror_y", False)))
     except InputError as exc:
         raise InputError(f"[geometry] rail_profile: {exc}") from None
+    limit = float(getattr(geo, "max_smoothing_error", MAX_SMOOTHING_ERROR))
     for c, what in ((w, "wheel"), (r, "rail")):
-        if c.smoothing_error > MAX_SMOOTHING_ERROR:
+        if c.smoothing_error > limit:
             key = f"{what}_smoothing" if getattr(geo, f"{what}_smoothing", None) is not None else "smoothing"
             raise InputError(f"[geometry] {key}: a wavelength of {_smoothing(geo, what):g} mm moves the {what} profile "
                              f"{c.name} up to {c.smoothing_error:.3g} mm from its points (at most "
-                             f"{MAX_SMOOTHING_ERROR:g} mm): it is no longer that profile; the default is 1 mm")
+                             f"{limit:g} mm, [geometry] max_smoothing_error): it is no longer that profile; the "
+                             "default is 1 mm")
     # the radius at each wheel-profile point, wheel_radius + z (z down), must be positive
     rho_min = float(geo.wheel_radius) + float(w.points[:, 1].min())
     if rho_min <= 0.0:
