@@ -94,21 +94,44 @@ def test_scene_keys_for_profile_conversions(tmp_path):
 
 
 @pytest.mark.slow
-def test_testbank_case_22_with_miniprof_profiles_against_contact():
-    """testbank case 22 (steady curving, high rail: Miniprof rail avg_HR.BAN with MIRRORY = 1 and
-    wheel avg_wheel.whl, both smoothed with CONTACT's lambda = 10, friction 0.6 given over the
-    profile, V = 1; about 5 s): FN, FX, FS, pmax, elements and position on the rail within the
-    Manchester tolerances (units of the tolerance <= 1); the contact angle is 0.006 rad off and
-    with it track FY 3.5 % (CONTACT keeps the profiles' kinks through its smoothing, the project's
-    spline does not)."""
+@pytest.mark.parametrize("case", [22, 23])
+def test_testbank_miniprof_cases_against_contact(case):
+    """testbank cases 22 and 23 (steady curving, high and low rail: Miniprof rails avg_HR.BAN,
+    avg_low2.ban with MIRRORY = 1 and wheel avg_wheel.whl, all smoothed with CONTACT's lambda = 10,
+    friction 0.6 given over the profile, V = 1; 5-10 s each): FN, FX, FS, pmax, elements, position
+    on the rail and track forces within the Manchester tolerances (units of the tolerance <= 1).
+    Case 22 (flange contact at 37 degrees): the contact angle is 0.006 rad off and with it track FY
+    3.5 % (CONTACT keeps the profiles' kinks through its smoothing, the project's spline does not)."""
     from conformal.contact_inp.deck import read_deck, solve_deck
     from conformal.contact_inp.refout import compare_wheelrail, read_ref_out_wheelrail
 
     parsed = read_deck(DECKS / "testbank.inp", ignore_subsurface=True, ignore_temperature=True)
     ref = read_ref_out_wheelrail((DECKS / "testbank.ref_out").read_text(encoding="utf-8"))
-    (d,) = list(solve_deck(parsed, cases=[22]))
-    dev = compare_wheelrail(d, ref[22], mu=0.6)
-    within = {k: v for k, v in dev.items() if k not in ("patch1.contact_angle", "FY_track")}
+    (d,) = list(solve_deck(parsed, cases=[case]))
+    dev = compare_wheelrail(d, ref[case], mu=0.6)
+    loose = ("patch1.contact_angle", "FY_track") if case == 22 else ()
+    within = {k: v for k, v in dev.items() if k not in loose}
     assert max(within.values()) <= 1.0, within
-    assert dev["patch1.contact_angle"] <= 1.5 and dev["FY_track"] <= 4.0
+    if case == 22:
+        assert dev["patch1.contact_angle"] <= 1.5 and dev["FY_track"] <= 4.0
     assert json.dumps(d)
+
+
+def test_deck_smoothing_limit_and_scene_default():
+    """A scene refuses smoothing that moves a profile more than ``[geometry] max_smoothing_error``
+    (default 0.1 mm); the deck reader allows CONTACT's smoothing up to 2 mm."""
+    from conformal.contact_inp.solve1 import DECK_SMOOTHING_ERROR
+    from conformal.geometry.wheelrail import profile_curves
+    from conformal.scene import scene_from_dict
+
+    geo = {"kind": "wheel_rail", "rail_profile": str(DECKS / "avg_HR.BAN"), "rail_mirror_y": True, "rail_z": "auto",
+           "wheel_profile": str(DECKS / "avg_wheel.whl"), "wheel_z": "auto", "rail_cant": 0.0, "smoothing": 40.0,
+           "flange_back": 1352.2, "gauge": 1435.1}
+    sc = scene_from_dict({"geometry": geo, "load": {"wheel_load": 10000.0}})
+    assert sc.geometry.max_smoothing_error == 0.1
+    with pytest.raises(InputError, match=r"\[geometry\] smoothing: .* max_smoothing_error"):
+        profile_curves(sc.geometry, DECKS)
+    loose = scene_from_dict({"geometry": {**geo, "max_smoothing_error": DECK_SMOOTHING_ERROR},
+                             "load": {"wheel_load": 10000.0}})
+    w, r = profile_curves(loose.geometry, DECKS)
+    assert 0.1 < max(w.smoothing_error, r.smoothing_error) <= DECK_SMOOTHING_ERROR
