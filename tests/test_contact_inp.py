@@ -351,3 +351,18 @@ def test_cli_out_must_be_a_folder(tmp_path, capsys):
     assert "--out" in capsys.readouterr().err
     assert main(["inp", str(tmp_path / "missing.inp")]) == 2
     assert "no such file" in capsys.readouterr().err
+
+
+def test_leading_edge_factor_of_a_transient_step():
+    """CONTACT's leading-edge correction (T = 2 with dq = 2 dx): the last contact element of a run
+    along x spent half the step inside the contact, the others all of it; dq = dx changes nothing."""
+    from conformal.solvers.history import leading_edge_factor
+
+    c = np.zeros((8, 2), bool)
+    c[2:6, 0] = True
+    c[1:4, 1] = True
+    c[5:7, 1] = True                       # a run reaching the last two columns: the whole step
+    f = leading_edge_factor(c, 2)
+    assert f[:, 0].tolist() == [0, 0, 1, 1, 1, 0.5, 0, 0]
+    assert f[:, 1].tolist() == [0, 1, 1, 0.5, 0, 1, 1, 0]
+    assert np.array_equal(leading_edge_factor(c, 1), c.astype(float))
