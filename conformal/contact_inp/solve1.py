@@ -1,14 +1,18 @@
 """Module-1 (wheel-rail) cases onto the project's wheel-rail scene and its planar path
 (conformal.cases.wheelrail, theory "exact": one tangent-plane half-space problem per patch).
 
-The deck's inputs map onto scene keys: the profiles (``.prr``/``.prw`` beside the deck, read by
-conformal.geometry.profiles), the track (GAUGHT, GAUGWD, CANT), the wheelset (FBDIST, FBPOS,
-NOMRADW), its position (Y_WS, ROLL, YAW; the vertical force FZ) and velocity (VS_WS, VY_WS, VROLL,
-VYAW, VPITCH), the element size DX (= DS), and the distance D_SEP above which patches are solved
-separately (``patch_combine``).
+The deck's inputs map onto scene keys: the profiles (SIMPACK ``.prr``/``.prw`` or Miniprof
+``.ban``/``.whl`` beside the deck, read by conformal.geometry.profiles, with MIRRORY, MIRRORZ and
+SMOOTH as ``*_mirror_y``, ``*_z``, ``*_smoothing``: :func:`_profile_keys`), the track (GAUGHT,
+GAUGWD, CANT), the wheelset (FBDIST, FBPOS, NOMRADW), its position (Y_WS, ROLL, YAW; the vertical
+force FZ) and velocity (VS_WS, VY_WS, VROLL, VYAW, VPITCH), the element size DX (= DS), and the
+distance D_SEP above which patches are solved separately (``patch_combine``).  Friction varying
+with the surface inclination (V = 1) takes, as CONTACT, one coefficient per patch at its contact
+angle, accepted where every patch gets the same (checked after the solve, :func:`solve_case`).
 
 Cases with CONTACT's conformal approach (D = 4) map onto theory ``conformal`` with influence
-``halfspace_planar`` (CONTACT's conformal half-space numbers, C3 = 2) and its rigid slip (creepage
+``halfspace_planar`` (CONTACT's conformal half-space numbers, C3 = 2; ``halfspace_blanco`` with
+Blanco's angle correction, C3 = 4, conformal.influence.blanco) and its rigid slip (creepage
 ``wheel_surface``), element sizes DX and DS (``element_size``, ``element_size_s``), every patch on
 its own strip (``[grid] strips = "separate"``); there the deck may prescribe the wheelset height
 Z_WS (N = 0: ``[load] approach`` from the first touch), the longitudinal force FX_WS with the pitch
