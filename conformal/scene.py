@@ -759,7 +759,7 @@ def _boolean(v):
 #: so that a bad value is refused whatever the theory (it was ignored where the theory did not read it)
 _OPTION_CHECKS = {
     "maxout": _whole(1), "max_mx": _whole(4), "max_ms": _whole(4), "n": _whole(4),
-    "creepage": _one_of("surface", "reference"), "creep_coefficients": _one_of("kalker", "elliptic"),
+    "creepage": _one_of("surface", "reference", "wheel_surface"), "creep_coefficients": _one_of("kalker", "elliptic"),
     "discretisation": _one_of("midpoint", "contact"), "flexibilities": _flexibilities,
     "require_c33": _boolean,
     "blanco_method": _one_of("full", "linear"),

@@ -61,6 +61,9 @@ def test_scene_keys():
     base = {"geometry": {"kind": "hertz", "a": 1.0, "b": 1.0}, "load": {"normal_force": 100.0}}
     with pytest.raises(InputError, match="halfspace_blanco"):
         scene_from_dict({**base, "model": {"theory": "exact", "influence": "halfspace_blanco"}})
+    # the documented creepage "wheel_surface" (CONTACT's rigid slip) is read with any influence numbers
+    assert scene_from_dict({**base, "model": {"theory": "exact", "creepage": "wheel_surface"}}).model.options[
+        "creepage"] == "wheel_surface"
     with pytest.raises(InputError, match=r"\[model\] blanco_variant: must be 1, 2, 3 or 4"):
         scene_from_dict({**base, "model": {"theory": "conformal", "influence": "halfspace_blanco", "blanco_variant": 5}})
 
