@@ -364,7 +364,9 @@ COMMON = (
     Option("bound", "str", "parabolic", "", "FASTSIM's traction bound", choices=("parabolic", "elliptic")),
     Option("influence", "str", "halfspace", "", "influence numbers: half-space with the element frames turned "
            "by the contact angles, \"halfspace_planar\" (CONTACT's conformal approach; theory conformal) or "
-           "\"fe\" (finite elements of the real bodies, [model.fe])", choices=("halfspace", "halfspace_planar", "fe")),
+           "\"halfspace_blanco\" (with Blanco-Lorenzo's angle correction, CONTACT's C3 = 4; theory conformal) or "
+           "\"fe\" (finite elements of the real bodies, [model.fe])",
+           choices=("halfspace", "halfspace_planar", "halfspace_blanco", "fe")),
     Option("tol", "float", 1e-6, "", "relative change of the tractions that stops the iterations (<= 1e-2)"),
     Option("maxit", "int", 1000, "", "largest number of iterations", minimum=1),
     Option("layer_flexibility", "float", 0.0, "mm/(N/mm²)", "FASTSIM contamination layer (seed Eqs. 34-36)"),
@@ -458,7 +460,11 @@ MODELS = Registry(models=(
                    Option("max_ms", "int", 200, "", "largest number of strip elements along s", minimum=4),
                    Option("creepage", "str", None, "", "creepages on the strip: \"surface\" (default) | "
                           "\"reference\" | \"wheel_surface\" (CONTACT's rigid slip; default of halfspace_planar)",
-                          choices=("surface", "reference", "wheel_surface"))),
+                          choices=("surface", "reference", "wheel_surface")),
+                   Option("blanco_variant", "int", 3, "", "influence = \"halfspace_blanco\": CONTACT's VARIANT "
+                          "(conformal.influence.blanco)", choices=(1, 2, 3, 4)),
+                   Option("blanco_method", "str", "full", "", "influence = \"halfspace_blanco\": \"full\" "
+                          "(CONTACT's IF_METH = 1) | \"linear\" (IF_METH = 0)", choices=("full", "linear"))),
           methods=("fe",),
           capabilities=frozenset({TANGENTIAL, LOAD_ANGLE, APPROACH_ALONG, PLANAR_HALFSPACE, GRID, CURVED_STRIP, VTU,
                                   CONFORMAL_GEOMETRY, FE_INFLUENCE}),

@@ -35,8 +35,10 @@ NORMAL_ONLY_THEORIES = tuple(m.name for m in MODELS if m.normal_only)
 GEOMETRY_KINDS = ("quadratic", "hertz", "table", "wheel_rail")
 #: ``[model] influence``: half-space numbers with the element frames turned by the contact angles (the
 #: default), without that turn ("halfspace_planar": CONTACT's conformal approach, its D = 4 with
-#: C3 = 2; theory conformal only) or the finite-element numbers of the real wheel and rail
-INFLUENCES = ("halfspace", "halfspace_planar", "fe")
+#: C3 = 2; theory conformal only), with Blanco-Lorenzo's angle correction ("halfspace_blanco": CONTACT's
+#: C3 = 4, variant and method in [model] blanco_variant / blanco_method; conformal only) or the
+#: finite-element numbers of the real wheel and rail
+INFLUENCES = ("halfspace", "halfspace_planar", "halfspace_blanco", "fe")
 
 #: model-specific ``[model]`` keys (besides theory, bound, influence, tol, maxit, layer_flexibility),
 #: with the theories that read them, from the registry (conformal.registry).  Any other key is
@@ -118,6 +120,12 @@ class WheelRailGeometry:
     patch_combine: float = 8.0           # mm, overlap regions closer than this form one patch
     wheel_z: str = "down"                # "up": the wheel file gives z positive upwards (negated on reading)
     rail_z: str = "down"                 # "up": the rail file gives z positive upwards (negated on reading)
+    #: "auto" for wheel_z / rail_z: z mirrored where the side faces say so (CONTACT's MIRRORZ = 0)
+    wheel_mirror_y: bool = False         # y negated on reading (CONTACT's MIRRORY = 1)
+    rail_mirror_y: bool = False          # y negated on reading (CONTACT's MIRRORY = 1)
+    wheel_smoothing: float | None = None  # mm, the wheel's own smoothing wavelength (None: smoothing)
+    rail_smoothing: float | None = None   # mm, the rail's own smoothing wavelength (None: smoothing)
+    max_smoothing_error: float = 0.1     # mm, the farthest a profile point may lie from its smoothed curve
 
 
 Geometry = QuadraticGeometry | HertzGeometry | TableGeometry | WheelRailGeometry
@@ -563,9 +571,22 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
         smoothing=sec.number("smoothing", d.smoothing, nonnegative=True),
         element_size=sec.number("element_size", positive=True),
         patch_combine=sec.number("patch_combine", d.patch_combine, nonnegative=True),
-        wheel_z=sec.choice("wheel_z", ("down", "up"), d.wheel_z),
-        rail_z=sec.choice("rail_z", ("down", "up"), d.rail_z),
+        wheel_z=sec.choice("wheel_z", ("down", "up", "auto"), d.wheel_z),
+        rail_z=sec.choice("rail_z", ("down", "up", "auto"), d.rail_z),
+        wheel_mirror_y=_flag(sec, "wheel_mirror_y"),
+        rail_mirror_y=_flag(sec, "rail_mirror_y"),
+        wheel_smoothing=sec.number("wheel_smoothing", nonnegative=True),
+        rail_smoothing=sec.number("rail_smoothing", nonnegative=True),
+        max_smoothing_error=sec.number("max_smoothing_error", d.max_smoothing_error, positive=True),
     )
+
+
+def _flag(sec: "_Section", key: str) -> bool:
+    """A true/false key of a table (default false)."""
+    v = sec.data.get(key, False)
+    if not isinstance(v, bool):
+        raise sec.error(key, f"must be true or false, got {v!r}")
+    return v
 
 
 def _element_size_s(sec: "_Section") -> float | None:
@@ -814,8 +835,8 @@ def validate(scene: "Scene", models: Registry = MODELS) -> "Scene":
         if kin.direction == -1 or kin.rigid_slip is not None or fr.mu_table is not None \
                 or "influence_file" in scene.model.options:
             raise InputError("[[history]]: not combined with direction = -1, rigid_slip, mu_table or influence_file")
-    if scene.model.influence == "halfspace_planar" and not model.accepts(PLANAR_HALFSPACE):
-        raise InputError(f"[model] influence: \"halfspace_planar\" (CONTACT's conformal approach) is for theory "
+    if scene.model.influence in ("halfspace_planar", "halfspace_blanco") and not model.accepts(PLANAR_HALFSPACE):
+        raise InputError(f"[model] influence: \"{scene.model.influence}\" (CONTACT's conformal approach) is for theory "
                          f"{models.quoted(PLANAR_HALFSPACE)}, got theory {theory!r}")
     if scene.load.approach_along is not None and not model.accepts(APPROACH_ALONG):
         raise InputError(f"[load] approach_along: an approach along the load direction needs [model] theory = "

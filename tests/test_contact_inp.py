@@ -41,10 +41,9 @@ SLOW = {"spence35.inp", "catt_to_cart.inp", "tractcurv.inp", "tractcurve_plast.i
 
 #: cases where the project differs from CONTACT: (what differs, the warning the case carries or
 #: None); the test checks that each one still differs (a fix shows up as a failure: remove it)
-KNOWN = {
-    # one transient step of dq = 2 dx from zero tractions (P = 2, T = 2), FX prescribed: xi -0.04434
-    # against -0.04500, adhesion 485 against 466 elements (FN, FX, pmax agree)
-    ("testbank.inp", 17): ("xi", None),
+KNOWN: dict = {
+    # (testbank case 17, one transient step of dq = 2 dx from zero tractions, xi -0.04434 against
+    # -0.04500, agrees since the leading-edge correction of conformal.solvers.history)
 }
 
 
@@ -165,18 +164,25 @@ def test_conformal_deck_against_contact(name, case):
         assert "pitch_creepage" in dev and len(d["patches"]) == 1
     else:
         assert len(d["patches"]) == 2 and abs(dev["patch2.FN"]) < 2.0       # the flange patch (issue 21)
+        # each strip's reference point on the rail (CONTACT's YCP(R)): -35.128 / -42.233 against
+        # -35.163 / -42.229 mm (it was null for conformal strips)
+        ours = sorted((p["FN"], p["y_rail"]) for p in d["patches"])
+        theirs = sorted((float(p["TILDE_FN"]), float(p["YCP(R)"])) for p in ref[case]["patches"])
+        assert [y for _, y in ours] == pytest.approx([y for _, y in theirs], abs=0.05)
 
 
 def test_conformal_decks_map_their_digits():
-    """groove_li: D = 4 with C = 2 (cases 1-4) runs, Blanco's angle correction C = 4 (cases 5-8) is
-    refused by name; F = 1 becomes FX_WS / (mu FZ) with the pitch solved; mbench_conf: N = 0 becomes
-    the approach from the first touch, V = 1 the table of friction over the surface inclination."""
+    """groove_li: D = 4 with C = 2 (cases 1-4) and with Blanco's angle correction C = 4 (cases 5-8:
+    IF_METH = 1, VARIANT = 3, kept by C = 1 in cases 6-8); F = 1 becomes FX_WS / (mu FZ) with the
+    pitch solved; mbench_conf: N = 0 becomes the approach from the first touch, V = 1 the table of
+    friction over the surface inclination."""
     from conformal.contact_inp.solve1 import constant_friction, friction_at
 
     pl = plan(read_deck(DECKS / "groove_li.inp"))
-    assert [c.number for chain in pl.chains for c, _ in chain] == [1, 2, 3, 4]
-    assert {(c.number, r) for c, r in pl.unsupported} == {(n, "module 1, control digit C = 4 (influence coefficients)")
-                                                          for n in (5, 6, 7, 8)}
+    assert [c.number for chain in pl.chains for c, _ in chain] == [1, 2, 3, 4, 5, 6, 7, 8] and not pl.unsupported
+    for chain in pl.chains[4:]:
+        assert chain[0][1]["model"] == {"theory": "conformal", "influence": "halfspace_blanco", "blanco_method": "full",
+                                        "blanco_variant": 3}
     (c1, s1), = pl.chains[0]
     assert s1["model"] == {"theory": "conformal", "influence": "halfspace_planar"}
     assert s1["kinematics"]["fx_rel"] == 0.0 and s1["geometry"]["placement"] == "single"
@@ -345,3 +351,18 @@ def test_cli_out_must_be_a_folder(tmp_path, capsys):
     assert "--out" in capsys.readouterr().err
     assert main(["inp", str(tmp_path / "missing.inp")]) == 2
     assert "no such file" in capsys.readouterr().err
+
+
+def test_leading_edge_factor_of_a_transient_step():
+    """CONTACT's leading-edge correction (T = 2 with dq = 2 dx): the last contact element of a run
+    along x spent half the step inside the contact, the others all of it; dq = dx changes nothing."""
+    from conformal.solvers.history import leading_edge_factor
+
+    c = np.zeros((8, 2), bool)
+    c[2:6, 0] = True
+    c[1:4, 1] = True
+    c[5:7, 1] = True                       # a run reaching the last two columns: the whole step
+    f = leading_edge_factor(c, 2)
+    assert f[:, 0].tolist() == [0, 0, 1, 1, 1, 0.5, 0, 0]
+    assert f[:, 1].tolist() == [0, 1, 1, 0.5, 0, 1, 1, 0]
+    assert np.array_equal(leading_edge_factor(c, 1), c.astype(float))

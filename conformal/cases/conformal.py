@@ -51,7 +51,7 @@ def creepage_option(model) -> str:
     theories' assumption) or "wheel_surface" (CONTACT's conformal rigid slip: the wheel's velocity at
     its own undeformed surface point of every element; the default of influence =
     "halfspace_planar")."""
-    default = "wheel_surface" if model.influence == "halfspace_planar" else "surface"
+    default = "wheel_surface" if model.influence in ("halfspace_planar", "halfspace_blanco") else "surface"
     creep = dict(model.options).get("creepage", default)
     if creep not in CREEPAGES:
         raise InputError(f"[model] creepage: must be one of {', '.join(CREEPAGES)}, got {creep!r}")
@@ -144,7 +144,7 @@ class StripBuilder:
         target = patch or self.patch
         # CONTACT's formulation (its kernel or its rigid slip): its grids put an element centre on the
         # reference point
-        centred = scene.model.influence == "halfspace_planar" or creepage_option(scene.model) == "wheel_surface"
+        centred = scene.model.influence in ("halfspace_planar", "halfspace_blanco") or creepage_option(scene.model) == "wheel_surface"
         if sizes is not None:
             grid, h, approach0 = curved_grid_for_patch(wheel, pl.pair.rail, target, sizes=sizes, scale=scale,
                                                        side=pl.pair.side, centred=centred, theory=scene.model.theory)
@@ -178,6 +178,9 @@ class StripBuilder:
             xi_s, eta_s, phi_s = column_creepages(grid, k.xi, m * k.eta, m * k.phi)
             kin = k
         info = patch_info(pl.pair, st, st.patches[0], 0)
+        if patch is not None:     # a strip of its own: its reference point on the rail (CONTACT's YCP(R), ZCP(R))
+            y_own, z_own = (float(v) for v in pl.pair.rail.curve.point(target.s_ref))
+            info.update(s_rail=float(target.s_ref), y_rail=m * y_own, z_rail=z_own)
         info.update(n_geometric_patches=self.n_patches, z_ws_reference=st.z, z_first_touch=pl.z_first,
                     side=pl.pair.side)
         if st.warnings or size_warnings or st.placement_warnings:

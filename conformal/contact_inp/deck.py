@@ -121,6 +121,8 @@ def plan(parsed: ParsedDeck) -> Plan:
             if reason is None:
                 try:
                     prob = scene_of(c, base) if getattr(c, "module", 3) == 1 else problem_of(c, base)
+                    if getattr(c, "module", 3) == 1:
+                        _check_profiles(prob, base)
                 except Unsupported as exc:
                     reason = str(exc).split("not supported: ", 1)[-1]
                 except InputError as exc:     # e.g. nu = 0.5, which the project's materials refuse
@@ -138,6 +140,15 @@ def plan(parsed: ParsedDeck) -> Plan:
         if items:
             chains.append(tuple(items))
     return Plan(chains=tuple(chains), unsupported=tuple(bad))
+
+
+def _check_profiles(raw: dict, base: Path) -> None:
+    """Read and fit a module-1 case's profiles (smoothing included) so that a profile the project
+    refuses (e.g. smoothing that moves it more than 0.1 mm) refuses the case before any solve."""
+    from conformal.geometry.wheelrail import profile_curves
+    from conformal.scene import scene_from_dict
+
+    profile_curves(scene_from_dict(raw, base_dir=base).geometry, base)
 
 
 def solve_deck(parsed: ParsedDeck, cases=None):

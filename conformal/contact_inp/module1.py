@@ -32,6 +32,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from conformal.contact_inp.blocks import control_words, damping_and_heat, material_parameters, solver_parameters
 from conformal.contact_inp.module3 import _skip_subsurface, unsupported
 from conformal.contact_inp.tokens import Deck
 from conformal.errors import InputError
@@ -53,6 +54,7 @@ class Module1State:
     case_count: int = 0
     conformal: bool = False                # the last discretisation had D = 4 (conformal approach)
     friction_table: tuple = ()             # V = 1: (ALPHA, FSTAT, FKIN) rows
+    blanco: tuple | None = None            # C = 4: (IF_METH, VARIANT) of Blanco's influence correction
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,6 +80,7 @@ class Module1Case:
     module: int = 1
     conformal: bool = False            # D = 4: CONTACT's conformal approach (conformal.contact_inp.solve1)
     friction_table: tuple = ()         # V = 1: (ALPHA, FSTAT, FKIN) per surface inclination (rad)
+    blanco: tuple | None = None        # C = 4: (IF_METH, VARIANT), Blanco's influence correction (D = 4 only)
 
     @property
     def rail_file(self) -> str:
@@ -89,27 +92,27 @@ class Module1Case:
 
 
 def _profile(deck: Deck, what: str) -> tuple:
+    """'FNAME' MIRRORY SCALEYZ SMOOTH {MIRRORZ PRFOPT} and the lines PRFOPT asks for, as the tuple
+    (FNAME, MIRRORY, SCALEYZ, SMOOTH, MIRRORZ, PRFOPT, ISMOOTH, ZIGTHRS) (CONTACT's defaults
+    MIRRORZ = 0, ISMOOTH = 0, ZIGTHRS = 150 degrees where not given)."""
+    from conformal.geometry.miniprof import ZIG_THRESHOLD
+
     v = deck.mixed("sirr", what, optional="ii")
+    mirrorz = v[4] if len(v) > 4 else 0
     prfopt = v[5] if len(v) > 5 else 0
+    ismooth, zig = 0, ZIG_THRESHOLD
     if prfopt >= 1:
-        deck.reals(5, "ISMOOTH ZIGTHRS KINKHIGH KINKLOW KINKWID", angle=True)
+        opts = deck.reals(5, "ISMOOTH ZIGTHRS KINKHIGH KINKLOW KINKWID", angle=True)
+        ismooth, zig = int(round(opts[0])), opts[1]
     if prfopt >= 2:
         deck.reals(2, "ERRHND MAXOMIT", angle=True)
-    return tuple(v)
+    return (v[0], v[1], v[2], v[3], mirrorz, prfopt, ismooth, zig)
 
 
 def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore_subsurface: bool = False,
               ignore_temperature: bool = False) -> Module1Case:
     """Read the case that follows a ``1`` module line (user guide, module-1 input), update ``state``."""
-    d1 = deck.digits("CPBTNFS")
-    d1["C1"] = d1.pop("C")          # CONFIG; "C" is the INFLCF digit of the second word
-    d2 = deck.digits("VLDCMZE")
-    ln2 = deck.lines[deck.pos - 1]
-    if len(ln2.tokens) > 1 and ln2.tokens[1].isdigit() and len(ln2.tokens[1]) == 1:
-        d2["M2"] = int(ln2.tokens[1])
-    d3 = deck.digits("XHGIAOWR")
-    d = {**d1, **d2, **d3}
-    d.setdefault("M2", 0)
+    d = control_words(deck, "CPBTNFS")
     for letter, ok in {"C1": (0, 1, 4, 5), "C": (0, 1, 2, 3, 4, 9), "L": (0, 1, 2, 3, 4, 6), "M": (0, 1, 2, 3, 4, 5), "V": (0, 1, 2),
                        "H": (0, 1, 3), "G": (0, 1, 2, 3, 4, 5), "S": (0, 1, 2, 3), "Z": (0, 1, 2, 3),
                        "E": (0, 1, 2, 3, 4, 5), "M2": (0, 1, 2)}.items():
@@ -131,18 +134,7 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
     if d["S"] and not ignore_subsurface:
         own.append(f"control digit S = {d['S']} (subsurface stresses; --ignore-subsurface skips them)")
     inh = state.reasons
-    if d["X"] == 1:
-        deck.ints(1, "PSFLCIN debug digits", optional=1)
-    eps = None
-    if d["G"] != 1:
-        g = deck.reals(5, "MAXGS MAXIN MAXNR MAXOUT EPS", optional=1, angle=True)
-        eps = g[4]
-    if d["G"] in (2, 3):
-        deck.reals(4, "OMEGAH OMEGAS INISLP OMGSLP", angle=True)
-    elif d["G"] == 4:
-        deck.reals(2, "INISLP OMGSLP", angle=True)
-    elif d["G"] == 5:
-        deck.reals(8, "FDECAY BETATH KDOWFB D_IFC D_LIN D_CNS D_SLP POW_S", angle=True)
+    _, eps = solver_parameters(deck, d["G"], module=1, debug=d["X"] == 1)
     L = d["L"]
     nval = {0: 2, 2: 5, 3: 5, 4: 5, 6: 4}.get(L)
     if L != 1:
@@ -159,7 +151,7 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
             state.friction_table = ()
         reason = None
         if d["V"] == 1 and L == 0 and all(r[1] == r[2] for r in state.friction_table):
-            reason = None            # accepted with D = 4 where constant over each patch (solve1)
+            reason = None            # accepted where constant over each patch (solve1)
         elif d["V"]:
             reason = f"module 1, control digit V = {d['V']} (friction varying over the profile)"
         elif L != 0:
@@ -174,16 +166,15 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
         raise InputError(f"{deck.name}, line {line}: L = 1 keeps the friction of a previous case; there is none")
     C, M = d["C"], d["M"]
     if C >= 2:
+        state.blanco = None
         if C == 4:
-            deck.ints(2, "IF_METH VARIANT")
+            state.blanco = tuple(deck.ints(2, "IF_METH VARIANT"))
         state.material = tuple(deck.reals(4, "POISS 1, 2  GG 1, 2", angle=True))
-        if d["B"] == 1:
-            deck.reals(1, "FLXZ", angle=True)
-        nmat = {1: 4, 2: 4, 3: 3, 4: 4, 5: 3}.get(M, 0)
-        if nmat:
-            deck.reals(nmat, "material model parameters", angle=True)
+        material_parameters(deck, d["B"], M)
         reason = None
-        if C != 2:
+        if C == 4 and (state.blanco[0] not in (0, 1) or state.blanco[1] not in (1, 2, 3, 4)):
+            reason = f"module 1, C = 4 with IF_METH = {state.blanco[0]}, VARIANT = {state.blanco[1]} (0-1, 1-4)"
+        elif C not in (2, 4):
             reason = f"module 1, control digit C = {C} (influence coefficients)"
         elif M != 0:
             reason = f"module 1, control digit M = {M} (material model)"
@@ -193,12 +184,7 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
             inh.pop("material", None)
     elif state.material is None:
         raise InputError(f"{deck.name}, line {line}: C = {C} keeps the material of a previous case; there is none")
-    if d["M2"] == 2:
-        deck.reals(4, "CDAMPN CDAMPT DFNMAX DFTMAX", angle=True)
-    if d["H"] == 3:
-        deck.reals(8, "BKTEMP HEATCP LAMBDA DENS (bodies 1, 2)", angle=True)
-        if M == 4:
-            deck.reals(1, "BETAPL", angle=True)
+    damping_and_heat(deck, d["M2"], d["H"], M)
     if d["D"] >= 2:
         state.discretisation = tuple(deck.reals(6, "DX DS DQREL A_SEP D_SEP D_COMB", optional=2, angle=True))
         state.conformal = d["D"] == 4
@@ -247,17 +233,20 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
     if (gaught <= 0 and not single) or (gaught > 0 and gaugsq != 0) or (len(state.track) > 4 and state.track[4] != 0):
         geo.append("module 1, a track given by rail position (GAUGHT <= 0), GAUGSQ != 0 or a curved track")
     for name, prof in (("rail", state.rail), ("wheel", state.wheel)):
-        mirz = prof[4] if len(prof) > 4 else 0
-        if Path(prof[0]).suffix.lower() in (".slcs", ".slcw"):
+        suffix = Path(prof[0]).suffix.lower()
+        if suffix in (".slcs", ".slcw"):
             geo.append(f"module 1, a variable {name} profile (slices file {Path(prof[0]).name})")
-        elif Path(prof[0]).suffix.lower() not in (".prr", ".prw"):
-            geo.append(f"module 1, {name} profile {Path(prof[0]).name} (Miniprof and other formats not read)")
-        if prof[1] != 0 or prof[2] != 1.0 or prof[3] != 0.0 or mirz != 0:
-            geo.append(f"module 1, {name} profile options MIRRORY = {prof[1]}, SCALEYZ = {prof[2]:g}, "
-                       f"SMOOTH = {prof[3]:g}, MIRRORZ = {mirz} (only 0, 1, 0, 0)")
-    if state.friction_table and not conf:
-        geo.append("module 1, control digit V = 1 (friction varying over the profile; only with the conformal "
-                   "approach D = 4)")
+        elif suffix not in (".prr", ".prw", ".ban", ".whl"):
+            geo.append(f"module 1, {name} profile {Path(prof[0]).name} (a 2-column table: only .prr, .prw, "
+                       ".ban and .whl are read)")
+        if prof[2] != 1.0:
+            geo.append(f"module 1, {name} profile option SCALEYZ = {prof[2]:g} (only 1)")
+        if prof[3] > 0 and prof[6] not in (0, 1):
+            geo.append(f"module 1, {name} profile option ISMOOTH = {prof[6]} (smoothing spline with a third-order "
+                       "penalty)")
+    if state.blanco is not None and not conf:
+        geo.append("module 1, control digit C = 4 (Blanco's influence correction; only with the conformal approach "
+                   "D = 4)")
     if any(v != 0.0 for v in state.rail_dev):
         geo.append("module 1, rail deviations DYRAIL .. VROLLR")
     if len(state.wheelset) > 3 and state.wheelset[3] != 0:
@@ -274,4 +263,4 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
                        track=state.track, rail=state.rail, wheelset=state.wheelset, wheel=state.wheel,
                        position=state.position, velocity=state.velocity, rail_dev=state.rail_dev, eps=eps,
                        unsupported=tuple(own) + tuple(inh.values()) + tuple(geo), skipped=skipped,
-                       conformal=conf, friction_table=state.friction_table)
+                       conformal=conf, friction_table=state.friction_table, blanco=state.blanco)

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from conformal.errors import InputError
+from conformal.contact_inp.blocks import control_words, damping_and_heat, material_parameters, solver_parameters
 from conformal.contact_inp.tokens import Deck
 
 
@@ -136,16 +137,7 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
     input it cannot read raises :class:`Unsupported`.  ``ignore_subsurface``: accept S = 1..3 and
     skip the subsurface stresses; ``ignore_temperature``: accept H = 1, 3 and skip the surface
     temperatures (outputs only; the case's ``skipped`` says so)."""
-    d1 = deck.digits("PBTNFS")
-    w2 = deck.lines[deck.pos].tokens[0] if not deck.at_end else ""
-    d2 = deck.digits("VLDCMZE" if len(w2) == 7 else "LDCMZE")
-    ln2 = deck.lines[deck.pos - 1]
-    if len(ln2.tokens) > 1 and ln2.tokens[1].isdigit() and len(ln2.tokens[1]) == 1:
-        d2["M2"] = int(ln2.tokens[1])       # the optional {M} digit after the word
-    d3 = deck.digits("XHGIAOWR")
-    digits = {**d1, **d2, **d3}
-    digits.setdefault("V", 0)
-    digits.setdefault("M2", 0)
+    digits = control_words(deck, "PBTNFS")
     hard = {"V": (0, 3), "L": (0, 1, 2, 3, 4, 6), "C": (0, 1, 2, 3, 4, 9), "M": (0, 1, 2, 3, 4, 5),
             "H": (0, 1, 3), "M2": (0, 1, 2), "E": (0, 1, 2, 3, 9), "G": (0, 1, 2, 3, 4, 5), "S": (0, 1, 2, 3),
             "T": (0, 1, 2, 3), "N": (0, 1), "F": (0, 1, 2), "D": (0, 1, 2), "Z": (0, 1, 2)}
@@ -157,18 +149,7 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
         own.append(f"control digit S = {digits['S']} (subsurface stresses; --ignore-subsurface skips them)")
     inh = state.reasons
     T, C, M, L = digits["T"], digits["C"], digits["M"], digits["L"]
-    if digits["X"] == 1:
-        deck.ints(1, "PSFLCIN debug digits", optional=1)
-    eps = maxout = None
-    if digits["G"] in (0, 2, 3, 4):
-        g = deck.reals(5, "MAXGS MAXIN MAXNR MAXOUT EPS")
-        maxout, eps = int(g[3]), g[4]
-    if digits["G"] in (2, 3):
-        deck.reals(4, "OMEGAH OMEGAS INISLP OMGSLP")
-    elif digits["G"] == 4:
-        deck.reals(2, "INISLP OMGSLP")
-    elif digits["G"] == 5:
-        deck.reals(8, "FDECAY BETATH KDOWFB D_IFC D_LIN D_CNS D_SLP POW_S")
+    maxout, eps = solver_parameters(deck, digits["G"], module=3, debug=digits["X"] == 1)
     kin = deck.reals(4, "PEN/FN CKSI/FXREL CETA/FYREL CPHI", optional=2)
     spin = (kin[4], kin[5]) if len(kin) >= 6 else (0.0, 0.0)
     if digits["V"] == 3:
@@ -195,10 +176,7 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
         if C == 9:
             state.cfname = deck.string("CFNAME")
         state.material = tuple(deck.reals(4, "POISS 1, 2  GG 1, 2"))
-        if digits["B"] == 1:
-            deck.reals(1, "FLXZ")
-        nmat = {1: 4, 2: 4, 3: 3, 4: 4, 5: 3}.get(M, 0)
-        state.mater_params = tuple(deck.reals(nmat, "material model parameters")) if nmat else ()
+        state.mater_params = material_parameters(deck, digits["B"], M)
         state.inflcf = C
         for key, reason in (("inflcf", f"control digit C = {C} ({_MEANING.get(('C', C), '')})" if C in (3, 4) else None),
                             ("material", f"control digit M = {M} ({_MEANING.get(('M', M), '')})"
@@ -209,12 +187,7 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
                 inh.pop(key, None)
     elif state.material is None:
         raise InputError(f"{deck.name}, line {line}: C = {C} keeps the material of a previous case; there is none")
-    if digits["M2"] == 2:
-        deck.reals(4, "CDAMPN CDAMPT DFNMAX DFTMAX")
-    if digits["H"] == 3:
-        deck.reals(8, "BKTEMP HEATCP LAMBDA DENS (bodies 1, 2)")
-        if M == 4:
-            deck.reals(1, "BETAPL")
+    damping_and_heat(deck, digits["M2"], digits["H"], M)
     if T > 1 and state.rolling is None:
         raise InputError(f"{deck.name}, line {line}: rolling (T = {T}) needs CHI, DQ, VELOC (C >= 2)")
     if digits["D"] == 2:

@@ -1,14 +1,18 @@
 """Module-1 (wheel-rail) cases onto the project's wheel-rail scene and its planar path
 (conformal.cases.wheelrail, theory "exact": one tangent-plane half-space problem per patch).
 
-The deck's inputs map onto scene keys: the profiles (``.prr``/``.prw`` beside the deck, read by
-conformal.geometry.profiles), the track (GAUGHT, GAUGWD, CANT), the wheelset (FBDIST, FBPOS,
-NOMRADW), its position (Y_WS, ROLL, YAW; the vertical force FZ) and velocity (VS_WS, VY_WS, VROLL,
-VYAW, VPITCH), the element size DX (= DS), and the distance D_SEP above which patches are solved
-separately (``patch_combine``).
+The deck's inputs map onto scene keys: the profiles (SIMPACK ``.prr``/``.prw`` or Miniprof
+``.ban``/``.whl`` beside the deck, read by conformal.geometry.profiles, with MIRRORY, MIRRORZ and
+SMOOTH as ``*_mirror_y``, ``*_z``, ``*_smoothing``: :func:`_profile_keys`), the track (GAUGHT,
+GAUGWD, CANT), the wheelset (FBDIST, FBPOS, NOMRADW), its position (Y_WS, ROLL, YAW; the vertical
+force FZ) and velocity (VS_WS, VY_WS, VROLL, VYAW, VPITCH), the element size DX (= DS), and the
+distance D_SEP above which patches are solved separately (``patch_combine``).  Friction varying
+with the surface inclination (V = 1) takes, as CONTACT, one coefficient per patch at its contact
+angle, accepted where every patch gets the same (checked after the solve, :func:`solve_case`).
 
 Cases with CONTACT's conformal approach (D = 4) map onto theory ``conformal`` with influence
-``halfspace_planar`` (CONTACT's conformal half-space numbers, C3 = 2) and its rigid slip (creepage
+``halfspace_planar`` (CONTACT's conformal half-space numbers, C3 = 2; ``halfspace_blanco`` with
+Blanco's angle correction, C3 = 4, conformal.influence.blanco) and its rigid slip (creepage
 ``wheel_surface``), element sizes DX and DS (``element_size``, ``element_size_s``), every patch on
 its own strip (``[grid] strips = "separate"``); there the deck may prescribe the wheelset height
 Z_WS (N = 0: ``[load] approach`` from the first touch), the longitudinal force FX_WS with the pitch
@@ -51,30 +55,64 @@ def constant_friction(table, lo: float, hi: float) -> float | None:
     return values.pop() if len(values) == 1 else None
 
 
-def scene_of(case: Module1Case, base_dir: Path) -> dict:
-    """The scene (as a dict for conformal.scene.scene_from_dict) of one module-1 case."""
+#: mm, how far the smoothing may move a deck's profile points (``[geometry] max_smoothing_error``;
+#: a scene's default is 0.1 mm): CONTACT sets no limit, and its lambda = 10 on the measured profiles
+#: of its testbank moves them up to 1.0 mm at their corners, where CONTACT keeps a kink
+DECK_SMOOTHING_ERROR = 2.0
+
+
+def _profile_keys(case: Module1Case, base_dir: Path) -> dict:
+    """``[geometry]`` keys of both profiles: the files, CONTACT's MIRRORY / MIRRORZ (``*_mirror_y``,
+    ``*_z``; MIRRORZ = 0 detects the orientation of Miniprof files, SIMPACK files are taken as they
+    are, as CONTACT does) and SMOOTH (``*_smoothing``): the wavelength L_filt where ISMOOTH = 1,
+    and where ISMOOTH = 0 (CONTACT's unweighted spline with parameter lambda) the wavelength that
+    gives the project's spline (conformal.geometry.spline.fit_curve) that same lambda, L = 2 pi
+    (lambda / dt)**(1/4) with dt the mean chord between the points."""
+    from conformal.geometry.miniprof import SUFFIXES
+    from conformal.geometry.profiles import check_points, load_profile
+
+    out = {}
+    for kind, prof in (("rail", case.rail), ("wheel", case.wheel)):
+        path = _profile_path(case, prof[0], base_dir)
+        mirror_y, smooth, mirror_z, ismooth = prof[1] >= 1, prof[3], prof[4], prof[6]
+        z = {1: "up", -1: "down"}.get(mirror_z, "auto" if path.suffix.lower() in SUFFIXES else "down")
+        out.update({f"{kind}_profile": str(path), f"{kind}_z": z, f"{kind}_mirror_y": mirror_y})
+        if smooth > 0 and ismooth == 0:
+            p = load_profile(str(path), kind, z_up=None if z == "auto" else z == "up", mirror_y=mirror_y).points
+            dt = float(np.hypot(*np.diff(check_points(p, kind, path.name), axis=0).T).mean())
+            smooth = 2.0 * np.pi * (smooth / dt) ** 0.25
+        out[f"{kind}_smoothing"] = float(max(smooth, 0.0))
+    out["max_smoothing_error"] = DECK_SMOOTHING_ERROR
+    return out
+
+
+def scene_of(case: Module1Case, base_dir: Path, mu: float | None = None) -> dict:
+    """The scene (as a dict for conformal.scene.scene_from_dict) of one module-1 case; ``mu``: the
+    friction coefficient where it varies over the profile (V = 1; default its first row)."""
     if case.conformal:
-        return _conformal_scene(case, base_dir)
+        return _conformal_scene(case, base_dir, mu)
     nu1, nu2, g1, g2 = case.material
     gaught, _, gaugwd, cant = case.track[:4]
     fbdist, fbpos, nomrad = case.wheelset[:3]
     s_ws, y_ws, fz, roll, yaw, _pitch = case.position
     dx = case.discretisation[0]
     d_sep = case.discretisation[4]
-    files = {key: str(_profile_path(case, name, base_dir))
-             for key, name in (("rail_profile", case.rail_file), ("wheel_profile", case.wheel_file))}
+    files = _profile_keys(case, base_dir)
     kin: dict = {}
     if case.digits["T"] == 3:
         vs, vy, vz, vroll, vyaw, vpitch = case.velocity
         kin = {"speed": vs, "pitch_velocity": vpitch, "yaw_rate": vyaw, "roll_rate": vroll, "lateral_velocity": vy}
+    fr = mu if mu is not None else (case.friction_table[0][1] if case.friction_table else None)
+    friction = ({"mu_static": fr, "mu_kinetic": fr} if fr is not None else
+                {"mu_static": case.friction[0], "mu_kinetic": case.friction[1]})
     return {
         "name": f"{case.deck} case {case.number}",
         "material": {"G": g1, "nu": nu1, "body2": {"G": g2, "nu": nu2}},
-        "friction": {"mu_static": case.friction[0], "mu_kinetic": case.friction[1]},
+        "friction": friction,
         "geometry": {"kind": "wheel_rail", **files, "rail_cant": cant, "side": case.side, "placement": "wheelset",
                      "lateral_shift": y_ws, "yaw": yaw, "roll": roll, "gauge": gaugwd, "gauge_height": gaught,
                      "flange_back": fbdist, "flange_back_pos": fbpos, "wheel_radius": nomrad,
-                     "element_size": dx, "patch_combine": d_sep, "smoothing": 0.0},
+                     "element_size": dx, "patch_combine": d_sep},
         "load": {"wheel_load": fz},
         "kinematics": kin,
         "model": {"theory": "exact"},
@@ -91,8 +129,7 @@ def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None)
     fbdist, fbpos, nomrad = case.wheelset[:3]
     s_ws, y_ws, z_inp, roll, yaw, _pitch = case.position
     dx, ds = case.discretisation[:2]
-    files = {key: str(_profile_path(case, name, base_dir))
-             for key, name in (("rail_profile", case.rail_file), ("wheel_profile", case.wheel_file))}
+    files = _profile_keys(case, base_dir)
     if case.friction_table:
         fr = mu if mu is not None else case.friction_table[0][1]
         friction = {"mu_static": fr, "mu_kinetic": fr}
@@ -117,12 +154,15 @@ def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None)
         "friction": friction,
         "geometry": {"kind": "wheel_rail", **files, "rail_cant": cant, "side": case.side, **place,
                      "lateral_shift": y_ws, "yaw": yaw, "roll": roll, "wheel_radius": nomrad,
-                     "element_size": dx, "element_size_s": ds, "smoothing": 0.0},
+                     "element_size": dx, "element_size_s": ds},
         "load": {"wheel_load": z_inp},
         "kinematics": {k: v for k, v in kin.items() if v != 0.0 or k in ("pitch_velocity", "fx_rel")},
         "grid": {"strips": "separate"},
         "model": {"theory": "conformal", "influence": "halfspace_planar"},
     }
+    if case.blanco is not None:            # C = 4: Blanco's angle correction (conformal.influence.blanco)
+        raw["model"] = {"theory": "conformal", "influence": "halfspace_blanco",
+                        "blanco_method": "full" if case.blanco[0] == 1 else "linear", "blanco_variant": case.blanco[1]}
     if case.digits["N"] == 0:              # Z_WS prescribed: the approach from the first touch
         z_first = place_scene(scene_from_dict(raw, base_dir=base_dir)).z_first
         if z_inp - z_first <= 0.0:
@@ -134,30 +174,50 @@ def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None)
 def solve_case(case: Module1Case, raw: dict, base_dir: Path):
     """Solve one case's scene; with friction varying over the profile (V = 1) check that it is
     constant over every patch's band of contact angles (solved once more with that value where the
-    first guess was another), else refuse naming the digit."""
+    first guess was another), else refuse naming the digit.  A case the project's wheel-rail
+    set-up cannot place (no contact point within the profiles, normals that miss a profile, a
+    ``[geometry]`` check) is refused naming that, as an unsupported case (one line, exit 2)."""
     from conformal.contact_inp.module3 import Unsupported
+    from conformal.errors import ConvergenceError, InputError, NoContactError
     from conformal.scene import scene_from_dict
     from conformal.dispatch import solve_scene
 
     def run(d):
-        return solve_scene(scene_from_dict(d, base_dir=base_dir, name=d["name"]))
+        try:
+            return solve_scene(scene_from_dict(d, base_dir=base_dir, name=d["name"]))
+        except (InputError, NoContactError, ConvergenceError) as exc:
+            text = str(exc)
+            if isinstance(exc, InputError) and not text.startswith("[geometry]"):
+                raise
+            if isinstance(exc, ConvergenceError) and not text.startswith(("wheel surface", "rail surface")):
+                raise
+            raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
+                              f"the project's wheel-rail set-up fails here ({text})") from None
 
     r = run(raw)
     if not case.friction_table:
         return r
     for attempt in range(2):
-        mus = [constant_friction(case.friction_table, p.extra["contact_angle_min"], p.extra["contact_angle_max"])
-               for p in (r.patches or (r,))]
+        mus = [constant_friction(case.friction_table, *_angle_band(p)) for p in (r.patches or (r,))]
         if any(m is None for m in mus) or len(set(mus)) > 1:
             raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
                               "control digit V = 1 (friction varying over the profile: not constant over the "
                               "contact patches)")
         if mus[0] == raw["friction"]["mu_static"]:
             return r
-        raw = _conformal_scene(case, base_dir, mu=mus[0])
+        raw = scene_of(case, base_dir, mu=mus[0])
         r = run(raw)
     raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, control digit "
                       "V = 1 (the friction coefficient of the patches does not settle)")
+
+
+def _angle_band(p) -> tuple[float, float]:
+    """The band of contact angles (rad) of a patch: a conformal strip's own band, or on the planar
+    path the patch's contact angle (CONTACT evaluates the friction of V = 1 there, one value per
+    patch)."""
+    if "contact_angle_min" in p.extra:
+        return p.extra["contact_angle_min"], p.extra["contact_angle_max"]
+    return p.extra["contact_angle"], p.extra["contact_angle"]
 
 
 def summary(case: Module1Case, r) -> dict:
@@ -173,7 +233,8 @@ def summary(case: Module1Case, r) -> dict:
             ncon = f.n_contact if f is not None else None
         angle, y_rail = p.extra.get("contact_angle"), p.extra.get("y_rail")
         if "contact_angle_min" in p.extra:     # a conformal strip: the middle of its band of angles
-            angle, y_rail = 0.5 * (p.extra["contact_angle_min"] + p.extra["contact_angle_max"]), None
+            angle = 0.5 * (p.extra["contact_angle_min"] + p.extra["contact_angle_max"])
+            y_rail = p.extra.get("y_rail")     # the strip's reference point on the rail (YCP(R))
         patches.append({"FN": p.FN, "FX": p.FX, "FS": p.FY, "MN": p.MZ, "pmax": p.pmax,
                         "n_contact": ncon,
                         "n_adhesion": f.n_adhesion if f is not None else None,

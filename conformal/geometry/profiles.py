@@ -12,7 +12,9 @@ A profile is a list of points (y, z) in mm in CONTACT's *right-side* form (see
 Points are ordered from the flange/gauge side to the field side (increasing y overall); files in
 the opposite order are reversed.  Files are CSV/text (``y,z`` rows, '#' comments) or CONTACT's
 SIMPACK-like ``.prw``/``.prr`` files (``point.begin ... point.end`` block, '!' comments, header
-keys ``mirror.y``, ``inversion``, ``units.len.f``).
+keys ``mirror.y``, ``inversion``, ``units.len.f``) or Miniprof ``.ban``/``.whl`` files
+(conformal.geometry.miniprof; ``[geometry] rail_mirror_y`` / ``wheel_mirror_y`` and ``rail_z`` /
+``wheel_z = "auto"`` bring them into this form as CONTACT's MIRRORY / MIRRORZ do).
 
 Every defect raises :class:`~conformal.errors.InputError` naming the file: NaN or infinite values,
 too few points, points out of order (the curve turns back), self-intersection, and a flanged wheel
@@ -176,12 +178,17 @@ def _read_simpack(path: Path) -> np.ndarray:
 
 
 def read_points(path: str | Path) -> np.ndarray:
-    """Raw (y, z) points of a profile file (CSV/text or .prw/.prr), no checks beyond parsing."""
+    """Raw (y, z) points of a profile file (CSV/text, .prw/.prr, or Miniprof .ban/.whl read by
+    conformal.geometry.miniprof), no checks beyond parsing."""
+    from conformal.geometry.miniprof import SUFFIXES, read_miniprof
+
     path = Path(path)
     if not path.is_file():
         raise InputError(f"profile file not found: {path}")
     if path.suffix.lower() in (".prw", ".prr", ".prf"):
         return _read_simpack(path)
+    if path.suffix.lower() in SUFFIXES:
+        return read_miniprof(path)
     return _read_csv(path)
 
 
@@ -322,16 +329,20 @@ def rail_orientation_warning(points: np.ndarray, name: str) -> str | None:
     return None
 
 
-def load_profile(spec: str, kind: str, base_dir: str | Path = ".", *, z_up: bool = False) -> Profile:
+def load_profile(spec: str, kind: str, base_dir: str | Path = ".", *, z_up: bool | None = False,
+                 mirror_y: bool = False) -> Profile:
     """Read and check a profile given by built-in name or file path.  ``z_up``: the file gives z
     positive upwards (the opposite of this package's convention, module docstring); z is negated
-    on reading."""
+    on reading; None: found from the side faces as CONTACT does (MIRRORZ = 0,
+    :func:`conformal.geometry.miniprof.z_needs_mirror`).  ``mirror_y``: y is negated on reading
+    (CONTACT's MIRRORY = 1, e.g. a Miniprof rail measured with the field side at negative y)."""
+    from conformal.geometry.miniprof import contact_canonical
+
     path, entry = resolve_profile(spec, base_dir)
     if entry is not None and entry.kind != kind:
         raise InputError(f"profile {spec!r} is a {entry.kind} profile, used as a {kind} profile")
-    points = read_points(path)
-    if z_up:
-        points = points * np.array([1.0, -1.0])
+    points = contact_canonical(read_points(path), kind, mirror_y=int(mirror_y),
+                               mirror_z=0 if z_up is None else (1 if z_up else -1))
     if entry is not None:
         if entry.mirror_y:
             points = points * np.array([-1.0, 1.0])

@@ -31,28 +31,42 @@ MAX_SMOOTHING_ERROR = 0.1
 
 # ----------------------------------------------------------------------------- set-up
 @lru_cache(maxsize=32)
-def _curve(spec: str, kind: str, base_dir: str, smoothing: float, z_up: bool = False) -> ProfileCurve:
-    prof = load_profile(spec, kind, base_dir, z_up=z_up)
+def _curve(spec: str, kind: str, base_dir: str, smoothing: float, z_up: bool | None = False,
+           mirror_y: bool = False) -> ProfileCurve:
+    prof = load_profile(spec, kind, base_dir, z_up=z_up, mirror_y=mirror_y)
     return fit_curve(prof.points, smoothing, prof.name)
+
+
+def _z_up(value: str) -> bool | None:
+    """``[geometry] wheel_z`` / ``rail_z``: "up" True, "down" False, "auto" None (CONTACT's MIRRORZ = 0)."""
+    return None if value == "auto" else value == "up"
+
+
+def _smoothing(geo, kind: str) -> float:
+    own = getattr(geo, f"{kind}_smoothing", None)
+    return float(geo.smoothing if own is None else own)
 
 
 def profile_curves(geo: WheelRailGeometry, base_dir: str | Path = ".") -> tuple[ProfileCurve, ProfileCurve]:
     """(wheel, rail) smoothing-spline curves of a scene's profiles (cached)."""
     try:
-        w = _curve(geo.wheel_profile, "wheel", str(base_dir), float(geo.smoothing),
-                   getattr(geo, "wheel_z", "down") == "up")
+        w = _curve(geo.wheel_profile, "wheel", str(base_dir), _smoothing(geo, "wheel"),
+                   _z_up(getattr(geo, "wheel_z", "down")), bool(getattr(geo, "wheel_mirror_y", False)))
     except InputError as exc:
         raise InputError(f"[geometry] wheel_profile: {exc}") from None
     try:
-        r = _curve(geo.rail_profile, "rail", str(base_dir), float(geo.smoothing),
-                   getattr(geo, "rail_z", "down") == "up")
+        r = _curve(geo.rail_profile, "rail", str(base_dir), _smoothing(geo, "rail"),
+                   _z_up(getattr(geo, "rail_z", "down")), bool(getattr(geo, "rail_mirror_y", False)))
     except InputError as exc:
         raise InputError(f"[geometry] rail_profile: {exc}") from None
+    limit = float(getattr(geo, "max_smoothing_error", MAX_SMOOTHING_ERROR))
     for c, what in ((w, "wheel"), (r, "rail")):
-        if c.smoothing_error > MAX_SMOOTHING_ERROR:
-            raise InputError(f"[geometry] smoothing: a wavelength of {geo.smoothing:g} mm moves the {what} profile "
+        if c.smoothing_error > limit:
+            key = f"{what}_smoothing" if getattr(geo, f"{what}_smoothing", None) is not None else "smoothing"
+            raise InputError(f"[geometry] {key}: a wavelength of {_smoothing(geo, what):g} mm moves the {what} profile "
                              f"{c.name} up to {c.smoothing_error:.3g} mm from its points (at most "
-                             f"{MAX_SMOOTHING_ERROR:g} mm): it is no longer that profile; the default is 1 mm")
+                             f"{limit:g} mm, [geometry] max_smoothing_error): it is no longer that profile; the "
+                             "default is 1 mm")
     # the radius at each wheel-profile point, wheel_radius + z (z down), must be positive
     rho_min = float(geo.wheel_radius) + float(w.points[:, 1].min())
     if rho_min <= 0.0:

@@ -293,19 +293,21 @@ def _numbers(line: str, name: str, lineno: int) -> list[float]:
         raise InputError(f"{name}, line {lineno}: expected numbers, got {line.strip()[:60]!r}") from None
 
 
+def _source_text(source) -> tuple[str, str]:
+    """(text, name) of an influence file given as a path or a text stream (both readers)."""
+    if hasattr(source, "read"):
+        return source.read(), getattr(source, "name", None) or "influence file"
+    path = Path(source)
+    if not path.is_file():
+        raise InputError(f"influence file not found: {path}")
+    return path.read_text(encoding="ascii", errors="replace"), path.name
+
+
 def read_contact_file(source) -> ContactInfluenceFile:
     """Read CONTACT's file of numerical influence coefficients (path or text stream); the layout of
     the module docstring, checked as CONTACT checks it (lquasid = 0, xyzorder = 312, lsymmx = 1,
     lsymmy = 0, nmatrix 1 or my)."""
-    name = getattr(source, "name", None) or "influence file"
-    if hasattr(source, "read"):
-        text = source.read()
-    else:
-        path = Path(source)
-        if not path.is_file():
-            raise InputError(f"influence file not found: {path}")
-        text = path.read_text(encoding="ascii", errors="replace")
-        name = path.name
+    text, name = _source_text(source)
     rows = []
     for k, raw in enumerate(text.splitlines(), start=1):
         line = raw.split("%")[0].strip()
@@ -401,15 +403,7 @@ def write_influence_file(target, kernel: np.ndarray, *, dx: float, s_edges, comm
 
 def read_influence_file(source) -> InfluenceFile:
     """Read a file written by :func:`write_influence_file` (path or text stream)."""
-    name = getattr(source, "name", None) or "influence file"
-    if hasattr(source, "read"):
-        text = source.read()
-    else:
-        path = Path(source)
-        if not path.is_file():
-            raise InputError(f"influence file not found: {path}")
-        text = path.read_text(encoding="ascii", errors="replace")
-        name = path.name
+    text, name = _source_text(source)
     comments, header, data_start = [], {}, None
     lines = text.splitlines()
     for k, raw in enumerate(lines):

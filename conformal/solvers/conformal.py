@@ -238,10 +238,17 @@ def influence_operator(grid: CurvedGrid, material: Material, model: ModelSpec, *
         # "halfspace_planar": CONTACT's conformal approach (its D = 4 with C3 = 2): the planar half-space
         # numbers on the developed (x, s) grid, every element in its own local frame but no turn between
         # the frames of two elements (Vollebregt 2014; CONTACT user guide, digit C3)
-        turned = model.influence != "halfspace_planar"
+        turned = model.influence == "halfspace"
         kernel = curved_halfspace_kernel(grid.mx, grid.dx, grid.s - grid.s_ref, grid.ds, grid.delta, material,
                                          angle_correction=turned)
         info = {"influence": model.influence}
+        if model.influence == "halfspace_blanco":     # CONTACT's C3 = 4 (conformal.influence.blanco)
+            from conformal.influence.blanco import blanco_kernel, linear_fit
+
+            alpha = np.asarray(grid.delta, float)      # CONTACT's inclination per row (its curv_incln)
+            if model.options.get("blanco_method", "full") == "linear":
+                alpha = linear_fit(grid.s, alpha)
+            kernel = blanco_kernel(kernel, alpha, int(model.options.get("blanco_variant", 3)))
     op = CurvedInfluence.from_kernel(kernel)
     info["influence_s"] = time.perf_counter() - t0
     return op, info

@@ -87,6 +87,24 @@ def _shifted(u: np.ndarray, ncol: int) -> np.ndarray:
     return u[:, ncol:]
 
 
+def leading_edge_factor(contact: np.ndarray, ncol: int) -> np.ndarray:
+    """The fraction of a transient step of ``ncol`` elements (dq = ncol dx, rolling in +x) that each
+    element of ``contact`` (mx, my) spent inside the contact area: the leading edge of a run of
+    contact elements along x lies one element beyond its last element, and an element at distance
+    d from it entered the contact d / dq of the step ago, f = min(1, d / dq) (CONTACT's
+    leading-edge correction of the rigid slip, its ``sxbnd`` with a fixed edge position; 1 for
+    dq = dx).  Exterior elements get 0."""
+    c = np.asarray(contact, bool)
+    mx = c.shape[0]
+    f = np.zeros(c.shape)
+    d = np.zeros(c.shape[1])                  # elements from the next leading edge, scanning from +x
+    for ix in range(mx - 1, -1, -1):
+        d = np.where(c[ix], d + 1.0, 0.0)
+        # the last two columns of the grid: no room to place an edge, the whole step (as CONTACT)
+        f[ix] = 1.0 if ix >= mx - 2 else np.minimum(1.0, d / ncol)
+    return np.where(c, f, 0.0)
+
+
 def solve_history(problem: ContactProblem, steps, *, maxout: int | None = None,
                   undeformed=None) -> HistoryResult:
     """Solve the steps one after the other, each with the memory of the previous tractions.
@@ -193,15 +211,16 @@ def solve_history(problem: ContactProblem, steps, *, maxout: int | None = None,
                                 **_load)
 
         def tangential_stage(pn, extra_u, p_start, _mem=memory, _rigid=rigid, _xi=xi, _eta=eta, _phi=phi,
-                             _kind=kind, _step=step):
+                             _kind=kind, _step=step, _ncol=ncol if step.rolling == "transient" else 0):
             eu = extra_u
             if _mem is not None:
                 eu = -_mem if eu is None else eu - _mem
             start = p_start if p_start is not None else p_prev
+            weight = leading_edge_factor(pn > 0, _ncol) if _ncol > 1 else None
             return solve_tangential(op, grid, pn, xi=_xi, eta=_eta, phi=_phi, mu_static=fr.mu_static,
                                     mu_kinetic=fr.mu_kinetic, rolling=_kind, fx_rel=_step.fx_rel,
                                     fy_rel=_step.fy_rel, extra_u=eu, tol=tol, maxit=maxit, p_start=start,
-                                    rigid_slip=_rigid)
+                                    rigid_slip=_rigid, creep_weight=weight)
 
         stages = exact.alternate(op, normal_stage, tangential_stage, tangential=True, tol=tol, maxout=maxout)
         tang = stages.tang

@@ -530,7 +530,8 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
                      fx_rel: float | None = None, fy_rel: float | None = None,
                      extra_u: np.ndarray | None = None, tol: float = 1e-6, maxit: int = 100,
                      p_start: np.ndarray | None = None,
-                     rigid_slip: np.ndarray | None = None) -> TangentialSolution:
+                     rigid_slip: np.ndarray | None = None,
+                     creep_weight: np.ndarray | None = None) -> TangentialSolution:
     """Solve the tangential problem (module docstring) for the pressure ``pn`` on ``grid``.
 
     Parameters
@@ -551,6 +552,10 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
     p_start : (2, mx, my) starting tractions (e.g. the previous solution), or None (zero).
     rigid_slip : (2, mx, my) rigid slip per element added to the creepage part (curved grids with
         creepages varying over the patch), or None.
+    creep_weight : (mx, my) factor on each element's rigid slip, the unknown creepages' part
+        included (the fraction of a transient step an element spent in contact, CONTACT's
+        leading-edge correction: conformal.solvers.history.leading_edge_factor), or None (1).  A
+        prescribed force is then found by the root search on the creepage (one force at a time).
 
     Returns
     -------
@@ -597,6 +602,13 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
     w = column_rigid_slip(grid, xi - phi * Y, eta, phi, steady)
     if rigid_slip is not None:
         w = w + checks.field("rigid_slip", np.asarray(rigid_slip, dtype=float), (2,) + shape)
+    weight = None
+    if creep_weight is not None:
+        weight = checks.field("creep_weight", np.asarray(creep_weight, dtype=float), shape)
+        w = w * weight
+        if len(targets) > 1:
+            raise InputError("[kinematics] fx_rel, fy_rel: both forces prescribed with a weighted rigid slip "
+                             "(a transient step over more than one element) are not supported")
     if extra_u is not None:
         eu = checks.field("extra_u", extra_u, (2,) + shape)
         if steady:  # (u - u')/dx of the extra displacement; u' of the leading column: u there
@@ -625,19 +637,24 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
     force_rows = [(k, targets[k] * mu_s * FN) for k in sorted(targets)]
     if p_start is not None:
         p_start = checks.field("p_start", p_start, (2,) + shape)
-    st, slip, its, res, msg, L = _solve_grid(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows,
-                                             np.array([xi, eta]), tol, int(maxit), p_start)
-    nprod = L.products
+    if weight is not None and force_rows:    # the creepage acts with a weight: fixed-creepage solves
+        st = slip = its = L = msg = None
+        res, nprod = np.inf, 0
+    else:
+        st, slip, its, res, msg, L = _solve_grid(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows,
+                                                 np.array([xi, eta]), tol, int(maxit), p_start)
+        nprod = L.products
     if res > tol and len(force_rows) == 1:
         # the bordered Newton system failed (e.g. near saturation with a strong normal-tangential
         # coupling): a bracketing root search on the creepage, each step a fixed-creepage solve
         k, target = force_rows[0]
         found = _bracketed_force(op, grid, pn, w, area, steady, mu_s, mu_k, k, target,
-                                 np.array([xi, eta]), float(st.creep[k]), tol, int(maxit))
+                                 np.array([xi, eta]), float(st.creep[k]) if st is not None else (xi, eta)[k], tol,
+                                 int(maxit), weight)
         nprod += found[-1]
-        if found[3] <= tol:
+        if found[3] <= tol or st is None:
             st, slip, its, res, msg, L = found[:-1]
-            msg = ""
+            msg = "" if res <= tol else msg
         else:
             msg = f"{msg}; the bracketing search on the creepage failed too: {found[4]}"
     idx = L.idx
@@ -656,11 +673,12 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
                   nprod, L)
 
 
-def _bracketed_force(op, grid, pn, w, area, steady, mu_s, mu_k, k, target, creep0, guess, tol, maxit):
+def _bracketed_force(op, grid, pn, w, area, steady, mu_s, mu_k, k, target, creep0, guess, tol, maxit, weight=None):
     """Prescribed force component k (N) by a root search on creepage k: expand a bracket from
     ``guess`` (factor 4 steps), then Illinois regula falsi.  Each evaluation solves the problem at
     a fixed creepage (no bordered system), warm started from the nearest solution.  The force is a
     continuous, monotone function of the creepage, so the bracket always exists for |F| < mu_k FN.
+    ``weight``: the creepage's rigid slip per element is weighted by it (``creep_weight``).
 
     Returns (state, slip, iterations, residual, message, L, products); residual combines the
     friction-law residual and the relative force error, as the Newton measure does."""
@@ -673,7 +691,7 @@ def _bracketed_force(op, grid, pn, w, area, steady, mu_s, mu_k, k, target, creep
     def evaluate(c: float):
         nonlocal products, its_total
         wc = w.copy()
-        wc[k] += c - creep0[k]
+        wc[k] += (c - creep0[k]) * (1.0 if weight is None else weight)
         creep = creep0.copy()
         creep[k] = c
         p0 = None
