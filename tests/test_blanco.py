@@ -64,7 +64,7 @@ def test_scene_keys():
     # the documented creepage "wheel_surface" (CONTACT's rigid slip) is read with any influence numbers
     assert scene_from_dict({**base, "model": {"theory": "exact", "creepage": "wheel_surface"}}).model.options[
         "creepage"] == "wheel_surface"
-    with pytest.raises(InputError, match=r"\[model\] blanco_variant: must be 1, 2, 3 or 4"):
+    with pytest.raises(InputError, match=r"\[model\] blanco_variant: must be one of 1, 2, 3, 4"):
         scene_from_dict({**base, "model": {"theory": "conformal", "influence": "halfspace_blanco", "blanco_variant": 5}})
 
 
