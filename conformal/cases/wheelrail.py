@@ -37,7 +37,7 @@ from conformal.geometry.kinematics import Creepages, WheelsetMotion, creepages
 from conformal.geometry.patches import Patch, curved_grid_for_patch, find_patches, planar_grid_for_patch
 from conformal.geometry.placement import WheelRailPair
 from conformal.geometry.profiles import rail_orientation_warning
-from conformal.geometry.search import RailTop
+from conformal.geometry.search import RailTop, pair_locus
 from conformal.geometry.wheelrail import build_pair, first_touch, profile_curves, wheelset_roll
 from conformal.grid import PlanarGrid
 from conformal.models import solve_problem
@@ -186,7 +186,8 @@ def state_at(pair: WheelRailPair, top: RailTop, z: float, roll: float, scene: Sc
     wheel = pair.wheel(z)
     out = []
     try:
-        patches = find_patches(wheel, pair.rail, top, d_comb=scene.geometry.patch_combine)
+        patches = find_patches(wheel, pair.rail, top, d_comb=scene.geometry.patch_combine,
+                               locus=pair_locus(pair, top, z))
     except InputError as exc:
         raise InputError(f"[geometry] lateral_shift: {exc}") from None
     for p in patches:
