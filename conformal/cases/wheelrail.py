@@ -204,21 +204,23 @@ def state_at(pair: WheelRailPair, top: RailTop, z: float, roll: float, scene: Sc
     return PairState(pair, z, roll, out)
 
 
-def _normal_force(pg: PatchGeometry, scene: Scene, warnings: list | None = None) -> float:
-    """Normal force of a patch at its approach: the grid's half-space normal problem for grid
-    theories, Hertz otherwise (the normal problem does not depend on friction for K = 0)."""
-    if scene.model.theory in GRID_THEORIES:
-        sol = solve_normal(None, pg.grid, pg.h, approach=pg.approach, material=scene.material,
-                           tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit)
-        if not sol.converged and warnings is not None:
-            warnings.append(f"vertical balance: the normal problem of the patch at contact angle "
-                            f"{pg.patch.delta:.3f} rad did not converge ({sol.iterations} iterations, "
-                            f"residual {sol.residual:.2g})")
-        return float(sol.FN)
-    if not pg.hertzian:
-        raise InputError(f"[model] theory: patch at contact angle {pg.patch.delta:.3f} rad is not Hertzian "
-                         f"(relative curvatures A = {pg.A:.3g}, B = {pg.B:.3g} 1/mm); use theory = \"exact\"")
-    return hertz_from_curvatures(pg.A, pg.B, scene.material, approach=pg.approach).FN
+def _check_normal(sol, pg: PatchGeometry, warnings: list | None) -> None:
+    """A warning when a normal solve of the balance did not converge."""
+    if not sol.converged and warnings is not None:
+        warnings.append(f"vertical balance: the normal problem of the patch at contact angle "
+                        f"{pg.patch.delta:.3f} rad did not converge ({sol.iterations} iterations, "
+                        f"residual {sol.residual:.2g})")
+
+
+def _normal_field(fields, pg: PatchGeometry, side: str, pn: np.ndarray) -> PatchField:
+    """The field of a balance's normal solution on patch ``pg`` (side frame) in the problem frame,
+    with the tangential tractions of the field it started from (resampled), if any."""
+    grid = _mirror_grid(pg.grid, None, side)[0]
+    pn = pn if side == "right" else pn[:, ::-1]
+    old = _nearest_field(fields, pg.patch.s_ref)
+    if old is None or old.px is None:
+        return PatchField(pg.patch.s_ref, grid, pn)
+    return PatchField(pg.patch.s_ref, grid, pn, resample(old.grid, old.px, grid), resample(old.grid, old.py, grid))
 
 
 # ----------------------------------------------------------------------------- placement of a scene
@@ -299,19 +301,15 @@ def _fn_at(pg: PatchGeometry, scene: Scene, approach: float, warnings: list, cou
             return 0.0
         if p_start is not None:
             p_start[key] = sol.pn
-        if not sol.converged:
-            warnings.append(f"vertical balance: the normal problem of the patch at contact angle "
-                            f"{pg.patch.delta:.3f} rad did not converge ({sol.iterations} iterations, "
-                            f"residual {sol.residual:.2g})")
+        _check_normal(sol, pg, warnings)
         return float(sol.FN)
     if not pg.hertzian:
-        raise InputError(f"[model] theory: patch at contact angle {pg.patch.delta:.3f} rad is not Hertzian "
-                         f"(relative curvatures A = {pg.A:.3g}, B = {pg.B:.3g} 1/mm); use theory = \"exact\"")
+        _raise_not_hertzian(pg)
     return hertz_from_curvatures(pg.A, pg.B, scene.material, approach=approach).FN
 
 
 def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | None = None,
-                   warnings: list | None = None, pressures: dict | None = None,
+                   warnings: list | None = None, fields: list | None = None,
                    normal_force: float | None = None) -> tuple[float, list[float]]:
     """The lowering dz (mm, vertical) from the height of ``st`` at which the patches carry the wheel
     load, and their normal forces there (seed Eq. 46 with the height as the unknown):
@@ -324,9 +322,10 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
     patch: FN = W / (cos d + r sin d) directly, one force-prescribed normal problem for its
     approach.  Several: secant steps on (F/W)^(2/3), nearly linear in dz for Hertz-like growth.
     Grid theories solve the half-space normal problem on the patch grids, the others use Hertz
-    from the patch curvatures.  ``counts`` = [normal solves] is incremented; ``pressures``
-    receives {id(grid): (grid, pn)} of the one-patch normal solution (a start for the contact solve
-    on the same grid).  ``normal_force``: one patch carries this (N) instead of W / (cos d + r sin d)
+    from the patch curvatures.  ``counts`` = [normal solves] is incremented; ``fields`` (a list of
+    :class:`PatchField`, changed in place) starts the normal solves (resampled onto the patch
+    grids) and receives the one-patch normal solution (with the tangential tractions of the field
+    it started from: the start of the next contact solve).  ``normal_force``: one patch carries this (N) instead of W / (cos d + r sin d)
     (a secant step of the caller on the vertical force of the contact solves)."""
     W = scene.load.wheel_load
     counts = counts if counts is not None else [0]
@@ -339,21 +338,20 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
         pg, fn = pgs[0], (normal_force if normal_force is not None and normal_force > 0 else W / w[0])
         if on_grid:
             counts[0] += 1
+            side = st.pair.side
             sol = solve_normal(None, pg.grid, pg.h, normal_force=fn, material=scene.material,
-                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit)
-            if not sol.converged:
-                warnings.append(f"vertical balance: the normal problem of the patch at contact angle "
-                                f"{pg.patch.delta:.3f} rad did not converge ({sol.iterations} iterations, "
-                                f"residual {sol.residual:.2g})")
+                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit,
+                               p_start=_normal_start(fields, pg, side))
+            _check_normal(sol, pg, warnings)
             a = float(sol.approach)
-            if pressures is not None:
-                pressures[id(pg.grid)] = (pg.grid, sol.pn)
+            if fields is not None:
+                fields[:] = [_normal_field(fields, pg, side, sol.pn)]
         else:
             a = hertz_from_curvatures(pg.A, pg.B, scene.material, normal_force=fn).approach if pg.hertzian \
                 else _raise_not_hertzian(pg)
             return (a - pg.hertz_approach) / c[0], [fn]
         return (a - pg.approach) / c[0], [fn]
-    p_start: dict = {}
+    p_start: dict = {k: _normal_start(fields, pg, st.pair.side) for k, pg in enumerate(pgs)} if on_grid else {}
     cache: dict[float, list[float]] = {}
 
     def fns_at(dz: float) -> list[float]:
@@ -361,13 +359,7 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
             out = []
             for k, pg in enumerate(pgs):
                 a = (pg.approach if on_grid else pg.hertz_approach) + dz * c[k]
-                if on_grid:
-                    out.append(_fn_at(pg, scene, a, warnings, counts, p_start, k))
-                elif a > 0:
-                    out.append(hertz_from_curvatures(pg.A, pg.B, scene.material, approach=a).FN
-                               if pg.hertzian else _raise_not_hertzian(pg))
-                else:
-                    out.append(0.0)
+                out.append(_fn_at(pg, scene, a, warnings, counts, p_start, k))
             cache[dz] = out
         return cache[dz]
 
@@ -390,7 +382,7 @@ def _raise_not_hertzian(pg: PatchGeometry):
 
 
 def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float | None = None,
-                   start: PairState | None = None, counts_out: list | None = None, pressures: dict | None = None,
+                   start: PairState | None = None, counts_out: list | None = None, fields: list | None = None,
                    normal_force: float | None = None) -> tuple[float, PairState, list[float]]:
     """Height z at which sum_i FN_i (cos d_i + r_i sin d_i) = wheel_load, with r_i = FS_i/FN_i
     (side frame) the tangential-to-normal ratios of the patches (0: normal forces only).
@@ -439,7 +431,7 @@ def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float 
         st = search(pl.z_touch + trial * (W / F1) ** (2.0 / 3.0))
     for _ in range(MAX_SEARCHES):
         del warnings[:]
-        dz, fns = linear_balance(st, scene, ratios, counts=counts, warnings=warnings, pressures=pressures,
+        dz, fns = linear_balance(st, scene, ratios, counts=counts, warnings=warnings, fields=fields,
                                  normal_force=normal_force if len(st.patches) == 1 else None)
         z = st.z + dz
         if abs(dz) <= BALANCE_ZTOL and all(fn > 0 for fn in fns):
@@ -491,7 +483,7 @@ def balance_height_bracketing(pl: Placement, scene: Scene, ratios=None) -> tuple
                 st = state_at(pl.pair, pl.top, z, pl.roll, scene, grids=on_grid) if z > pl.z_touch else None
             except NoContactError:      # just above the touching height no element overlaps yet
                 st = None
-            fns = [_normal_force(pg, scene, warnings) for pg in st.patches] if st else []
+            fns = [_fn_at(pg, scene, pg.approach, warnings, [0]) for pg in st.patches] if st else []
             cache[z] = (st, fns)
         st, fns = cache[z]
         if st is None:
@@ -543,12 +535,75 @@ def _ratio(ratios, pg: PatchGeometry) -> float:
     return best[1] if abs(best[0] - s) < 5.0 else 0.0
 
 
+# ----------------------------------------------------------------------------- starting fields
+@dataclass(frozen=True, eq=False)
+class PatchField:
+    """A solved patch's tractions as the start of a later solve of the same contact on another
+    grid (a later height of the balance, the next position of a sweep): the rail arc length of its
+    reference point and the tractions on its grid, in the problem frame (mirrored for a left
+    wheel, as the contact problems); px, py None for a normal solve."""
+
+    s_ref: float
+    grid: PlanarGrid
+    pn: np.ndarray
+    px: np.ndarray | None = None
+    py: np.ndarray | None = None
+
+
+def resample(src: PlanarGrid, values: np.ndarray, dst: PlanarGrid) -> np.ndarray:
+    """``values`` (src's shape, per element) bilinearly interpolated at the element centres of
+    ``dst`` (both grids in their patch's tangent-plane coordinates about the reference point), 0
+    beyond src; equal to ``values`` where dst is src."""
+    def axis(n_src, lo_src, d_src, n_dst, lo_dst, d_dst):
+        f = (lo_dst + (np.arange(n_dst) + 0.5) * d_dst - lo_src) / d_src - 0.5   # src index coordinate
+        i0 = np.floor(f).astype(int)
+        w = f - i0
+        return np.clip(i0, -1, n_src) + 1, np.clip(i0 + 1, -1, n_src) + 1, w   # indices into the padded array
+
+    v = np.pad(np.asarray(values, float), 1)
+    ia, ib, wi = axis(src.mx, src.xl, src.dx, dst.mx, dst.xl, dst.dx)
+    ja, jb, wj = axis(src.my, src.yl, src.dy, dst.my, dst.yl, dst.dy)
+    rows = (1.0 - wi)[:, None] * v[ia] + wi[:, None] * v[ib]
+    return (1.0 - wj)[None, :] * rows[:, ja] + wj[None, :] * rows[:, jb]
+
+
+def _nearest_field(fields, s_ref: float) -> PatchField | None:
+    """The field of the patch nearest to rail arc length ``s_ref`` (within 5 mm), or None."""
+    best = min(fields or (), key=lambda f: abs(f.s_ref - s_ref), default=None)
+    return best if best is not None and abs(best.s_ref - s_ref) < 5.0 else None
+
+
+def _normal_start(fields, pg: PatchGeometry, side: str) -> np.ndarray | None:
+    """A starting pressure for the normal problem of patch ``pg`` (side frame) from the nearest
+    known field, or None."""
+    f = _nearest_field(fields, pg.patch.s_ref)
+    if f is None:
+        return None
+    pn = resample(f.grid, f.pn, _mirror_grid(pg.grid, None, side)[0])
+    pn = pn if side == "right" else pn[:, ::-1]
+    return pn if np.any(pn > 0) else None
+
+
+def _contact_start(fields, pg: PatchGeometry, problem: ContactProblem):
+    """(pn, px, py) on the problem's grid from the nearest known field (px, py None from a normal
+    solve), or None."""
+    f = _nearest_field(fields, pg.patch.s_ref)
+    if f is None:
+        return None
+    pn = resample(f.grid, f.pn, problem.grid)
+    if not np.any(pn > 0):
+        return None
+    if f.px is None:
+        return (pn, None, None)
+    return (pn, resample(f.grid, f.px, problem.grid), resample(f.grid, f.py, problem.grid))
+
+
 # ----------------------------------------------------------------------------- problems
-def _mirror_grid(grid: PlanarGrid, h: np.ndarray, side: str) -> tuple[PlanarGrid, np.ndarray]:
+def _mirror_grid(grid: PlanarGrid, h: np.ndarray | None, side: str) -> tuple[PlanarGrid, np.ndarray | None]:
     if side == "right":
         return grid, h
     g = PlanarGrid(grid.mx, grid.my, grid.dx, grid.dy, grid.xl, -(grid.yl + grid.my * grid.dy))
-    return g, h[:, ::-1].copy()
+    return g, None if h is None else h[:, ::-1].copy()
 
 
 def _kinematics_for(scene: Scene, pair: WheelRailPair, z: float, patch: Patch):
@@ -649,22 +704,26 @@ def problems_at(scene: Scene, pl: Placement, st: PairState, fns: list[float] | N
 @dataclass(frozen=True)
 class WarmStart:
     """What a neighbouring solve (the previous position of a sweep) knows: its wheelset lowering
-    below the height where the wheel touches (mm) and the tangential-to-normal ratios of its
-    patches ((rail arc length s_ref, FS/FN) pairs, side frame), the starting point of the next
-    vertical balance."""
+    below the height where the wheel touches (mm), the tangential-to-normal ratios of its
+    patches ((rail arc length s_ref, FS/FN) pairs, side frame) and their traction fields
+    (:class:`PatchField`), the starting point of the next vertical balance and of its normal and
+    contact solves."""
 
     lowering: float | None = None
     ratios: tuple[tuple[float, float], ...] = ()
+    fields: tuple[PatchField, ...] = ()
 
     @classmethod
     def from_result(cls, result: Result) -> "WarmStart":
         b = result.extra.get("balance") or {}
-        return cls(b.get("lowering"), tuple((float(s), float(r)) for s, r in b.get("ratios", ())))
+        fields = tuple(PatchField(float(p.extra["s_rail"]), p.field.grid, p.field.pn, p.field.px, p.field.py)
+                       for p in result.patches if p.field is not None and "s_rail" in p.extra)
+        return cls(b.get("lowering"), tuple((float(s), float(r)) for s, r in b.get("ratios", ())), fields)
 
 
 def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grids: bool = True,
                  lowering: float | None = None, start: PairState | None = None, counts_out: list | None = None,
-                 warn: bool = True, pressures: dict | None = None, normal_force: float | None = None
+                 warn: bool = True, fields: list | None = None, normal_force: float | None = None
                  ) -> tuple[Placement, PairState, list[float] | None]:
     """The one wheel-rail sequence "place, then balance the wheel load or lower by the approach":
     (placement, the patches at the loaded height, the balanced normal forces or None).
@@ -680,7 +739,7 @@ def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grid
     load = scene.load
     if load.wheel_load is not None:
         _, st, fns = balance_height(pl, scene, ratios, lowering=lowering, start=start, counts_out=counts_out,
-                                    pressures=pressures, normal_force=normal_force)
+                                    fields=fields, normal_force=normal_force)
         if not grids and st.geometry_offset > 0:   # the patches themselves (curved strips): at the height
             st = replace(state_at(pl.pair, pl.top, st.z, pl.roll, scene, grids=False), warnings=st.warnings)
     elif load.approach is None:
@@ -787,21 +846,21 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | Non
     lowering = warm.lowering
     history = []
     counts: list[BalanceCounts] = []
-    pressures: dict = {}       # normal solutions of the balance: starts of the contact solves on their grids
+    # the latest tractions per patch (the neighbour's, then the balance's normal solutions and the
+    # contact solves): resampled onto each new grid, they start the normal and contact solves
+    fields: list[PatchField] = list(warm.fields)
     _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=lowering, counts_out=counts, warn=False,
-                              pressures=pressures)
+                              fields=fields)
     extra_normal = 0
-    starts: dict = {}
     passes: list[tuple[float, float]] = []      # (FN, FZ) of the passes of a one-patch wheel
     for outer in range(1, max_outer + 1):
         z = st.z
         problems = problems_at(scene, pl, st, fns)
-        if scene.model.theory == "exact":   # the previous pass on the same grid starts the iterations
-            problems = [replace(p, start=_start_for(pg.grid, starts, pressures, pl.pair.side))
-                        for p, pg in zip(problems, st.patches)]
+        if scene.model.theory == "exact":   # the latest tractions of this patch start the iterations
+            problems = [replace(p, start=_contact_start(fields, pg, p)) for p, pg in zip(problems, st.patches)]
         results = [solve_problem(p) for p in problems]
-        starts = {id(pg.grid): (pg.grid, (r.field.pn, r.field.px, r.field.py)) for pg, r in zip(st.patches, results)
-                  if r.field is not None}
+        fields = [PatchField(pg.patch.s_ref, r.field.grid, r.field.pn, r.field.px, r.field.py)
+                  for pg, r in zip(st.patches, results) if r.field is not None]
         FZ = sum(track_forces(r, p.info["contact_angle"])[2] for r, p in zip(results, problems))
         history.append({"z_ws": z, "FZ_track": float(FZ)})
         # side-frame ratio FS/FN (mirroring flips both FS and the angle: the product is invariant)
@@ -821,20 +880,20 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | Non
                 fn_next = fn_next if 0.5 * f1 < fn_next < 2.0 * f1 else None
         if balanced:      # the ratios have settled on the kept geometry: search it at the balanced height
             _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
-                                      warn=False, pressures=pressures, normal_force=fns[0] if len(fns) == 1 else None)
+                                      warn=False, fields=fields, normal_force=fns[0] if len(fns) == 1 else None)
             passes = []   # a secant step spans passes on one geometry
             continue
         # the ratios changed: balance again on the same geometry (seed Eq. 46, linearised in the height)
         n = [0]
         warn: list[str] = []
-        dz, fns2 = linear_balance(st, scene, ratios, counts=n, warnings=warn, pressures=pressures,
+        dz, fns2 = linear_balance(st, scene, ratios, counts=n, warnings=warn, fields=fields,
                                   normal_force=fn_next)
         extra_normal += n[0]
         if all(fn > 0 for fn in fns2) and len(fns2) == len(st.patches):
             st, fns = replace(st.lowered(dz), warnings=tuple(warn)), fns2
             if st.geometry_offset > GEOMETRY_REUSE:   # too far from the searched geometry: search again
                 _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
-                                          warn=False, pressures=pressures, normal_force=fn_next)
+                                          warn=False, fields=fields, normal_force=fn_next)
                 passes = []
         else:
             _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
@@ -852,19 +911,6 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | Non
         extra["warnings"] = list(st.warnings) + list(st.placement_warnings)
     out = combine_patches(results, problems, theory, extra, pl.pair)
     return replace(out, approach=pl.approach(z), converged=out.converged and not st.warnings)
-
-
-def _start_for(grid, starts: dict, pressures: dict, side: str):
-    """The start of a contact solve on ``grid`` (side frame): the previous pass's tractions on it,
-    else the balance's pressure on it (mirrored like the problem's grid for a left wheel), else None."""
-    hit = starts.get(id(grid))
-    if hit is not None and hit[0] is grid:
-        return hit[1]
-    hit = pressures.get(id(grid))
-    if hit is not None and hit[0] is grid:
-        pn = hit[1] if side == "right" else hit[1][:, ::-1]
-        return (pn, None, None)
-    return None
 
 
 def curved_creepages(pair: WheelRailPair, z: float, motion: WheelsetMotion, grid, patch: Patch) -> Creepages:
