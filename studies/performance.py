@@ -273,7 +273,7 @@ def mbench_sequence(quick: bool) -> dict:
     t0, c0 = time.perf_counter(), time.process_time()
     for sc, c in zip(scenes, cases):
         r = wr.solve_wheel_rail(sc, warm=warm)
-        warm = wr.WarmStart.from_result(r)
+        warm = wr.WarmStart.from_result(r, warm)
         main = max(r.patches, key=lambda p: p.FN)
         errs.append(abs(main.FN / c["outputs"]["patches"][0]["FN"] - 1.0))
         for k in counts:

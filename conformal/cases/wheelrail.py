@@ -274,6 +274,14 @@ MAX_SEARCHES = 8
 #: the passes of solve_wheel_rail keep a searched geometry while the height moves at most this (mm)
 #: from it (the first-order gap change dz cos d; the tangential shift dz sin d is left out)
 GEOMETRY_REUSE = 1e-2
+#: the one-patch passes (:func:`one_patch_passes`) end when the height at which the contact solve's
+#: normal force acts (from its approach) lies within this (mm) of the height its creepages were
+#: taken at: a creepage changes by dz / R, 2e-9 for 1e-6 mm on a 460 mm wheel
+DZ_FINAL = 1e-6
+#: relative tolerance of the vertical force balance of the one-patch passes: a pass on a kept
+#: geometry costs a contact solve started from the previous one, so the balance is taken 100
+#: times tighter than BALANCE_TOL (the answer then no longer depends on the path to it)
+ONE_PATCH_TOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -528,9 +536,13 @@ def balance_height_bracketing(pl: Placement, scene: Scene, ratios=None) -> tuple
 
 def _ratio(ratios, pg: PatchGeometry) -> float:
     """Tangential-to-normal ratio of the nearest patch of a previous solve (by rail position)."""
+    return _ratio_near(ratios, pg.patch.s_ref)
+
+
+def _ratio_near(ratios, s: float) -> float:
+    """The ratio of the (s_ref, FS/FN) entry nearest to rail arc length s (within 5 mm), else 0."""
     if not ratios:
         return 0.0
-    s = pg.patch.s_ref
     best = min(ratios, key=lambda item: abs(item[0] - s))
     return best[1] if abs(best[0] - s) < 5.0 else 0.0
 
@@ -707,18 +719,53 @@ class WarmStart:
     below the height where the wheel touches (mm), the tangential-to-normal ratios of its
     patches ((rail arc length s_ref, FS/FN) pairs, side frame) and their traction fields
     (:class:`PatchField`), the starting point of the next vertical balance and of its normal and
-    contact solves."""
+    contact solves.  With the neighbour's own neighbour (``from_result(..., previous)``) it also
+    knows the slopes of the lowering and the ratios against the lateral shift and extrapolates
+    them (:meth:`at`)."""
 
     lowering: float | None = None
     ratios: tuple[tuple[float, float], ...] = ()
     fields: tuple[PatchField, ...] = ()
+    shift: float | None = None                 # the neighbour's lateral shift (mm)
+    step: float | None = None                  # its distance from its own neighbour (mm)
+    lowering_slope: float = 0.0                # d lowering / d shift
+    ratio_slopes: tuple[float, ...] = ()       # d (FS/FN) / d shift per entry of ratios
 
     @classmethod
-    def from_result(cls, result: Result) -> "WarmStart":
+    def from_result(cls, result: Result, previous: "WarmStart | None" = None) -> "WarmStart":
+        """The warm start a result gives its next position; ``previous``: the warm start this result
+        was solved from (the position before it), for the slopes."""
         b = result.extra.get("balance") or {}
         fields = tuple(PatchField(float(p.extra["s_rail"]), p.field.grid, p.field.pn, p.field.px, p.field.py)
                        for p in result.patches if p.field is not None and "s_rail" in p.extra)
-        return cls(b.get("lowering"), tuple((float(s), float(r)) for s, r in b.get("ratios", ())), fields)
+        ratios = tuple((float(s), float(r)) for s, r in b.get("ratios", ()))
+        shift, lowering = b.get("lateral_shift"), b.get("lowering")
+        out = cls(lowering, ratios, fields, shift)
+        p = previous
+        if (p is None or p.shift is None or shift is None or p.lowering is None or lowering is None
+                or p.shift == shift or len(p.ratios) != len(ratios)):
+            return out
+        h = shift - p.shift
+        slopes = []
+        for s_ref, r in ratios:
+            q = _ratio_near(p.ratios, s_ref)
+            slopes.append((r - q) / h if any(abs(s_ref - s0) < 5.0 for s0, _ in p.ratios) else 0.0)
+        return replace(out, step=h, lowering_slope=(lowering - p.lowering) / h, ratio_slopes=tuple(slopes))
+
+    def at(self, shift: float) -> "WarmStart":
+        """This warm start extrapolated linearly to the lateral shift ``shift`` (mm): the lowering and
+        the ratios along their slopes, when the new step goes the same way as the last and is at
+        most 1.5 times as long (unchanged otherwise, e.g. across a jump in the sequence)."""
+        if self.step is None or self.shift is None or self.lowering is None:
+            return self
+        h = shift - self.shift
+        if h == 0.0 or h / self.step < 0 or abs(h) > 1.5 * abs(self.step):
+            return self
+        lowering = self.lowering + self.lowering_slope * h
+        if not lowering > 0:
+            return self
+        ratios = tuple((s, r + k * h) for (s, r), k in zip(self.ratios, self.ratio_slopes))
+        return replace(self, lowering=lowering, ratios=ratios)
 
 
 def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grids: bool = True,
@@ -818,37 +865,75 @@ def _geometry_extra(scene: Scene, pl: Placement) -> dict:
             "smoothing_error_rail": r.smoothing_error}
 
 
-def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | None = None) -> Result:
-    """Solve a wheel-rail scene with a planar model (one tangent-plane problem per patch): patches,
-    vertical balance including the tangential forces (iterated), and the combined result with
-    track-frame totals.  (Any model: :func:`conformal.cases.solve_wheel_rail`.)  ``warm``: the
-    :class:`WarmStart` of a neighbouring solve (a sweep's previous position); ``extra["balance"]``
-    counts the geometry searches, normal and tangential solves of the balance and carries the
-    next position's warm start."""
-    if scene.model.theory == "conformal":   # one curved grid per wheel: conformal.cases.conformal
-        raise InputError("[model] theory: the conformal theory solves a wheel on ONE curved strip: "
-                         "conformal.cases.solve_wheel_rail (or conformal.solve) dispatches it")
-    pl = place_scene(scene)
-    theory = scene.model.theory
-    geo_extra = _geometry_extra(scene, pl)
-    if scene.load.wheel_load is None:
-        _, st, _ = loaded_state(scene, pl)
-        problems = problems_at(scene, pl, st, None)
-        results = [solve_problem(p) for p in problems]
-        ext = {"z_ws": st.z, **geo_extra}
-        if st.placement_warnings:
-            ext["warnings"] = list(st.placement_warnings)
-        out = combine_patches(results, problems, theory, ext, pl.pair)
-        return replace(out, approach=pl.approach(st.z))
+def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fields: list, ratios, *,
+                     max_outer: int = 12, search=None):
+    """The vertical balance of a one-patch wheel with the contact solve as its normal solve (seed
+    Eq. 46; grid theory "exact"): each pass solves the contact problem on the patch geometry of
+    ``st`` with the normal force ``fn`` prescribed; its approach a gives the height at which fn
+    acts, z + (a - a_st) / cos(delta), and its FZ = FN cos d + FS sin d the next normal force (the
+    fixed point W / (cos d + (FS/FN) sin d), then secant steps on FZ(FN) over the passes on one
+    geometry).  The next pass lowers the geometry to the predicted height (the approach of the
+    new force from a ~ FN^(2/3)) or, beyond BALANCE_ZTOL from the searched height, searches it
+    again (``search(z)``).  Done when |FZ - W| <= BALANCE_TOL W, the approach agrees with the
+    height within DZ_FINAL and the geometry lies within BALANCE_ZTOL.  No separate normal solves:
+    a pass costs one contact solve, started from the latest tractions of the patch (``fields``).
+
+    Returns (state, results, problems, ratios, passes, fields), or None when the contact leaves
+    the one-patch case (another patch appears, the wheel lifts off, no convergence in
+    ``max_outer`` passes): the caller then balances with :func:`loaded_state`."""
     W = scene.load.wheel_load
-    warm = warm or WarmStart()
-    ratios = list(warm.ratios) or None
-    lowering = warm.lowering
+    side, mirror = pl.pair.side, pl.pair.mirror
+    passes: list[tuple[float, float]] = []
+    for k in range(1, max_outer + 1):
+        pg = st.patches[0]
+        c = math.cos(pg.patch.delta)
+        problem = problems_at(scene, pl, st, [fn])[0]
+        problem = replace(problem, start=_contact_start(fields, pg, problem))
+        r = solve_problem(problem)
+        if r.field is not None:
+            fields = [PatchField(pg.patch.s_ref, r.field.grid, r.field.pn, r.field.px, r.field.py)]
+        if not (r.FN > 0 and r.approach > 0):
+            return None
+        dz = (r.approach - pg.approach) / c
+        FZ = float(track_forces(r, problem.info["contact_angle"])[2])
+        ratio = mirror * r.FY / r.FN
+        ratios = [(pg.patch.s_ref, ratio)]
+        balanced = abs(FZ - W) <= ONE_PATCH_TOL * W
+        if balanced and abs(dz) <= DZ_FINAL and st.geometry_offset <= BALANCE_ZTOL:
+            return st, [r], [problem], ratios, k, fields
+        passes.append((fn, FZ))
+        fn_next = fn
+        if not balanced:
+            w = c + ratio * math.sin(pg.patch.delta)
+            fn_next = W / w if w > 0 else fn
+            if len(passes) >= 2 and passes[-1][1] != passes[-2][1] and passes[-1][0] != passes[-2][0]:
+                (f0, F0), (f1, F1) = passes[-2], passes[-1]
+                sec = f1 + (W - F1) * (f1 - f0) / (F1 - F0)
+                fn_next = sec if 0.5 * f1 < sec < 2.0 * f1 else fn_next
+        z_next = st.z + dz + r.approach * ((fn_next / fn) ** (2.0 / 3.0) - 1.0) / c
+        z_geo = st.z if st.z_geometry is None else st.z_geometry
+        if abs(z_next - z_geo) > BALANCE_ZTOL:
+            try:
+                st = search(z_next)
+            except NoContactError:
+                return None
+            if len(st.patches) != 1:
+                return None
+            passes = []
+        else:
+            st = st.lowered(z_next - st.z)
+        fn = fn_next
+    return None
+
+
+def _general_passes(scene: Scene, pl: Placement, ratios, lowering, fields: list, counts: list, max_outer: int):
+    """The vertical balance of any wheel: :func:`loaded_state` (the height from the normal
+    problems, :func:`balance_height`), a contact solve per patch, the ratios FS/FN back into the
+    balance on the kept geometry (a secant step on FZ(FN) for one patch) until the vertical force
+    of the contact solves carries the wheel load.  Returns (state, height, results, problems,
+    ratios, passes, extra normal solves)."""
+    W = scene.load.wheel_load
     history = []
-    counts: list[BalanceCounts] = []
-    # the latest tractions per patch (the neighbour's, then the balance's normal solutions and the
-    # contact solves): resampled onto each new grid, they start the normal and contact solves
-    fields: list[PatchField] = list(warm.fields)
     _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=lowering, counts_out=counts, warn=False,
                               fields=fields)
     extra_normal = 0
@@ -901,12 +986,92 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | Non
     else:
         raise ConvergenceError(f"[load] wheel_load: the vertical balance did not converge in {max_outer} "
                                f"iterations (FZ = {FZ:.1f} N for {W:g} N)")
+    return st, z, results, problems, ratios, len(history), extra_normal
+
+
+def _one_patch_start(scene: Scene, pl: Placement, warm: "WarmStart", fields: list, counts: list, max_outer: int):
+    """The start of :func:`one_patch_passes` and the passes: the patches searched at the
+    neighbour's lowering with FN = W / (cos d + r sin d) from its ratio, or without a neighbour the
+    normal-problem balance (:func:`loaded_state`); None (and the general balance) when that gives
+    other than one patch or the passes leave the one-patch case.  Returns (state, results, problems,
+    ratios, passes, searches) with the searches of the passes (those of a balance are in ``counts``)."""
+    W = scene.load.wheel_load
+    ratios = list(warm.ratios) or None
+    searches = [0]
+
+    def search(z):
+        searches[0] += 1
+        return state_at(pl.pair, pl.top, z, pl.roll, scene)
+
+    st, fn = None, None
+    if warm.lowering is not None and warm.lowering > 0:
+        try:
+            st = search(pl.z_touch + warm.lowering)
+        except NoContactError:
+            st = None
+    if st is None or len(st.patches) != 1:   # no neighbour, or the contact changed: the normal balance
+        _, st, fns = loaded_state(scene, pl, ratios=ratios, counts_out=counts, warn=False, fields=fields,
+                                  lowering=warm.lowering)
+        fn = fns[0] if len(fns) == 1 else None
+    if len(st.patches) != 1:
+        return None
+    if fn is None:
+        d = st.patches[0].patch.delta
+        w = math.cos(d) + _ratio(ratios, st.patches[0]) * math.sin(d)
+        if not w > 0:
+            return None
+        fn = W / w
+    out = one_patch_passes(scene, pl, st, fn, list(fields), ratios, max_outer=max_outer, search=search)
+    if out is None:
+        return None
+    st, results, problems, ratios, n, _ = out
+    return st, results, problems, ratios, n, searches[0]
+
+
+def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | None = None) -> Result:
+    """Solve a wheel-rail scene with a planar model (one tangent-plane problem per patch): patches,
+    vertical balance including the tangential forces (iterated), and the combined result with
+    track-frame totals.  (Any model: :func:`conformal.cases.solve_wheel_rail`.)  ``warm``: the
+    :class:`WarmStart` of a neighbouring solve (a sweep's previous position); ``extra["balance"]``
+    counts the geometry searches, normal and tangential solves of the balance and carries the
+    next position's warm start."""
+    if scene.model.theory == "conformal":   # one curved grid per wheel: conformal.cases.conformal
+        raise InputError("[model] theory: the conformal theory solves a wheel on ONE curved strip: "
+                         "conformal.cases.solve_wheel_rail (or conformal.solve) dispatches it")
+    pl = place_scene(scene)
+    theory = scene.model.theory
+    geo_extra = _geometry_extra(scene, pl)
+    if scene.load.wheel_load is None:
+        _, st, _ = loaded_state(scene, pl)
+        problems = problems_at(scene, pl, st, None)
+        results = [solve_problem(p) for p in problems]
+        ext = {"z_ws": st.z, **geo_extra}
+        if st.placement_warnings:
+            ext["warnings"] = list(st.placement_warnings)
+        out = combine_patches(results, problems, theory, ext, pl.pair)
+        return replace(out, approach=pl.approach(st.z))
+    W = scene.load.wheel_load
+    warm = (warm or WarmStart()).at(scene.geometry.lateral_shift)
+    ratios = list(warm.ratios) or None
+    counts: list[BalanceCounts] = []
+    # the latest tractions per patch (the neighbour's, then the balance's normal solutions and the
+    # contact solves): resampled onto each new grid, they start the normal and contact solves
+    fields: list[PatchField] = list(warm.fields)
+    one = _one_patch_start(scene, pl, warm, fields, counts, max_outer) if theory == "exact" else None
+    if one is not None:
+        st, results, problems, ratios, n_passes, searches = one
+        z, extra_normal = st.z, 0
+        counts.append(BalanceCounts(searches, 0))
+    else:
+        st, z, results, problems, ratios, n_passes, extra_normal = _general_passes(
+            scene, pl, ratios, warm.lowering, fields, counts, max_outer)
     st = replace(st, placement_warnings=tuple(placement_warnings(scene, pl, st)))
     balance = {"searches": sum(c.searches for c in counts),
                "normal_solves": sum(c.normal_solves for c in counts) + extra_normal,
-               "tangential_solves": len(history) * len(problems), "bracketing": any(c.bracketing for c in counts),
-               "lowering": float(z - pl.z_touch), "ratios": [[float(a), float(b)] for a, b in ratios]}
-    extra = {"z_ws": z, **geo_extra, "wheel_load": W, "balance_iterations": len(history), "balance": balance}
+               "tangential_solves": n_passes * len(problems), "bracketing": any(c.bracketing for c in counts),
+               "lowering": float(z - pl.z_touch), "ratios": [[float(a), float(b)] for a, b in ratios],
+               "one_patch_passes": one is not None, "lateral_shift": float(scene.geometry.lateral_shift)}
+    extra = {"z_ws": z, **geo_extra, "wheel_load": W, "balance_iterations": n_passes, "balance": balance}
     if st.warnings or st.placement_warnings:
         extra["warnings"] = list(st.warnings) + list(st.placement_warnings)
     out = combine_patches(results, problems, theory, extra, pl.pair)
