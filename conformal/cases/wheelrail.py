@@ -878,13 +878,36 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
     height within DZ_FINAL and the geometry lies within BALANCE_ZTOL.  No separate normal solves:
     a pass costs one contact solve, started from the latest tractions of the patch (``fields``).
 
-    Returns (state, results, problems, ratios, passes, fields), or None when the contact leaves
+    Returns (state, results, problems, ratios, passes, fields, normal solves), or None when the contact leaves
     the one-patch case (another patch appears, the wheel lifts off, no convergence in
     ``max_outer`` passes): the caller then balances with :func:`loaded_state`."""
     W = scene.load.wheel_load
-    side, mirror = pl.pair.side, pl.pair.mirror
+    mirror = pl.pair.mirror
     passes: list[tuple[float, float]] = []
+    normal_solves = [0]
+
+    def settle(st: PairState, fn: float) -> PairState | None:
+        """The state lowered to the height where the patch carries fn (a force-prescribed normal
+        solve per geometry, searched again while that height lies beyond BALANCE_ZTOL)."""
+        for _ in range(MAX_SEARCHES):
+            if len(st.patches) != 1:
+                return None
+            warn: list[str] = []
+            dz, _ = linear_balance(st, scene, None, counts=normal_solves, warnings=warn, fields=fields,
+                                   normal_force=fn)
+            z_geo = st.z if st.z_geometry is None else st.z_geometry
+            if abs(st.z + dz - z_geo) <= BALANCE_ZTOL:
+                return replace(st.lowered(dz), warnings=tuple(warn))
+            try:
+                st = search(st.z + dz)
+            except NoContactError:
+                return None
+        return None
+
+    st = settle(st, fn) if st.z_geometry is None else st
     for k in range(1, max_outer + 1):
+        if st is None:
+            return None
         pg = st.patches[0]
         c = math.cos(pg.patch.delta)
         problem = problems_at(scene, pl, st, [fn])[0]
@@ -900,7 +923,7 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
         ratios = [(pg.patch.s_ref, ratio)]
         balanced = abs(FZ - W) <= ONE_PATCH_TOL * W
         if balanced and abs(dz) <= DZ_FINAL and st.geometry_offset <= BALANCE_ZTOL:
-            return st, [r], [problem], ratios, k, fields
+            return st, [r], [problem], ratios, k, fields, normal_solves[0]
         passes.append((fn, FZ))
         fn_next = fn
         if not balanced:
@@ -914,10 +937,8 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
         z_geo = st.z if st.z_geometry is None else st.z_geometry
         if abs(z_next - z_geo) > BALANCE_ZTOL:
             try:
-                st = search(z_next)
+                st = settle(search(z_next), fn_next)
             except NoContactError:
-                return None
-            if len(st.patches) != 1:
                 return None
             passes = []
         else:
@@ -1024,8 +1045,8 @@ def _one_patch_start(scene: Scene, pl: Placement, warm: "WarmStart", fields: lis
     out = one_patch_passes(scene, pl, st, fn, list(fields), ratios, max_outer=max_outer, search=search)
     if out is None:
         return None
-    st, results, problems, ratios, n, _ = out
-    return st, results, problems, ratios, n, searches[0]
+    st, results, problems, ratios, n, _, n_normal = out
+    return st, results, problems, ratios, n, searches[0], n_normal
 
 
 def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | None = None) -> Result:
@@ -1059,8 +1080,8 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | Non
     fields: list[PatchField] = list(warm.fields)
     one = _one_patch_start(scene, pl, warm, fields, counts, max_outer) if theory == "exact" else None
     if one is not None:
-        st, results, problems, ratios, n_passes, searches = one
-        z, extra_normal = st.z, 0
+        st, results, problems, ratios, n_passes, searches, extra_normal = one
+        z = st.z
         counts.append(BalanceCounts(searches, 0))
     else:
         st, z, results, problems, ratios, n_passes, extra_normal = _general_passes(
