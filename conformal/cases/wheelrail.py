@@ -11,7 +11,9 @@ the README's References):
    per trial height and a vertical step dz changes each patch's approach by dz cos(delta)
    (:func:`linear_balance`; one patch: FN = W / (cos d + (FS/FN) sin d) and one force-prescribed
    normal solve give the height), a few searches in all (:func:`balance_height`; a sweep starts
-   from its neighbour's height, :class:`WarmStart`);
+   from its neighbour's height and ratios extrapolated along the shift, :class:`WarmStart`).
+   A one-patch wheel with the exact theory takes the contact solve itself as the normal solve of
+   the balance (:func:`one_patch_passes`, about two contact solves per position of a sweep);
    ``[load] approach`` lowers the wheelset by that many mm below the height where its first wheel
    touches (a wheel that then still has a gap is lifted off: NoContactError).  The reported
    ``approach`` of a wheel-load solve is the same quantity, so that solving at it gives the load
@@ -874,9 +876,11 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
     fixed point W / (cos d + (FS/FN) sin d), then secant steps on FZ(FN) over the passes on one
     geometry).  The next pass lowers the geometry to the predicted height (the approach of the
     new force from a ~ FN^(2/3)) or, beyond BALANCE_ZTOL from the searched height, searches it
-    again (``search(z)``).  Done when |FZ - W| <= BALANCE_TOL W, the approach agrees with the
-    height within DZ_FINAL and the geometry lies within BALANCE_ZTOL.  No separate normal solves:
-    a pass costs one contact solve, started from the latest tractions of the patch (``fields``).
+    again (``search(z)``); after a search one force-prescribed normal solve puts the height where
+    the patch carries fn (the approach of a searched grid moves in small steps with the height).
+    Done when |FZ - W| <= ONE_PATCH_TOL W, the approach agrees with the height within DZ_FINAL
+    and the geometry lies within BALANCE_ZTOL.  A pass costs one contact solve, started from the
+    latest tractions of the patch (``fields``).
 
     Returns (state, results, problems, ratios, passes, fields, normal solves), or None when the contact leaves
     the one-patch case (another patch appears, the wheel lifts off, no convergence in
