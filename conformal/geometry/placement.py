@@ -92,7 +92,7 @@ class WheelRailPair:
     pose: SidePose
     side: str = "right"
     #: the contact locus samples at z = 0 by sampling step (filled on first use, see locus_samples)
-    _loci: dict = field(default_factory=dict, repr=False, compare=False)
+    _loci: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def frame(self, z: float) -> WheelFrame:
         return WheelFrame.from_pose(self.pose.y, z, self.pose.roll, self.pose.yaw, self.radius)
