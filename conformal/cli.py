@@ -188,7 +188,14 @@ def _sweep_solve(scene, args) -> int:
     return code
 
 
-def build_parser() -> argparse.ArgumentParser:
+#: the commands defined in this module: a process running one of them builds only their parsers
+#: (the other modules' commands import numpy, scipy and more just to declare their options)
+CORE_COMMANDS = ("solve", "demo", "sweep", "precompute", "cache")
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``conformal`` argument parser; ``command`` in CORE_COMMANDS leaves out the commands of
+    the other modules (table, simulate, stability, inp, stresses)."""
     from conformal import __version__
 
     p = argparse.ArgumentParser(prog="conformal", description="Conformal wheel-rail rolling contact workbench")
@@ -238,6 +245,8 @@ def build_parser() -> argparse.ArgumentParser:
     ca.add_argument("--cache", metavar="DIR", help="cache folder (default: $CONFORMAL_CACHE or the user cache)")
     ca.set_defaults(func=cmd_cache)
 
+    if command in CORE_COMMANDS:
+        return p
     from conformal.tables.cli import add_parsers as add_table_parsers  # conformal table build|info
     add_table_parsers(sub)
 
@@ -316,8 +325,9 @@ def _join_negative_ranges(argv: list[str]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(_join_negative_ranges(list(sys.argv[1:] if argv is None else argv)))
+    argv = _join_negative_ranges(list(sys.argv[1:] if argv is None else argv))
+    parser = build_parser(argv[0] if argv and argv[0] in CORE_COMMANDS else None)
+    args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
     except ConformalError as exc:

@@ -284,7 +284,7 @@ def solve_sweep(scene, shifts: Sequence[float], *, workers: int | None = None, c
                 warns.append(())
                 warm = None
                 continue
-            warm = WarmStart.from_result(r) if warm_start else None
+            warm = WarmStart.from_result(r, warm) if warm_start else None
             results.append(r)
             errors.append(None)
             warns.append(tuple(dict.fromkeys(base_warn + r.warnings)))

@@ -11,7 +11,9 @@ docs/references.md):
    per trial height and a vertical step dz changes each patch's approach by dz cos(delta)
    (:func:`linear_balance`; one patch: FN = W / (cos d + (FS/FN) sin d) and one force-prescribed
    normal solve give the height), a few searches in all (:func:`balance_height`; a sweep starts
-   from its neighbour's height, :class:`WarmStart`);
+   from its neighbour's height and ratios extrapolated along the shift, :class:`WarmStart`).
+   A one-patch wheel with the exact theory takes the contact solve itself as the normal solve of
+   the balance (:func:`one_patch_passes`, about two contact solves per position of a sweep);
    ``[load] approach`` lowers the wheelset by that many mm below the height where its first wheel
    touches (a wheel that then still has a gap is lifted off: NoContactError).  The reported
    ``approach`` of a wheel-load solve is the same quantity, so that solving at it gives the load
@@ -37,7 +39,7 @@ from conformal.geometry.kinematics import Creepages, WheelsetMotion, creepages
 from conformal.geometry.patches import Patch, curved_grid_for_patch, find_patches, planar_grid_for_patch
 from conformal.geometry.placement import WheelRailPair
 from conformal.geometry.profiles import rail_orientation_warning
-from conformal.geometry.search import RailTop
+from conformal.geometry.search import RailTop, pair_locus
 from conformal.geometry.wheelrail import build_pair, first_touch, profile_curves, wheelset_roll
 from conformal.grid import PlanarGrid
 from conformal.models import solve_problem
@@ -186,7 +188,8 @@ def state_at(pair: WheelRailPair, top: RailTop, z: float, roll: float, scene: Sc
     wheel = pair.wheel(z)
     out = []
     try:
-        patches = find_patches(wheel, pair.rail, top, d_comb=scene.geometry.patch_combine)
+        patches = find_patches(wheel, pair.rail, top, d_comb=scene.geometry.patch_combine,
+                               locus=pair_locus(pair, top, z))
     except InputError as exc:
         raise InputError(f"[geometry] lateral_shift: {exc}") from None
     for p in patches:
@@ -203,21 +206,23 @@ def state_at(pair: WheelRailPair, top: RailTop, z: float, roll: float, scene: Sc
     return PairState(pair, z, roll, out)
 
 
-def _normal_force(pg: PatchGeometry, scene: Scene, warnings: list | None = None) -> float:
-    """Normal force of a patch at its approach: the grid's half-space normal problem for grid
-    theories, Hertz otherwise (the normal problem does not depend on friction for K = 0)."""
-    if MODELS.accepts(scene.model.theory, GRID):
-        sol = solve_normal(None, pg.grid, pg.h, approach=pg.approach, material=scene.material,
-                           tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit)
-        if not sol.converged and warnings is not None:
-            warnings.append(f"vertical balance: the normal problem of the patch at contact angle "
-                            f"{pg.patch.delta:.3f} rad did not converge ({sol.iterations} iterations, "
-                            f"residual {sol.residual:.2g})")
-        return float(sol.FN)
-    if not pg.hertzian:
-        raise InputError(f"[model] theory: patch at contact angle {pg.patch.delta:.3f} rad is not Hertzian "
-                         f"(relative curvatures A = {pg.A:.3g}, B = {pg.B:.3g} 1/mm); use theory = \"exact\"")
-    return hertz_from_curvatures(pg.A, pg.B, scene.material, approach=pg.approach).FN
+def _check_normal(sol, pg: PatchGeometry, warnings: list | None) -> None:
+    """A warning when a normal solve of the balance did not converge."""
+    if not sol.converged and warnings is not None:
+        warnings.append(f"vertical balance: the normal problem of the patch at contact angle "
+                        f"{pg.patch.delta:.3f} rad did not converge ({sol.iterations} iterations, "
+                        f"residual {sol.residual:.2g})")
+
+
+def _normal_field(fields, pg: PatchGeometry, side: str, pn: np.ndarray) -> PatchField:
+    """The field of a balance's normal solution on patch ``pg`` (side frame) in the problem frame,
+    with the tangential tractions of the field it started from (resampled), if any."""
+    grid = _mirror_grid(pg.grid, None, side)[0]
+    pn = pn if side == "right" else pn[:, ::-1]
+    old = _nearest_field(fields, pg.patch.s_ref)
+    if old is None or old.px is None:
+        return PatchField(pg.patch.s_ref, grid, pn)
+    return PatchField(pg.patch.s_ref, grid, pn, resample(old.grid, old.px, grid), resample(old.grid, old.py, grid))
 
 
 # ----------------------------------------------------------------------------- placement of a scene
@@ -271,6 +276,14 @@ MAX_SEARCHES = 8
 #: the passes of solve_wheel_rail keep a searched geometry while the height moves at most this (mm)
 #: from it (the first-order gap change dz cos d; the tangential shift dz sin d is left out)
 GEOMETRY_REUSE = 1e-2
+#: the one-patch passes (:func:`one_patch_passes`) end when the height at which the contact solve's
+#: normal force acts (from its approach) lies within this (mm) of the height its creepages were
+#: taken at: a creepage changes by dz / R, 2e-9 for 1e-6 mm on a 460 mm wheel
+DZ_FINAL = 1e-6
+#: relative tolerance of the vertical force balance of the one-patch passes: a pass on a kept
+#: geometry costs a contact solve started from the previous one, so the balance is taken 100
+#: times tighter than BALANCE_TOL (the answer then no longer depends on the path to it)
+ONE_PATCH_TOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -298,19 +311,15 @@ def _fn_at(pg: PatchGeometry, scene: Scene, approach: float, warnings: list, cou
             return 0.0
         if p_start is not None:
             p_start[key] = sol.pn
-        if not sol.converged:
-            warnings.append(f"vertical balance: the normal problem of the patch at contact angle "
-                            f"{pg.patch.delta:.3f} rad did not converge ({sol.iterations} iterations, "
-                            f"residual {sol.residual:.2g})")
+        _check_normal(sol, pg, warnings)
         return float(sol.FN)
     if not pg.hertzian:
-        raise InputError(f"[model] theory: patch at contact angle {pg.patch.delta:.3f} rad is not Hertzian "
-                         f"(relative curvatures A = {pg.A:.3g}, B = {pg.B:.3g} 1/mm); use theory = \"exact\"")
+        _raise_not_hertzian(pg)
     return hertz_from_curvatures(pg.A, pg.B, scene.material, approach=approach).FN
 
 
 def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | None = None,
-                   warnings: list | None = None, pressures: dict | None = None,
+                   warnings: list | None = None, fields: list | None = None,
                    normal_force: float | None = None) -> tuple[float, list[float]]:
     """The lowering dz (mm, vertical) from the height of ``st`` at which the patches carry the wheel
     load, and their normal forces there (seed Eq. 46 with the height as the unknown):
@@ -323,9 +332,10 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
     patch: FN = W / (cos d + r sin d) directly, one force-prescribed normal problem for its
     approach.  Several: secant steps on (F/W)^(2/3), nearly linear in dz for Hertz-like growth.
     Grid theories solve the half-space normal problem on the patch grids, the others use Hertz
-    from the patch curvatures.  ``counts`` = [normal solves] is incremented; ``pressures``
-    receives {id(grid): (grid, pn)} of the one-patch normal solution (a start for the contact solve
-    on the same grid).  ``normal_force``: one patch carries this (N) instead of W / (cos d + r sin d)
+    from the patch curvatures.  ``counts`` = [normal solves] is incremented; ``fields`` (a list of
+    :class:`PatchField`, changed in place) starts the normal solves (resampled onto the patch
+    grids) and receives the one-patch normal solution (with the tangential tractions of the field
+    it started from: the start of the next contact solve).  ``normal_force``: one patch carries this (N) instead of W / (cos d + r sin d)
     (a secant step of the caller on the vertical force of the contact solves)."""
     W = scene.load.wheel_load
     counts = counts if counts is not None else [0]
@@ -338,21 +348,20 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
         pg, fn = pgs[0], (normal_force if normal_force is not None and normal_force > 0 else W / w[0])
         if on_grid:
             counts[0] += 1
+            side = st.pair.side
             sol = solve_normal(None, pg.grid, pg.h, normal_force=fn, material=scene.material,
-                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit)
-            if not sol.converged:
-                warnings.append(f"vertical balance: the normal problem of the patch at contact angle "
-                                f"{pg.patch.delta:.3f} rad did not converge ({sol.iterations} iterations, "
-                                f"residual {sol.residual:.2g})")
+                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit,
+                               p_start=_normal_start(fields, pg, side))
+            _check_normal(sol, pg, warnings)
             a = float(sol.approach)
-            if pressures is not None:
-                pressures[id(pg.grid)] = (pg.grid, sol.pn)
+            if fields is not None:
+                fields[:] = [_normal_field(fields, pg, side, sol.pn)]
         else:
             a = hertz_from_curvatures(pg.A, pg.B, scene.material, normal_force=fn).approach if pg.hertzian \
                 else _raise_not_hertzian(pg)
             return (a - pg.hertz_approach) / c[0], [fn]
         return (a - pg.approach) / c[0], [fn]
-    p_start: dict = {}
+    p_start: dict = {k: _normal_start(fields, pg, st.pair.side) for k, pg in enumerate(pgs)} if on_grid else {}
     cache: dict[float, list[float]] = {}
 
     def fns_at(dz: float) -> list[float]:
@@ -360,13 +369,7 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
             out = []
             for k, pg in enumerate(pgs):
                 a = (pg.approach if on_grid else pg.hertz_approach) + dz * c[k]
-                if on_grid:
-                    out.append(_fn_at(pg, scene, a, warnings, counts, p_start, k))
-                elif a > 0:
-                    out.append(hertz_from_curvatures(pg.A, pg.B, scene.material, approach=a).FN
-                               if pg.hertzian else _raise_not_hertzian(pg))
-                else:
-                    out.append(0.0)
+                out.append(_fn_at(pg, scene, a, warnings, counts, p_start, k))
             cache[dz] = out
         return cache[dz]
 
@@ -389,7 +392,7 @@ def _raise_not_hertzian(pg: PatchGeometry):
 
 
 def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float | None = None,
-                   start: PairState | None = None, counts_out: list | None = None, pressures: dict | None = None,
+                   start: PairState | None = None, counts_out: list | None = None, fields: list | None = None,
                    normal_force: float | None = None) -> tuple[float, PairState, list[float]]:
     """Height z at which sum_i FN_i (cos d_i + r_i sin d_i) = wheel_load, with r_i = FS_i/FN_i
     (side frame) the tangential-to-normal ratios of the patches (0: normal forces only).
@@ -438,7 +441,7 @@ def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float 
         st = search(pl.z_touch + trial * (W / F1) ** (2.0 / 3.0))
     for _ in range(MAX_SEARCHES):
         del warnings[:]
-        dz, fns = linear_balance(st, scene, ratios, counts=counts, warnings=warnings, pressures=pressures,
+        dz, fns = linear_balance(st, scene, ratios, counts=counts, warnings=warnings, fields=fields,
                                  normal_force=normal_force if len(st.patches) == 1 else None)
         z = st.z + dz
         if abs(dz) <= BALANCE_ZTOL and all(fn > 0 for fn in fns):
@@ -490,7 +493,7 @@ def balance_height_bracketing(pl: Placement, scene: Scene, ratios=None) -> tuple
                 st = state_at(pl.pair, pl.top, z, pl.roll, scene, grids=on_grid) if z > pl.z_touch else None
             except NoContactError:      # just above the touching height no element overlaps yet
                 st = None
-            fns = [_normal_force(pg, scene, warnings) for pg in st.patches] if st else []
+            fns = [_fn_at(pg, scene, pg.approach, warnings, [0]) for pg in st.patches] if st else []
             cache[z] = (st, fns)
         st, fns = cache[z]
         if st is None:
@@ -535,19 +538,86 @@ def balance_height_bracketing(pl: Placement, scene: Scene, ratios=None) -> tuple
 
 def _ratio(ratios, pg: PatchGeometry) -> float:
     """Tangential-to-normal ratio of the nearest patch of a previous solve (by rail position)."""
+    return _ratio_near(ratios, pg.patch.s_ref)
+
+
+def _ratio_near(ratios, s: float) -> float:
+    """The ratio of the (s_ref, FS/FN) entry nearest to rail arc length s (within 5 mm), else 0."""
     if not ratios:
         return 0.0
-    s = pg.patch.s_ref
     best = min(ratios, key=lambda item: abs(item[0] - s))
     return best[1] if abs(best[0] - s) < 5.0 else 0.0
 
 
+# ----------------------------------------------------------------------------- starting fields
+@dataclass(frozen=True, eq=False)
+class PatchField:
+    """A solved patch's tractions as the start of a later solve of the same contact on another
+    grid (a later height of the balance, the next position of a sweep): the rail arc length of its
+    reference point and the tractions on its grid, in the problem frame (mirrored for a left
+    wheel, as the contact problems); px, py None for a normal solve."""
+
+    s_ref: float
+    grid: PlanarGrid
+    pn: np.ndarray
+    px: np.ndarray | None = None
+    py: np.ndarray | None = None
+
+
+def resample(src: PlanarGrid, values: np.ndarray, dst: PlanarGrid) -> np.ndarray:
+    """``values`` (src's shape, per element) bilinearly interpolated at the element centres of
+    ``dst`` (both grids in their patch's tangent-plane coordinates about the reference point), 0
+    beyond src; equal to ``values`` where dst is src."""
+    def axis(n_src, lo_src, d_src, n_dst, lo_dst, d_dst):
+        f = (lo_dst + (np.arange(n_dst) + 0.5) * d_dst - lo_src) / d_src - 0.5   # src index coordinate
+        i0 = np.floor(f).astype(int)
+        w = f - i0
+        return np.clip(i0, -1, n_src) + 1, np.clip(i0 + 1, -1, n_src) + 1, w   # indices into the padded array
+
+    v = np.pad(np.asarray(values, float), 1)
+    ia, ib, wi = axis(src.mx, src.xl, src.dx, dst.mx, dst.xl, dst.dx)
+    ja, jb, wj = axis(src.my, src.yl, src.dy, dst.my, dst.yl, dst.dy)
+    rows = (1.0 - wi)[:, None] * v[ia] + wi[:, None] * v[ib]
+    return (1.0 - wj)[None, :] * rows[:, ja] + wj[None, :] * rows[:, jb]
+
+
+def _nearest_field(fields, s_ref: float) -> PatchField | None:
+    """The field of the patch nearest to rail arc length ``s_ref`` (within 5 mm), or None."""
+    best = min(fields or (), key=lambda f: abs(f.s_ref - s_ref), default=None)
+    return best if best is not None and abs(best.s_ref - s_ref) < 5.0 else None
+
+
+def _normal_start(fields, pg: PatchGeometry, side: str) -> np.ndarray | None:
+    """A starting pressure for the normal problem of patch ``pg`` (side frame) from the nearest
+    known field, or None."""
+    f = _nearest_field(fields, pg.patch.s_ref)
+    if f is None:
+        return None
+    pn = resample(f.grid, f.pn, _mirror_grid(pg.grid, None, side)[0])
+    pn = pn if side == "right" else pn[:, ::-1]
+    return pn if np.any(pn > 0) else None
+
+
+def _contact_start(fields, pg: PatchGeometry, problem: ContactProblem):
+    """(pn, px, py) on the problem's grid from the nearest known field (px, py None from a normal
+    solve), or None."""
+    f = _nearest_field(fields, pg.patch.s_ref)
+    if f is None:
+        return None
+    pn = resample(f.grid, f.pn, problem.grid)
+    if not np.any(pn > 0):
+        return None
+    if f.px is None:
+        return (pn, None, None)
+    return (pn, resample(f.grid, f.px, problem.grid), resample(f.grid, f.py, problem.grid))
+
+
 # ----------------------------------------------------------------------------- problems
-def _mirror_grid(grid: PlanarGrid, h: np.ndarray, side: str) -> tuple[PlanarGrid, np.ndarray]:
+def _mirror_grid(grid: PlanarGrid, h: np.ndarray | None, side: str) -> tuple[PlanarGrid, np.ndarray | None]:
     if side == "right":
         return grid, h
     g = PlanarGrid(grid.mx, grid.my, grid.dx, grid.dy, grid.xl, -(grid.yl + grid.my * grid.dy))
-    return g, h[:, ::-1].copy()
+    return g, None if h is None else h[:, ::-1].copy()
 
 
 def _kinematics_for(scene: Scene, pair: WheelRailPair, z: float, patch: Patch):
@@ -648,22 +718,61 @@ def problems_at(scene: Scene, pl: Placement, st: PairState, fns: list[float] | N
 @dataclass(frozen=True)
 class WarmStart:
     """What a neighbouring solve (the previous position of a sweep) knows: its wheelset lowering
-    below the height where the wheel touches (mm) and the tangential-to-normal ratios of its
-    patches ((rail arc length s_ref, FS/FN) pairs, side frame), the starting point of the next
-    vertical balance."""
+    below the height where the wheel touches (mm), the tangential-to-normal ratios of its
+    patches ((rail arc length s_ref, FS/FN) pairs, side frame) and their traction fields
+    (:class:`PatchField`), the starting point of the next vertical balance and of its normal and
+    contact solves.  With the neighbour's own neighbour (``from_result(..., previous)``) it also
+    knows the slopes of the lowering and the ratios against the lateral shift and extrapolates
+    them (:meth:`at`)."""
 
     lowering: float | None = None
     ratios: tuple[tuple[float, float], ...] = ()
+    fields: tuple[PatchField, ...] = ()
+    shift: float | None = None                 # the neighbour's lateral shift (mm)
+    step: float | None = None                  # its distance from its own neighbour (mm)
+    lowering_slope: float = 0.0                # d lowering / d shift
+    ratio_slopes: tuple[float, ...] = ()       # d (FS/FN) / d shift per entry of ratios
 
     @classmethod
-    def from_result(cls, result: Result) -> "WarmStart":
+    def from_result(cls, result: Result, previous: "WarmStart | None" = None) -> "WarmStart":
+        """The warm start a result gives its next position; ``previous``: the warm start this result
+        was solved from (the position before it), for the slopes."""
         b = result.extra.get("balance") or {}
-        return cls(b.get("lowering"), tuple((float(s), float(r)) for s, r in b.get("ratios", ())))
+        fields = tuple(PatchField(float(p.extra["s_rail"]), p.field.grid, p.field.pn, p.field.px, p.field.py)
+                       for p in result.patches if p.field is not None and "s_rail" in p.extra)
+        ratios = tuple((float(s), float(r)) for s, r in b.get("ratios", ()))
+        shift, lowering = b.get("lateral_shift"), b.get("lowering")
+        out = cls(lowering, ratios, fields, shift)
+        p = previous
+        if (p is None or p.shift is None or shift is None or p.lowering is None or lowering is None
+                or p.shift == shift or len(p.ratios) != len(ratios)):
+            return out
+        h = shift - p.shift
+        slopes = []
+        for s_ref, r in ratios:
+            q = _ratio_near(p.ratios, s_ref)
+            slopes.append((r - q) / h if any(abs(s_ref - s0) < 5.0 for s0, _ in p.ratios) else 0.0)
+        return replace(out, step=h, lowering_slope=(lowering - p.lowering) / h, ratio_slopes=tuple(slopes))
+
+    def at(self, shift: float) -> "WarmStart":
+        """This warm start extrapolated linearly to the lateral shift ``shift`` (mm): the lowering and
+        the ratios along their slopes, when the new step goes the same way as the last and is at
+        most 1.5 times as long (unchanged otherwise, e.g. across a jump in the sequence)."""
+        if self.step is None or self.shift is None or self.lowering is None:
+            return self
+        h = shift - self.shift
+        if h == 0.0 or h / self.step < 0 or abs(h) > 1.5 * abs(self.step):
+            return self
+        lowering = self.lowering + self.lowering_slope * h
+        if not lowering > 0:
+            return self
+        ratios = tuple((s, r + k * h) for (s, r), k in zip(self.ratios, self.ratio_slopes))
+        return replace(self, lowering=lowering, ratios=ratios)
 
 
 def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grids: bool = True,
                  lowering: float | None = None, start: PairState | None = None, counts_out: list | None = None,
-                 warn: bool = True, pressures: dict | None = None, normal_force: float | None = None
+                 warn: bool = True, fields: list | None = None, normal_force: float | None = None
                  ) -> tuple[Placement, PairState, list[float] | None]:
     """The one wheel-rail sequence "place, then balance the wheel load or lower by the approach":
     (placement, the patches at the loaded height, the balanced normal forces or None).
@@ -679,7 +788,7 @@ def loaded_state(scene: Scene, pl: Placement | None = None, *, ratios=None, grid
     load = scene.load
     if load.wheel_load is not None:
         _, st, fns = balance_height(pl, scene, ratios, lowering=lowering, start=start, counts_out=counts_out,
-                                    pressures=pressures, normal_force=normal_force)
+                                    fields=fields, normal_force=normal_force)
         if not grids and st.geometry_offset > 0:   # the patches themselves (curved strips): at the height
             st = replace(state_at(pl.pair, pl.top, st.z, pl.roll, scene, grids=False), warnings=st.warnings)
     elif load.approach is None:
@@ -753,6 +862,192 @@ def _geometry_extra(scene: Scene, pl: Placement) -> dict:
             "smoothing_error_rail": r.smoothing_error}
 
 
+def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fields: list, ratios, *,
+                     max_outer: int = 12, search=None):
+    """The vertical balance of a one-patch wheel with the contact solve as its normal solve (seed
+    Eq. 46; grid theory "exact"): each pass solves the contact problem on the patch geometry of
+    ``st`` with the normal force ``fn`` prescribed; its approach a gives the height at which fn
+    acts, z + (a - a_st) / cos(delta), and its FZ = FN cos d + FS sin d the next normal force (the
+    fixed point W / (cos d + (FS/FN) sin d), then secant steps on FZ(FN) over the passes on one
+    geometry).  The next pass lowers the geometry to the predicted height (the approach of the
+    new force from a ~ FN^(2/3)) or, beyond BALANCE_ZTOL from the searched height, searches it
+    again (``search(z)``); after a search one force-prescribed normal solve puts the height where
+    the patch carries fn (the approach of a searched grid moves in small steps with the height).
+    Done when |FZ - W| <= ONE_PATCH_TOL W, the approach agrees with the height within DZ_FINAL
+    and the geometry lies within BALANCE_ZTOL.  A pass costs one contact solve, started from the
+    latest tractions of the patch (``fields``).
+
+    Returns (state, results, problems, ratios, passes, fields, normal solves), or None when the contact leaves
+    the one-patch case (another patch appears, the wheel lifts off, no convergence in
+    ``max_outer`` passes): the caller then balances with :func:`loaded_state`."""
+    W = scene.load.wheel_load
+    mirror = pl.pair.mirror
+    passes: list[tuple[float, float]] = []
+    normal_solves = [0]
+
+    def settle(st: PairState, fn: float) -> PairState | None:
+        """The state lowered to the height where the patch carries fn (a force-prescribed normal
+        solve per geometry, searched again while that height lies beyond BALANCE_ZTOL)."""
+        for _ in range(MAX_SEARCHES):
+            if len(st.patches) != 1:
+                return None
+            warn: list[str] = []
+            dz, _ = linear_balance(st, scene, None, counts=normal_solves, warnings=warn, fields=fields,
+                                   normal_force=fn)
+            z_geo = st.z if st.z_geometry is None else st.z_geometry
+            if abs(st.z + dz - z_geo) <= BALANCE_ZTOL:
+                return replace(st.lowered(dz), warnings=tuple(warn))
+            try:
+                st = search(st.z + dz)
+            except NoContactError:
+                return None
+        return None
+
+    st = settle(st, fn) if st.z_geometry is None else st
+    for k in range(1, max_outer + 1):
+        if st is None:
+            return None
+        pg = st.patches[0]
+        c = math.cos(pg.patch.delta)
+        problem = problems_at(scene, pl, st, [fn])[0]
+        problem = replace(problem, start=_contact_start(fields, pg, problem))
+        r = solve_problem(problem)
+        if r.field is not None:
+            fields = [PatchField(pg.patch.s_ref, r.field.grid, r.field.pn, r.field.px, r.field.py)]
+        if not (r.FN > 0 and r.approach > 0):
+            return None
+        dz = (r.approach - pg.approach) / c
+        FZ = float(track_forces(r, problem.info["contact_angle"])[2])
+        ratio = mirror * r.FY / r.FN
+        ratios = [(pg.patch.s_ref, ratio)]
+        balanced = abs(FZ - W) <= ONE_PATCH_TOL * W
+        if balanced and abs(dz) <= DZ_FINAL and st.geometry_offset <= BALANCE_ZTOL:
+            return st, [r], [problem], ratios, k, fields, normal_solves[0]
+        passes.append((fn, FZ))
+        fn_next = fn
+        if not balanced:
+            w = c + ratio * math.sin(pg.patch.delta)
+            fn_next = W / w if w > 0 else fn
+            if len(passes) >= 2 and passes[-1][1] != passes[-2][1] and passes[-1][0] != passes[-2][0]:
+                (f0, F0), (f1, F1) = passes[-2], passes[-1]
+                sec = f1 + (W - F1) * (f1 - f0) / (F1 - F0)
+                fn_next = sec if 0.5 * f1 < sec < 2.0 * f1 else fn_next
+        z_next = st.z + dz + r.approach * ((fn_next / fn) ** (2.0 / 3.0) - 1.0) / c
+        z_geo = st.z if st.z_geometry is None else st.z_geometry
+        if abs(z_next - z_geo) > BALANCE_ZTOL:
+            try:
+                st = settle(search(z_next), fn_next)
+            except NoContactError:
+                return None
+            passes = []
+        else:
+            st = st.lowered(z_next - st.z)
+        fn = fn_next
+    return None
+
+
+def _general_passes(scene: Scene, pl: Placement, ratios, lowering, fields: list, counts: list, max_outer: int):
+    """The vertical balance of any wheel: :func:`loaded_state` (the height from the normal
+    problems, :func:`balance_height`), a contact solve per patch, the ratios FS/FN back into the
+    balance on the kept geometry (a secant step on FZ(FN) for one patch) until the vertical force
+    of the contact solves carries the wheel load.  Returns (state, height, results, problems,
+    ratios, passes, extra normal solves)."""
+    W = scene.load.wheel_load
+    history = []
+    _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=lowering, counts_out=counts, warn=False,
+                              fields=fields)
+    extra_normal = 0
+    passes: list[tuple[float, float]] = []      # (FN, FZ) of the passes of a one-patch wheel
+    for outer in range(1, max_outer + 1):
+        z = st.z
+        problems = problems_at(scene, pl, st, fns)
+        if MODELS.accepts(scene.model.theory, WARM_START):   # the latest tractions of this patch start the iterations
+            problems = [replace(p, start=_contact_start(fields, pg, p)) for p, pg in zip(problems, st.patches)]
+        results = [solve_problem(p) for p in problems]
+        fields = [PatchField(pg.patch.s_ref, r.field.grid, r.field.pn, r.field.px, r.field.py)
+                  for pg, r in zip(st.patches, results) if r.field is not None]
+        FZ = sum(track_forces(r, p.info["contact_angle"])[2] for r, p in zip(results, problems))
+        history.append({"z_ws": z, "FZ_track": float(FZ)})
+        # side-frame ratio FS/FN (mirroring flips both FS and the angle: the product is invariant)
+        ratios = [(pg.patch.s_ref, pl.pair.mirror * r.FY / r.FN if r.FN > 0 else 0.0)
+                  for pg, r in zip(st.patches, results)]
+        balanced = abs(FZ - W) <= BALANCE_TOL * W
+        if balanced and st.geometry_offset <= BALANCE_ZTOL:
+            break
+        # one patch: a secant step on FZ(FN) over the passes (the fixed point FN = W / (cos d + r sin d)
+        # converges slowly in flange contact, where FS sin d carries a third of the load)
+        fn_next = None
+        if len(st.patches) == 1:
+            passes.append((fns[0], FZ))
+            if len(passes) >= 2 and passes[-1][1] != passes[-2][1] and passes[-1][0] != passes[-2][0]:
+                (f0, F0), (f1, F1) = passes[-2], passes[-1]
+                fn_next = f1 + (W - F1) * (f1 - f0) / (F1 - F0)
+                fn_next = fn_next if 0.5 * f1 < fn_next < 2.0 * f1 else None
+        if balanced:      # the ratios have settled on the kept geometry: search it at the balanced height
+            _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
+                                      warn=False, fields=fields, normal_force=fns[0] if len(fns) == 1 else None)
+            passes = []   # a secant step spans passes on one geometry
+            continue
+        # the ratios changed: balance again on the same geometry (seed Eq. 46, linearised in the height)
+        n = [0]
+        warn: list[str] = []
+        dz, fns2 = linear_balance(st, scene, ratios, counts=n, warnings=warn, fields=fields,
+                                  normal_force=fn_next)
+        extra_normal += n[0]
+        if all(fn > 0 for fn in fns2) and len(fns2) == len(st.patches):
+            st, fns = replace(st.lowered(dz), warnings=tuple(warn)), fns2
+            if st.geometry_offset > GEOMETRY_REUSE:   # too far from the searched geometry: search again
+                _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
+                                          warn=False, fields=fields, normal_force=fn_next)
+                passes = []
+        else:
+            _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
+                                      warn=False)
+    else:
+        raise ConvergenceError(f"[load] wheel_load: the vertical balance did not converge in {max_outer} "
+                               f"iterations (FZ = {FZ:.1f} N for {W:g} N)")
+    return st, z, results, problems, ratios, len(history), extra_normal
+
+
+def _one_patch_start(scene: Scene, pl: Placement, warm: "WarmStart", fields: list, counts: list, max_outer: int):
+    """The start of :func:`one_patch_passes` and the passes: the patches searched at the
+    neighbour's lowering with FN = W / (cos d + r sin d) from its ratio, or without a neighbour the
+    normal-problem balance (:func:`loaded_state`); None (and the general balance) when that gives
+    other than one patch or the passes leave the one-patch case.  Returns (state, results, problems,
+    ratios, passes, searches) with the searches of the passes (those of a balance are in ``counts``)."""
+    W = scene.load.wheel_load
+    ratios = list(warm.ratios) or None
+    searches = [0]
+
+    def search(z):
+        searches[0] += 1
+        return state_at(pl.pair, pl.top, z, pl.roll, scene)
+
+    st, fn = None, None
+    if warm.lowering is not None and warm.lowering > 0:
+        try:
+            st = search(pl.z_touch + warm.lowering)
+        except NoContactError:
+            st = None
+    if st is None or len(st.patches) != 1:   # no neighbour, or the contact changed: the normal balance
+        _, st, fns = loaded_state(scene, pl, ratios=ratios, counts_out=counts, warn=False, fields=fields,
+                                  lowering=warm.lowering)
+        fn = fns[0] if len(fns) == 1 else None
+    if len(st.patches) != 1:
+        return None
+    if fn is None:
+        d = st.patches[0].patch.delta
+        w = math.cos(d) + _ratio(ratios, st.patches[0]) * math.sin(d)
+        if not w > 0:
+            return None
+        fn = W / w
+    out = one_patch_passes(scene, pl, st, fn, list(fields), ratios, max_outer=max_outer, search=search)
+    if out is None:
+        return None
+    st, results, problems, ratios, n, _, n_normal = out
+    return st, results, problems, ratios, n, searches[0], n_normal
+
+
 def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | None = None) -> Result:
     """Solve a wheel-rail scene with a planar model (one tangent-plane problem per patch): patches,
     vertical balance including the tangential forces (iterated), and the combined result with
@@ -776,89 +1071,31 @@ def solve_wheel_rail(scene: Scene, *, max_outer: int = 12, warm: WarmStart | Non
         out = combine_patches(results, problems, theory, ext, pl.pair)
         return replace(out, approach=pl.approach(st.z))
     W = scene.load.wheel_load
-    warm = warm or WarmStart()
+    warm = (warm or WarmStart()).at(scene.geometry.lateral_shift)
     ratios = list(warm.ratios) or None
-    lowering = warm.lowering
-    history = []
     counts: list[BalanceCounts] = []
-    pressures: dict = {}       # normal solutions of the balance: starts of the contact solves on their grids
-    _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=lowering, counts_out=counts, warn=False,
-                              pressures=pressures)
-    extra_normal = 0
-    starts: dict = {}
-    passes: list[tuple[float, float]] = []      # (FN, FZ) of the passes of a one-patch wheel
-    for outer in range(1, max_outer + 1):
+    # the latest tractions per patch (the neighbour's, then the balance's normal solutions and the
+    # contact solves): resampled onto each new grid, they start the normal and contact solves
+    fields: list[PatchField] = list(warm.fields)
+    one = _one_patch_start(scene, pl, warm, fields, counts, max_outer) if MODELS.accepts(theory, WARM_START) else None
+    if one is not None:
+        st, results, problems, ratios, n_passes, searches, extra_normal = one
         z = st.z
-        problems = problems_at(scene, pl, st, fns)
-        if MODELS.accepts(scene.model.theory, WARM_START):   # the previous pass on the same grid starts the iterations
-            problems = [replace(p, start=_start_for(pg.grid, starts, pressures, pl.pair.side))
-                        for p, pg in zip(problems, st.patches)]
-        results = [solve_problem(p) for p in problems]
-        starts = {id(pg.grid): (pg.grid, (r.field.pn, r.field.px, r.field.py)) for pg, r in zip(st.patches, results)
-                  if r.field is not None}
-        FZ = sum(track_forces(r, p.info["contact_angle"])[2] for r, p in zip(results, problems))
-        history.append({"z_ws": z, "FZ_track": float(FZ)})
-        # side-frame ratio FS/FN (mirroring flips both FS and the angle: the product is invariant)
-        ratios = [(pg.patch.s_ref, pl.pair.mirror * r.FY / r.FN if r.FN > 0 else 0.0)
-                  for pg, r in zip(st.patches, results)]
-        balanced = abs(FZ - W) <= BALANCE_TOL * W
-        if balanced and st.geometry_offset <= BALANCE_ZTOL:
-            break
-        # one patch: a secant step on FZ(FN) over the passes (the fixed point FN = W / (cos d + r sin d)
-        # converges slowly in flange contact, where FS sin d carries a third of the load)
-        fn_next = None
-        if len(st.patches) == 1:
-            passes.append((fns[0], FZ))
-            if len(passes) >= 2 and passes[-1][1] != passes[-2][1] and passes[-1][0] != passes[-2][0]:
-                (f0, F0), (f1, F1) = passes[-2], passes[-1]
-                fn_next = f1 + (W - F1) * (f1 - f0) / (F1 - F0)
-                fn_next = fn_next if 0.5 * f1 < fn_next < 2.0 * f1 else None
-        if balanced:      # the ratios have settled on the kept geometry: search it at the balanced height
-            _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
-                                      warn=False, pressures=pressures, normal_force=fns[0] if len(fns) == 1 else None)
-            passes = []   # a secant step spans passes on one geometry
-            continue
-        # the ratios changed: balance again on the same geometry (seed Eq. 46, linearised in the height)
-        n = [0]
-        warn: list[str] = []
-        dz, fns2 = linear_balance(st, scene, ratios, counts=n, warnings=warn, pressures=pressures,
-                                  normal_force=fn_next)
-        extra_normal += n[0]
-        if all(fn > 0 for fn in fns2) and len(fns2) == len(st.patches):
-            st, fns = replace(st.lowered(dz), warnings=tuple(warn)), fns2
-            if st.geometry_offset > GEOMETRY_REUSE:   # too far from the searched geometry: search again
-                _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
-                                          warn=False, pressures=pressures, normal_force=fn_next)
-                passes = []
-        else:
-            _, st, fns = loaded_state(scene, pl, ratios=ratios, lowering=st.z - pl.z_touch, counts_out=counts,
-                                      warn=False)
+        counts.append(BalanceCounts(searches, 0))
     else:
-        raise ConvergenceError(f"[load] wheel_load: the vertical balance did not converge in {max_outer} "
-                               f"iterations (FZ = {FZ:.1f} N for {W:g} N)")
+        st, z, results, problems, ratios, n_passes, extra_normal = _general_passes(
+            scene, pl, ratios, warm.lowering, fields, counts, max_outer)
     st = replace(st, placement_warnings=tuple(placement_warnings(scene, pl, st)))
     balance = {"searches": sum(c.searches for c in counts),
                "normal_solves": sum(c.normal_solves for c in counts) + extra_normal,
-               "tangential_solves": len(history) * len(problems), "bracketing": any(c.bracketing for c in counts),
-               "lowering": float(z - pl.z_touch), "ratios": [[float(a), float(b)] for a, b in ratios]}
-    extra = {"z_ws": z, **geo_extra, "wheel_load": W, "balance_iterations": len(history), "balance": balance}
+               "tangential_solves": n_passes * len(problems), "bracketing": any(c.bracketing for c in counts),
+               "lowering": float(z - pl.z_touch), "ratios": [[float(a), float(b)] for a, b in ratios],
+               "one_patch_passes": one is not None, "lateral_shift": float(scene.geometry.lateral_shift)}
+    extra = {"z_ws": z, **geo_extra, "wheel_load": W, "balance_iterations": n_passes, "balance": balance}
     if st.warnings or st.placement_warnings:
         extra["warnings"] = list(st.warnings) + list(st.placement_warnings)
     out = combine_patches(results, problems, theory, extra, pl.pair)
     return replace(out, approach=pl.approach(z), converged=out.converged and not st.warnings)
-
-
-def _start_for(grid, starts: dict, pressures: dict, side: str):
-    """The start of a contact solve on ``grid`` (side frame): the previous pass's tractions on it,
-    else the balance's pressure on it (mirrored like the problem's grid for a left wheel), else None."""
-    hit = starts.get(id(grid))
-    if hit is not None and hit[0] is grid:
-        return hit[1]
-    hit = pressures.get(id(grid))
-    if hit is not None and hit[0] is grid:
-        pn = hit[1] if side == "right" else hit[1][:, ::-1]
-        return (pn, None, None)
-    return None
 
 
 def curved_creepages(pair: WheelRailPair, z: float, motion: WheelsetMotion, grid, patch: Patch) -> Creepages:

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from conformal.errors import ConvergenceError, InputError, NoContactError
-from conformal.geometry.search import ContactPoint, RailTop, newton_contact, wheel_locus
+from conformal.geometry.search import ContactPoint, Locus, RailTop, newton_contact, wheel_locus
 from conformal.geometry.surfaces import RailSurface, WheelSurface
 from conformal.grid import CurvedGrid, PlanarGrid
 from conformal.scene import check_grid_memory
@@ -73,23 +73,39 @@ class Patch:
 
 
 # ----------------------------------------------------------------------------- lobes
-def locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop):
+#: locus samples higher than this (mm) above the rail top are not projected onto the rail profile
+#: (their overlap is set to minus their vertical gap): an overlap needs a vertical gap < 0, and
+#: neighbouring samples (0.05 mm apart) differ in gap by far less than this
+NEAR_GAP = 2.0
+
+
+def locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locus: Locus | None = None):
     """Locus samples with their rail arc length s_r, normal overlap pen (> 0 inside the rail) and
-    the rolling-direction curvature A = (e_r . n) / (2 rho) of the gap."""
-    loc = wheel_locus(wheel, top)
+    the rolling-direction curvature A = (e_r . n) / (2 rho) of the gap.  ``locus``: the wheel's
+    locus if known (:func:`~conformal.geometry.search.pair_locus`).  Samples more than NEAR_GAP
+    above the rail top get pen = -gap and s_r = A = NaN (all samples are projected when none is
+    that near)."""
+    loc = locus if locus is not None else wheel_locus(wheel, top)
     ok = np.isfinite(loc.theta) & np.isfinite(loc.gap)
-    pts = loc.points
-    s_r = rail.project(pts[:, 1:], top.s_near(pts[:, 1:]))     # closest rail point, from the nearest sample
-    Y, Z, Y1, Z1, _, _ = rail.profile(s_r)
+    near = ok & (loc.gap < NEAR_GAP)
+    if not near.any():
+        near = ok
+    k = np.nonzero(near)[0]
+    pts = loc.points[k]
+    s_k = rail.project(pts[:, 1:], top.s_near(pts[:, 1:]))     # closest rail point, from the nearest sample
+    Y, Z, Y1, Z1, _, _ = rail.profile(s_k)
     g = np.hypot(Y1, Z1)
     ny, nz = -Z1 / g, Y1 / g
-    pen = (pts[:, 1] - Y) * ny + (pts[:, 2] - Z) * nz
-    er = wheel.e_r(np.nan_to_num(loc.theta))
-    rho = wheel.rolling_radius(loc.s)
-    A = np.clip((er[:, 1] * ny + er[:, 2] * nz) / (2 * rho), 1e-6, None)
+    pen_k = (pts[:, 1] - Y) * ny + (pts[:, 2] - Z) * nz
+    er = wheel.e_r(np.nan_to_num(loc.theta[k]))
+    rho = wheel.rolling_radius(loc.s[k])
+    A_k = np.clip((er[:, 1] * ny + er[:, 2] * nz) / (2 * rho), 1e-6, None)
     # points that project onto an end of the rail are not over the rail
-    inside = ok & (s_r > 1e-6) & (s_r < rail.curve.length - 1e-6)
-    pen = np.where(inside, pen, np.nan)
+    inside = (s_k > 1e-6) & (s_k < rail.curve.length - 1e-6)
+    n = loc.s.size
+    s_r, A = np.full(n, np.nan), np.full(n, np.nan)
+    pen = np.where(ok, -loc.gap, np.nan)
+    s_r[k], A[k], pen[k] = s_k, A_k, np.where(inside, pen_k, np.nan)
     return loc, s_r, pen, A
 
 
@@ -102,12 +118,13 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 
 def find_patches(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = None, *,
-                 d_comb: float = D_COMB) -> list[Patch]:
-    """The contact patches of the wheel at its current height, most penetrating first.
+                 d_comb: float = D_COMB, locus: Locus | None = None) -> list[Patch]:
+    """The contact patches of the wheel at its current height, most penetrating first
+    (``locus``: the wheel's contact locus if known, :func:`~conformal.geometry.search.pair_locus`).
 
     Raises NoContactError (with the smallest gap) when the wheel does not touch the rail."""
     top = top or RailTop.of(rail)
-    loc, s_r, pen, A = locus_penetration(wheel, rail, top)
+    loc, s_r, pen, A = locus_penetration(wheel, rail, top, locus)
     if not np.isfinite(pen).any():
         raise NoContactError("wheel-rail contact: the wheel is not over the rail")
     pmax = float(np.nanmax(pen))
@@ -118,8 +135,9 @@ def find_patches(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = N
             gap = -newton_contact(wheel, rail, (loc.s[i], loc.theta[i], loc.points[i, 0], s_r[i])).penetration
         except ConvergenceError:
             pass
-        raise NoContactError(f"wheel lifted off: the smallest gap between wheel and rail is "
-                             f"{gap:.4g} mm (at rail y = {float(rail.curve.y(s_r[i])):.2f} mm)")
+        where = (f" (at rail y = {float(rail.curve.y(s_r[i])):.2f} mm)" if np.isfinite(s_r[i])
+                 else f" (side-frame y = {loc.points[i, 1]:.2f} mm)")
+        raise NoContactError(f"wheel lifted off: the smallest gap between wheel and rail is {gap:.4g} mm{where}")
     runs = _runs(np.nan_to_num(pen, nan=-1.0) > 0)
     valid = np.isfinite(pen)
     for a, b in runs:
@@ -194,8 +212,7 @@ def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: n
         er, et = wheel.e_r(th), wheel.e_t(th)
         r = f.O + u[:, None] * f.a + rho[:, None] * er
         F = r - Q - t[:, None] * n
-        J = np.stack([u1[:, None] * f.a + rho1[:, None] * er, rho[:, None] * et, -n], axis=2)
-        d = np.linalg.solve(J, -F[..., None])[..., 0]
+        d = _solve3(u1[:, None] * f.a + rho1[:, None] * er, rho[:, None] * et, -n, -F)
         d[:, 0] = np.clip(d[:, 0], -2.0, 2.0)
         d[:, 1] = np.clip(d[:, 1], -0.05, 0.05)
         s = np.clip(s + d[:, 0], 0.0, L)
@@ -207,6 +224,17 @@ def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: n
         raise ConvergenceError(f"wheel surface: the normal lines do not meet the wheel (residual "
                                f"{np.max(np.abs(F)):.2e} mm); the patch reaches beyond the wheel profile")
     return s, th, t
+
+
+def _solve3(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solutions d (N, 3) of the 3 x 3 systems [c0 c1 c2] d = b (columns and b (N, 3)), by
+    Cramer's rule (a batched numpy.linalg.solve costs several times more at these sizes)."""
+    k12, k20, k01 = np.cross(c1, c2), np.cross(c2, c0), np.cross(c0, c1)
+    det = np.einsum("ij,ij->i", c0, k12)
+    if not np.all(np.abs(det) > 0.0):
+        raise np.linalg.LinAlgError("singular matrix")
+    return np.stack([np.einsum("ij,ij->i", b, k12), np.einsum("ij,ij->i", b, k20),
+                     np.einsum("ij,ij->i", b, k01)], axis=1) / det[:, None]
 
 
 def rail_on_lines(rail: RailSurface, Q: np.ndarray, n: np.ndarray, s0: np.ndarray, *,

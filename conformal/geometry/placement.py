@@ -24,7 +24,7 @@ change sign.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
@@ -91,12 +91,30 @@ class WheelRailPair:
     offset: float          # axial position of the wheel-profile origin from the wheelset centre
     pose: SidePose
     side: str = "right"
+    #: the contact locus samples at z = 0 by sampling step (filled on first use, see locus_samples)
+    _loci: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def frame(self, z: float) -> WheelFrame:
         return WheelFrame.from_pose(self.pose.y, z, self.pose.roll, self.pose.yaw, self.radius)
 
     def wheel(self, z: float) -> WheelSurface:
         return WheelSurface(self.wheel_curve, self.radius, self.offset, self.frame(z))
+
+    def locus_samples(self, z: float, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(s_w, theta, points (n, 3)) of the wheel's contact locus (:meth:`WheelSurface.locus_theta`)
+        sampled every ``step`` mm of wheel profile, at wheelset height z.  The locus is rigid under
+        a vertical translation of the wheelset (theta depends on the orientation only), so it is
+        computed once per pair at z = 0 and moved by z: a contact search at many trial heights of
+        one position samples the wheel once."""
+        hit = self._loci.get(step)
+        if hit is None:
+            wheel = self.wheel(0.0)
+            s, _ = wheel.curve.sample(step)
+            th = wheel.locus_theta(s)
+            hit = (s, th, wheel.point(s, np.nan_to_num(th)))
+            self._loci[step] = hit
+        s, th, pts = hit
+        return s, th, pts + np.array([0.0, 0.0, z])
 
     @property
     def mirror(self) -> float:

@@ -121,6 +121,18 @@ def wheel_locus(wheel: WheelSurface, top: RailTop, step: float = LOCUS_STEP) -> 
     s, _ = wheel.curve.sample(step)
     th = wheel.locus_theta(s)
     pts = wheel.point(s, np.nan_to_num(th))
+    return _locus(s, th, pts, top)
+
+
+def pair_locus(pair, top: RailTop, z: float, step: float = LOCUS_STEP) -> Locus:
+    """The contact locus of the wheel of ``pair`` (a :class:`~conformal.geometry.placement.WheelRailPair`)
+    at wheelset height z: the pair's locus sampled once and moved by z
+    (:meth:`~conformal.geometry.placement.WheelRailPair.locus_samples`), equal to
+    ``wheel_locus(pair.wheel(z), top)`` to rounding."""
+    return _locus(*pair.locus_samples(z, step), top)
+
+
+def _locus(s: np.ndarray, th: np.ndarray, pts: np.ndarray, top: RailTop) -> Locus:
     gap = top.z_at(pts[:, 1]) - pts[:, 2]
     gap = np.where(np.isnan(th), np.nan, gap)
     return Locus(s, th, pts, gap)
@@ -296,11 +308,12 @@ class SearchResult:
 
 
 def find_contacts(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = None, *,
-                  window: float = 1.0) -> SearchResult:
+                  window: float = 1.0, locus: Locus | None = None) -> SearchResult:
     """All distinct contact candidates whose vertical gap is within ``window`` mm of the smallest,
-    refined by Newton-Raphson; deepest (largest penetration) first."""
+    refined by Newton-Raphson; deepest (largest penetration) first.  ``locus``: the wheel's locus
+    if known (:func:`pair_locus`)."""
     top = top or RailTop.of(rail)
-    loc = wheel_locus(wheel, top)
+    loc = locus if locus is not None else wheel_locus(wheel, top)
     if not np.isfinite(loc.gap).any():
         raise NoContactError("contact search: the wheel does not lie over the rail "
                              "(no part of the wheel profile is above the rail profile)")
@@ -343,12 +356,12 @@ def touch_height(pair, top: RailTop | None = None, z0: float = 0.0, *, tol: floa
     envelope's resolution in one step; Newton-Raphson contact points then correct it
     (a vertical move dz changes the penetration by dz n_z)."""
     top = top or RailTop.of(pair.rail)
-    loc = wheel_locus(pair.wheel(z0), top)
+    loc = pair_locus(pair, top, z0)
     if not np.isfinite(loc.gap).any():
         raise NoContactError("contact search: the wheel does not lie over the rail")
     z = z0 + float(np.nanmin(loc.gap))
     for _ in range(maxit):
-        sr = find_contacts(pair.wheel(z), pair.rail, top)
+        sr = find_contacts(pair.wheel(z), pair.rail, top, locus=pair_locus(pair, top, z))
         c = sr.contacts[0]
         dz = -c.penetration / c.normal[2]
         z += dz
