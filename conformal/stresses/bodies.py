@@ -174,25 +174,28 @@ def _split_halfspace(bm, grid, loads_of, X: np.ndarray, G: float, nu: float) -> 
     return out
 
 
-def _mesh_isolated(model, patch, spec, attempts: int = 3):
-    """:func:`mesh_body` in a forked child process, retried: gmsh's mesh generation has aborted
-    the whole process (heap corruption, intermittent) on the S1002/UIC60 bodies with conform =
-    "all"; a crashed child is retried up to ``attempts`` times before an FESolveError (exit 2 in
-    the CLI, a note in the study, instead of the lost process)."""
+def _mesh_isolated(model, patch, spec):
+    """:func:`mesh_body` with gmsh's Delaunay 3-D mesher, in a forked child process.
+
+    The bodies here are swept in one slab per strip column (``conform = "all"``), each dx thick
+    across the whole cross-section; HXT (mesh_body's default) aborted the whole process on them
+    (its boundary recovery inserts Steiner points on the surface mesh, an unfinished path of gmsh
+    4.15: S1002/UIC60 at 6.2 and 6.25 mm and the deep pair, deterministic), Delaunay meshes them
+    (see :func:`conformal.meshing.gmsh_body.mesh_body`).  The child keeps any other abort of
+    gmsh from killing the caller: it ends in an FESolveError (exit 2 in the CLI, a note in the
+    study)."""
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor
     from concurrent.futures.process import BrokenProcessPool
 
-    for k in range(attempts):
-        try:
-            with ProcessPoolExecutor(1, mp_context=mp.get_context("fork")) as ex:
-                return ex.submit(mesh_body, model, patch, spec).result()
-        except BrokenProcessPool:
-            continue
-    from conformal.influence.factor import FESolveError
+    try:
+        with ProcessPoolExecutor(1, mp_context=mp.get_context("fork")) as ex:
+            return ex.submit(mesh_body, model, patch, spec, algorithm3d=1).result()
+    except BrokenProcessPool:
+        from conformal.influence.factor import FESolveError
 
-    raise FESolveError(f"stresses: gmsh aborted meshing the {model.kind} body ({attempts} tries); try other "
-                       "[model] fe_h_load / fe_h_patch or [grid] n")
+        raise FESolveError(f"stresses: gmsh aborted meshing the {model.kind} body; try other [model] fe_h_load / "
+                           "fe_h_patch or [grid] n") from None
 
 
 def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FESettings = FESettings(),
