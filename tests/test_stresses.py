@@ -450,6 +450,40 @@ def test_fe_large_flat_wheel_gives_the_halfspace_stresses(tmp_path):
 
 
 @pytest.mark.slow
+def test_fe_flat_wheel_rolling_block_dang_van():
+    """The FE wheel on the whole block of the half-space field (the rolling pass, Dang Van): the
+    block's columns are the circles about the axle, and its half-space part a convolution of one
+    kernel per profile row along the columns (conformal.stresses.bodies._wheel_rolling_block).  On
+    the flat wheel of radius 1e5 mm (as above) the block equals the half-space stresses of body 2
+    within 1e-4 of their size at every point of all 8 columns (a wrong column offset in the
+    convolution or a wrong turn about the axle would misfit by the size of the stresses;
+    measured 8e-6) and the Dang Van equivalent stress of every line within 1e-4 of it."""
+    from conformal.solvers.conformal import CurvedTractionField
+    from conformal.stresses.bodies import body_stresses
+    from conformal.stresses.field import stress_field
+
+    R = 1.0e5
+    cg = _tilted_strip(0.0, mx=8, ms=5, dx=0.4, ds=0.4)
+    prof = np.c_[np.linspace(-40, 40, 801), np.zeros(801)]
+    cg = type(cg)(**{**cg.__dict__, "rail_curve": np.c_[np.linspace(-5, 7, 121), np.zeros(121)],
+                     "rail_curve_s": np.linspace(0, 12, 121) - 5.0, "wheel_profile": prof,
+                     "wheel_centre": np.array([0.0, 0.0, -R]), "wheel_radius": R})
+    X, S = cg.mesh()
+    pn = 900.0 * np.clip(1 - (X / 1.2) ** 2 - ((S - cg.s_ref) / 0.9) ** 2, 0, None) ** 0.5
+    f = CurvedTractionField(PlanarGrid(8, 5, 0.4, 0.4, cg.xl, -1.0), pn=pn, px=0.3 * pn, py=0.1 * pn,
+                            status=(pn > 0).astype(int), curved=cg)
+    sf = stress_field(f, np.linspace(0.0, 1.0, 6), nu=0.28, body=2)
+    bs = body_stresses(f, sf.points, body=2, G=82000.0, nu=0.28, profile_points=prof, rolling_block=True)
+    scale = np.abs(sf.sigma).max()
+    assert scale > 300.0 and bs.sigma.shape == sf.sigma.shape
+    assert np.abs(bs.sigma - sf.sigma).max() < 1e-4 * scale
+    tau_fe, _ = dang_van(bs.sigma, 1 / 3, axis=1)
+    tau_hs, _ = dang_van(sf.sigma, 1 / 3, axis=1)
+    assert tau_hs.max() > 0.1 * scale
+    assert np.abs(tau_fe - tau_hs).max() < 1e-4 * scale
+
+
+@pytest.mark.slow
 def test_gauge_corner_study_quick(tmp_path):
     """studies/gauge_corner_stresses.py --quick (flange root at 6.2 mm, coarse strip, half-space):
     the superposed field meets the traction condition sigma_nn = -p at the surface within 1 % of
