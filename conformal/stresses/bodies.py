@@ -293,6 +293,8 @@ def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FE
         raise InputError(f"stresses: body must be 1 or 2, got {body!r}")
     t0 = time.perf_counter()
     pts = np.asarray(points, float)
+    if rolling_block and (pts.ndim != 4 or pts.shape[1] != grid.mx):
+        raise InputError(f"stresses: a rolling block needs points (nd, {grid.mx}, nc, 3), got {pts.shape}")
     shape = pts.shape[:-1]
     P = pts.reshape(-1, 3)
     pn, px, ps = (np.asarray(field.side_frame(k), float) for k in ("pn", "px", "py"))
@@ -349,8 +351,6 @@ def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FE
 
     # the FE correction's stress at the points (P1: constant per tetrahedron)
     if rolling_block and body == 2:
-        if pts.ndim != 4 or pts.shape[1] != grid.mx:
-            raise InputError(f"stresses: a rolling block needs points (nd, {grid.mx}, nc, 3), got {pts.shape}")
         sig_hs, sig_c = _wheel_rolling_block(m, place, bm, grid, sources, correction, pts, G, nu, ic)
         sig_hs, sig_c = sig_hs.reshape(-1, 3, 3), sig_c.reshape(-1, 3, 3)
     else:
