@@ -20,7 +20,9 @@ half-space field of the elements on their tangent planes plus the FE correction 
 one FE solve with the final load) and inside the FE wheel (the opposite tractions in the wheel's
 element frames), each on the cross-section through that body's half-space von Mises maximum,
 against the half-space stresses at the same points ("FE body, section" and "half-space, same
-section"; tau_DV is not evaluated there: it needs the whole rolling pass).
+section"), and over the whole block of the half-space field with the Dang Van index of the rolling
+pass ("FE body, whole block" and "half-space, whole block"; the wheel's block on circles about its
+axle, conformal.stresses.bodies).
 
 Writes to --out (default studies/out/gauge_corner_stresses): gauge_corner_stresses.csv, .md, and
 <case>_<influence>_rail.png / _wheel.png (slices, von Mises and orthogonal shear, per-depth maxima),
@@ -121,20 +123,25 @@ def run_case(name, path, shift, influence, args):
             t1 = time.perf_counter()
             stem = f"{name}_{influence}_fe_section" + ("" if who == "rail" else "_wheel")
             vtu = Path(args.out) / f"{name}_{influence}_fe_{who}.vtu" if args.vtu else None
-            sec, pts, bs, hs_sigma = fe_body_section_data(result, scene, fields[who], vtu=vtu)
+            sec, pts, bs, hs_sigma = fe_body_section_data(result, scene, fields[who], vtu=vtu, params=PARAMS)
             figures.append((fields[who], pts, bs, hs_sigma, Path(args.out) / f"{stem}.png"))
             base = next(r for r in rows if r["body"] == who and r["frame"] == "strip")
-            for frame, key in (("FE body, section", "fe"), ("half-space, same section", "halfspace")):
-                m = sec[key]
+            for frame, m, dv in (("FE body, section", sec["fe"], None),
+                                 ("half-space, same section", sec["halfspace"], None),
+                                 ("FE body, whole block", sec["block"]["fe"], sec["dang_van"]["fe"]),
+                                 ("half-space, whole block", sec["block"]["halfspace"], sec["dang_van"]["halfspace"])):
+                nan = float("nan")
                 rows.append({**{k: base[k] for k in ("case", "influence", "FN", "FX", "FY", "pmax", "a", "b", "FI_surf")},
                              "body": who, "frame": frame, "max_von_mises": m["max_von_mises"],
                              "vm_depth": m["max_von_mises_depth"], "vm_y": m["max_von_mises_position"][1],
                              "vm_z": m["max_von_mises_position"][2], "max_shear": m["max_shear"],
                              "shear_depth": m["max_shear_depth"], "max_orthogonal_shear": m["max_orthogonal_shear"],
-                             "orth_depth": m["max_orthogonal_shear_depth"], "tau_dv": float("nan"),
-                             "dv_depth": float("nan"), "FI_sub": float("nan"), "solve_s": t_solve,
+                             "orth_depth": m["max_orthogonal_shear_depth"],
+                             "tau_dv": dv["tau_dv_max"] if dv else nan, "dv_depth": dv["depth"] if dv else nan,
+                             "FI_sub": dv["FI_sub"] if dv else nan, "solve_s": t_solve,
                              "stress_s": time.perf_counter() - t1,
-                             "surface_check": f"x = {sec['section_x']:.2f} mm, max |sigma_c| {sec['max_correction']:.1f}, "
+                             "surface_check": f"x = {sec['section_x']:.2f} mm, max |sigma_c| "
+                                              f"{sec['max_correction'] if dv is None else sec['max_correction_block']:.1f}, "
                                               f"{sec['stats']['dofs']} unknowns"})
             print(f"  FE {who}: {sec['stats']['dofs']} unknowns, {time.perf_counter() - t1:.0f} s", flush=True)
         for sf, pts, bs, hs_sigma, fig in figures:
@@ -179,8 +186,7 @@ def main(argv=None) -> int:
     ap.add_argument("--no-fe", action="store_true", help="half-space influence numbers only")
     ap.add_argument("--no-fe-body", action="store_true", help="no FE body stresses (conformal.stresses.bodies)")
     ap.add_argument("--cases", help="comma-separated subset of " + ", ".join(c[0] for c in CASES))
-    ap.add_argument("--fe-h-load", type=float, help="[model] fe_h_load of the FE bodies (gmsh aborted meshing the "
-                    "S1002 wheel at 6.2 mm, n = 24 with the default 0.5 and conform = all; 0.45 meshes)")
+    ap.add_argument("--fe-h-load", type=float, help="[model] fe_h_load of the FE bodies (default: the scene's)")
     ap.add_argument("--vtu", action="store_true", help="also write the FE bodies' stresses as VTU (ParaView)")
     ap.add_argument("--n", type=int, help="[grid] n of every scene (default: the scenes' 40 and 30)")
     ap.add_argument("--out", help="output folder")

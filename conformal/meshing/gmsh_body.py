@@ -484,8 +484,17 @@ def closure_report(original, body: BodyModel, patch: StripPatch, ext: BodyExtent
 
 
 def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
-              extent: BodyExtent | None = None, *, threads: int = 1) -> BodyMesh:
+              extent: BodyExtent | None = None, *, threads: int = 1, algorithm3d: int | None = None) -> BodyMesh:
     """Build and mesh one body for a patch (gmsh, OpenCASCADE).  Raises MeshingError on failure.
+
+    ``algorithm3d``: gmsh's 3-D mesher; None (default) HXT (10), and gmsh's Delaunay (1) where HXT
+    leaves the volume empty; 1: Delaunay only.  With ``conform = "all"`` the body is swept in
+    slabs one column (dx) thick that span the whole cross-section, whose faces carry triangles
+    up to h_max (tens of dx) far from the patch; HXT's boundary recovery then inserts Steiner
+    points on the surface mesh ("Steiner point inserted that splits an existing edge (boundary
+    mesh has changed ...)", an unfinished path of gmsh 4.15's HXT) and aborts the process
+    (heap corruption / SIGSEGV, deterministic; S1002/UIC60 at 6.2 and 6.25 mm and the deep pair,
+    n = 24): such bodies need ``algorithm3d = 1``, which recovers them.
 
     ``threads = 1`` (default) makes the mesh reproducible: gmsh's HXT mesher with 2 threads gave a
     different mesh on every run (node counts differing by one or two, influence numbers by up to
@@ -511,7 +520,11 @@ def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
     # HXT (fast) first; where it cannot recover the surface mesh ("failed to recover constrained
     # triangles", S1002 at a 5 mm shift) it leaves gmsh unusable ("I'm busy"), so the whole model
     # is built again for gmsh's Delaunay mesher (slower, more tolerant)
+    if algorithm3d not in (None, 1):
+        raise InputError(f"mesh_body: algorithm3d must be None (HXT, Delaunay fallback) or 1, got {algorithm3d!r}")
     try:
+        if algorithm3d == 1:
+            raise _NoTetrahedra()
         pts, tets, free, clamped, t1, t2 = _generate(gmsh, body, patch, ext, spec, h_e, threads, 10, joints)
     except _NoTetrahedra:
         pts, tets, free, clamped, t1, t2 = _generate(gmsh, body, patch, ext, spec, h_e, threads, 1, joints)

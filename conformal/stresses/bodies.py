@@ -174,32 +174,111 @@ def _split_halfspace(bm, grid, loads_of, X: np.ndarray, G: float, nu: float) -> 
     return out
 
 
-def _mesh_isolated(model, patch, spec, attempts: int = 3):
-    """:func:`mesh_body` in a forked child process, retried: gmsh's mesh generation has aborted
-    the whole process (heap corruption, intermittent) on the S1002/UIC60 bodies with conform =
-    "all"; a crashed child is retried up to ``attempts`` times before an FESolveError (exit 2 in
-    the CLI, a note in the study, instead of the lost process)."""
+def _mesh_isolated(model, patch, spec):
+    """:func:`mesh_body` with gmsh's Delaunay 3-D mesher, in a forked child process.
+
+    The bodies here are swept in one slab per strip column (``conform = "all"``), each dx thick
+    across the whole cross-section; HXT (mesh_body's default) aborted the whole process on them
+    (its boundary recovery inserts Steiner points on the surface mesh, an unfinished path of gmsh
+    4.15: S1002/UIC60 at 6.2 and 6.25 mm and the deep pair, deterministic), Delaunay meshes them
+    (see :func:`conformal.meshing.gmsh_body.mesh_body`).  The child keeps any other abort of
+    gmsh from killing the caller: it ends in an FESolveError (exit 2 in the CLI, a note in the
+    study)."""
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor
     from concurrent.futures.process import BrokenProcessPool
 
-    for k in range(attempts):
-        try:
-            with ProcessPoolExecutor(1, mp_context=mp.get_context("fork")) as ex:
-                return ex.submit(mesh_body, model, patch, spec).result()
-        except BrokenProcessPool:
-            continue
-    from conformal.influence.factor import FESolveError
+    try:
+        with ProcessPoolExecutor(1, mp_context=mp.get_context("fork")) as ex:
+            return ex.submit(mesh_body, model, patch, spec, algorithm3d=1).result()
+    except BrokenProcessPool:
+        from conformal.influence.factor import FESolveError
 
-    raise FESolveError(f"stresses: gmsh aborted meshing the {model.kind} body ({attempts} tries); try other "
-                       "[model] fe_h_load / fe_h_patch or [grid] n")
+        raise FESolveError(f"stresses: gmsh aborted meshing the {model.kind} body; try other [model] fe_h_load / "
+                           "fe_h_patch or [grid] n") from None
+
+
+def _rot_y(phi: float) -> np.ndarray:
+    """Rotation by phi about the wheel's axle (mesh y): the point at angle 0 (x = 0, z - axle_z = r)
+    goes to x = r sin(phi) (the mesh's rolling coordinate grows with phi)."""
+    c, s = math.cos(phi), math.sin(phi)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def _rect_stress_graded(q: np.ndarray, dx: float, dy: float, G: float, nu: float) -> np.ndarray:
+    """rectangle_stress (n, 3, 3, 3 local loads) at local points q: the closed form within 4 element
+    sizes, 3 x 3 Gauss point forces up to 10 (error ~ (h/r)^6), one point force beyond (~ (h/r)^2,
+    1e-2 of a contribution that is itself ~1e-2 of the near field), the grading of the FE residual load."""
+    from conformal.stresses.rectangle import _gauss_rectangle_stress, rectangle_stress
+
+    h = max(dx, dy)
+    r = np.maximum(np.abs(q[:, 0]), np.abs(q[:, 1]))
+    out = np.empty((len(q), 3, 3, 3))
+    near = r <= 4 * h
+    mid = (~near) & (r <= 10 * h)
+    far = r > 10 * h
+    if near.any():
+        out[near] = rectangle_stress(q[near], dx, dy, G=G, nu=nu, near=None)
+    for sel, ng in ((mid, 3), (far, 1)):
+        if sel.any():
+            out[sel] = _gauss_rectangle_stress(q[sel, 0], q[sel, 1], np.maximum(q[sel, 2], 1e-12 * h), dx, dy, nu, ng)
+    return out
+
+
+def _wheel_rolling_block(m, place, bm, grid, sources, correction, P: np.ndarray, G: float, nu: float, ic: int):
+    """sigma_hs, sigma_c (nd, mx, nc, 3, 3) of the wheel on the rolling block ``P`` (nd, mx, nc, 3)
+    (a StressField's points: axis 1 the strip's columns).
+
+    The wheel's material points travel on circles about its axle: the point of column ix is the
+    section point of column ic (the mesh's angle 0) turned about the axle by (ix - ic) dx / R_ref,
+    and its stress is turned back by the same angle, so that each line along axis 1 is the stress
+    history of one material point in its own (co-rotating) frame, as Dang Van's criterion needs.
+    The half-space part of the wheel's own tangent planes (:func:`_split_halfspace`) is then a
+    convolution along the columns: source row J of column ix_s acts on column ix as the source of
+    column ic on the column ic + ix - ix_s (the body is one of revolution), one kernel per row J."""
+    nd, mx, nc = P.shape[:3]
+    r_ref = float(bm.extent.x_ref_radius)
+    axle = np.array([0.0, 0.0, float(bm.body.axle_z)])
+    X0 = place.to_mesh(P[:, ic].reshape(-1, 3)) - axle                 # (npts, 3) about the axle
+    npts = len(X0)
+    sig_c = np.empty((mx, npts, 3, 3))
+    for ix in range(mx):
+        Rm = _rot_y((ix - ic) * grid.dx / r_ref)
+        sig_c[ix] = Rm.T @ correction(_locate_tets(m, X0 @ Rm.T + axle)) @ Rm
+    loads0 = _loads(bm, 0.0)
+    cols = np.array([int(round(x0 / grid.dx)) + ic for x0, _, _ in sources])
+    off = np.arange(-(int(cols.max()) if cols.size else 0), mx - (int(cols.min()) if cols.size else 0))
+    Rms = np.stack([_rot_y(o * grid.dx / r_ref) for o in off])            # (no, 3, 3)
+    Xk = np.einsum("oij,pj->opi", Rms, X0) + axle                        # (no, npts, 3)
+    sig_hs = np.zeros((mx, npts, 3, 3))
+    for J in sorted({j for _, j, _ in sources}):
+        R = loads0.local[J]
+        q = (Xk.reshape(-1, 3) - loads0.centres[J]) @ R.T
+        q[:, 2] = np.maximum(q[:, 2], 0.0)
+        k = _rect_stress_graded(q, grid.dx, float(loads0.widths[J]), G, nu).reshape(len(off), npts, 3, 3, 3)
+        k = np.einsum("ab,opbcl,cd->opadl", R.T, k, R)                   # mesh components, per local load
+        k = np.einsum("oba,opbcl,ocd->opadl", Rms, k, Rms)               # turned back: Rm^T s Rm
+        for (x0, j, c), ix_s in zip(sources, cols):
+            if j == J:
+                lo = int(-off[0]) - ix_s                                  # the offset index of ix = 0
+                sig_hs += k[lo:lo + mx] @ (loads0.B @ c)
+    shape = (mx, nd, nc, 3, 3)
+    return (place.tensor_from_mesh(np.swapaxes(sig_hs.reshape(shape), 0, 1)),
+            place.tensor_from_mesh(np.swapaxes(sig_c.reshape(shape), 0, 1)))
 
 
 def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FESettings = FESettings(),
-                  profile_points: np.ndarray | None = None, vtu=None, vtu_radius: float | None = None
-                  ) -> BodyStresses:
+                  profile_points: np.ndarray | None = None, vtu=None, vtu_radius: float | None = None,
+                  rolling_block: bool = False, sigma_hs: np.ndarray | None = None) -> BodyStresses:
     """The FE body ``body`` (1: rail, 2: wheel) under the strip's tractions at ``points`` (..., 3)
-    in the rail-profile frame; see :func:`rail_body_stresses` and :func:`wheel_body_stresses`."""
+    in the rail-profile frame; see :func:`rail_body_stresses` and :func:`wheel_body_stresses`.
+
+    ``rolling_block``: ``points`` is a StressField's block (nd, mx, nc, 3) whose axis 1 runs along
+    the strip's mx columns (the rolling pass, for Dang Van's criterion): the rail (an extrusion)
+    at the points themselves; the wheel on the circles about its axle through the section of the
+    mesh's middle column, each line in its co-rotating frame (:func:`_wheel_rolling_block`).
+    ``sigma_hs`` (rail only): the half-space part at the points if already known (the
+    StressField's sigma of body 1: the same superposed field), else computed here."""
     from skfem import asm
     from skfem.models.elasticity import linear_elasticity
 
@@ -214,6 +293,8 @@ def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FE
         raise InputError(f"stresses: body must be 1 or 2, got {body!r}")
     t0 = time.perf_counter()
     pts = np.asarray(points, float)
+    if rolling_block and (pts.ndim != 4 or pts.shape[1] != grid.mx):
+        raise InputError(f"stresses: a rolling block needs points (nd, {grid.mx}, nc, 3), got {pts.shape}")
     shape = pts.shape[:-1]
     P = pts.reshape(-1, 3)
     pn, px, ps = (np.asarray(field.side_frame(k), float) for k in ("pn", "px", "py"))
@@ -269,12 +350,17 @@ def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FE
         return 2.0 * G * eps + lam * np.trace(eps, axis1=1, axis2=2)[:, None, None] * np.eye(3)
 
     # the FE correction's stress at the points (P1: constant per tetrahedron)
-    Pm = place.to_mesh(P)
-    sig_c = place.tensor_from_mesh(correction(_locate_tets(m, Pm)))
-    if body == 1:
-        sig_hs = halfspace_stresses(field, P, nu=nu, body=1)
+    if rolling_block and body == 2:
+        sig_hs, sig_c = _wheel_rolling_block(m, place, bm, grid, sources, correction, pts, G, nu, ic)
+        sig_hs, sig_c = sig_hs.reshape(-1, 3, 3), sig_c.reshape(-1, 3, 3)
     else:
-        sig_hs = place.tensor_from_mesh(_split_halfspace(bm, grid, sources, Pm, G, nu))
+        Pm = place.to_mesh(P)
+        sig_c = place.tensor_from_mesh(correction(_locate_tets(m, Pm)))
+        if body == 1:
+            sig_hs = (halfspace_stresses(field, P, nu=nu, body=1) if sigma_hs is None
+                      else np.asarray(sigma_hs, float).reshape(-1, 3, 3))
+        else:
+            sig_hs = place.tensor_from_mesh(_split_halfspace(bm, grid, sources, Pm, G, nu))
     t_end = time.perf_counter()
     stats = {"body": "rail" if body == 1 else "wheel", "dofs": int(space.basis.N), "tets": int(m.nelements),
              "loaded_elements": int(len(loaded)), "mesh_s": t_mesh - t0, "rhs_s": t_rhs - t_mesh,

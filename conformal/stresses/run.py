@@ -29,7 +29,7 @@ from conformal.files import write_text
 from conformal.registry import FE_INFLUENCE, MODELS
 from conformal.result import _jsonable
 from conformal.scene import read_scene_file, scene_from_dict
-from conformal.stresses.fatigue import (ALPHA_DV, K_SHEAR, TAU_E, FatigueParameters, surface_index,
+from conformal.stresses.fatigue import (ALPHA_DV, K_SHEAR, TAU_E, FatigueParameters, dang_van, surface_index,
                                        surface_index_area)
 from conformal.stresses.field import N_DEPTHS, default_depths, stress_field
 
@@ -131,6 +131,12 @@ def patch_stresses(result, scene, opts: dict, vtu=None) -> tuple[dict, list]:
         best_fe = max(fe_rows, key=lambda r: r["max_von_mises"])
         out["fe_body"] = best_fe["fe_body"]
         out["fe_bodies"] = best_fe["fe_bodies"]
+        # Dang Van in the FE bodies (the rolling pass through the FE rail / wheel), per body: the
+        # patch with the largest tau_DV
+        out["fatigue"]["fe_bodies"] = {
+            who: max((r["fe_bodies"][who]["dang_van"]["fe"] for r in fe_rows if who in r["fe_bodies"]),
+                     key=lambda d: d["tau_dv_max"])
+            for who in sorted({w for r in fe_rows for w in r["fe_bodies"]})}
     out["frame"] = rows[0]["frame"]
     out["patches"] = rows
     warnings = list(result.warnings)
@@ -176,61 +182,85 @@ def _section_maxima(sf) -> dict:
     return out
 
 
-def fe_body_stress_section(result, scene, sf, body: int | None = None, vtu=None):
-    """(points (nd, 1, nc, 3), BodyStresses) inside the FE body (1: rail, 2: wheel; default the
-    body of ``sf``; conformal.stresses.bodies) on the cross-section of the strip through the
-    half-space von Mises maximum of ``sf`` (the StressField of that body); ``vtu``: also write the
-    FE body's stresses around the patch there (conformal.stresses.bodies.write_body_vtu)."""
+def fe_body_stress_section(result, scene, sf, body: int | None = None, vtu=None, block: bool = False):
+    """(points, BodyStresses) inside the FE body (1: rail, 2: wheel; default the body of ``sf``;
+    conformal.stresses.bodies): on the cross-section of the strip through the half-space von Mises
+    maximum of ``sf`` (the StressField of that body; points (nd, 1, nc, 3)), or with ``block`` on
+    the whole block of ``sf`` (the rolling pass, for Dang Van: the rail at the points of ``sf``,
+    whose half-space part is ``sf.sigma``; the wheel on circles about its axle); ``vtu``: also write
+    the FE body's stresses around the patch there (conformal.stresses.bodies.write_body_vtu)."""
     from conformal.cases.conformal import scene_profiles
     from conformal.influence.fe import settings_from_options
-    from conformal.stresses.bodies import rail_body_stresses, wheel_body_stresses
+    from conformal.stresses.bodies import body_stresses
 
     body = sf.body if body is None else body
-    vm = sf.von_mises
-    x_i = int(np.unravel_index(int(np.nanargmax(vm)), vm.shape)[1])
-    pts = sf.points[:, x_i:x_i + 1]
+    if block:
+        pts = sf.points
+    else:
+        x_i = int(np.unravel_index(int(np.nanargmax(sf.von_mises)), sf.von_mises.shape)[1])
+        pts = sf.points[:, x_i:x_i + 1]
     rail_pts, wheel_pts = scene_profiles(scene)
     settings = settings_from_options(scene.model.options)
     field = result.field if result.field is not None else result.patches[0].field
-    if body == 1:
-        bs = rail_body_stresses(field, pts, G=scene.material.G1, nu=scene.material.nu1, settings=settings,
-                                rail_points=rail_pts, vtu=vtu)
-    else:
-        bs = wheel_body_stresses(field, pts, G=scene.material.G2, nu=scene.material.nu2, settings=settings,
-                                 wheel_points=wheel_pts, vtu=vtu)
+    G, nu = (scene.material.G1, scene.material.nu1) if body == 1 else (scene.material.G2, scene.material.nu2)
+    bs = body_stresses(field, pts, body=body, G=G, nu=nu, settings=settings,
+                       profile_points=rail_pts if body == 1 else wheel_pts, vtu=vtu, rolling_block=block,
+                       sigma_hs=sf.sigma if (block and body == 1 and sf.body == 1) else None)
     return pts, bs
 
 
 def fe_body_section(result, scene, sf, params=None, figure=None, vtu=None) -> dict:
     """The maxima inside the FE body of ``sf`` (rail or wheel) on the cross-section through the
-    half-space maximum (:func:`fe_body_stress_section`), against the half-space stresses of
-    ``sf`` at the same points; ``figure``: also write the comparison figure there and its 3-D
-    view (pyvista) beside it as ``<stem>_3d.png`` (:func:`fe_section_figures`); ``vtu``: the FE
-    body's stresses around the patch for ParaView."""
-    out, pts, bs, hs_sigma = fe_body_section_data(result, scene, sf, vtu=vtu)
+    half-space maximum and over the whole block with the Dang Van index of the rolling pass
+    (:func:`fe_body_section_data`), against the half-space stresses of ``sf``; ``figure``: also
+    write the comparison figure there and its 3-D view (pyvista) beside it as ``<stem>_3d.png``
+    (:func:`fe_section_figures`); ``vtu``: the FE body's stresses around the patch for ParaView."""
+    out, pts, bs, hs_sigma = fe_body_section_data(result, scene, sf, vtu=vtu, params=params)
     if figure is not None:
         fe_section_figures(result, scene, sf, pts, bs, hs_sigma, figure)
     return out
 
 
-def fe_body_section_data(result, scene, sf, vtu=None):
-    """(summary, points, BodyStresses, half-space sigma at the points) of :func:`fe_body_section`
-    without the figures (a study meshes every body before it draws with VTK: gmsh meshing after a
-    VTK render in the same process has crashed the heap)."""
+def fe_body_section_data(result, scene, sf, vtu=None, params=None):
+    """(summary, section points, section BodyStresses, half-space sigma at the section points) of
+    :func:`fe_body_section` without the figures (a study meshes every body before it draws with
+    VTK: gmsh meshing after a VTK render in the same process has crashed the heap).
+
+    One FE solve gives the FE body's stresses on the whole block of ``sf`` (the rolling pass):
+    ``fe`` / ``halfspace`` are the maxima on the section through the half-space von Mises maximum,
+    ``block`` the maxima of both over the whole block and ``dang_van`` the Dang Van index of both
+    (tau_DV, its depth and position, FI_sub; ``params``: the FatigueParameters, default ones)."""
     from dataclasses import replace as _replace
 
+    from conformal.stresses.bodies import BodyStresses
     from conformal.stresses.field import StressField
 
-    pts, bs = fe_body_stress_section(result, scene, sf, vtu=vtu)
+    params = params or FatigueParameters()
+    pts_b, bb = fe_body_stress_section(result, scene, sf, vtu=vtu, block=True)
     x_i = int(np.unravel_index(int(np.nanargmax(sf.von_mises)), sf.von_mises.shape)[1])
+    pts = pts_b[:, x_i:x_i + 1]
+    bs = BodyStresses(pts, bb.sigma_hs[:, x_i:x_i + 1], bb.sigma_c[:, x_i:x_i + 1], bb.stats)
     who = "rail" if sf.body == 1 else "wheel"
     fe = StressField(bs.sigma, pts, sf.depths, sf.normal, sf.frame, sf.body)
     hs = _replace(fe, sigma=sf.sigma[:, x_i:x_i + 1])
+    fe_block = StressField(bb.sigma, pts_b, sf.depths, sf.normal, sf.frame, sf.body)
+    dv = {}
+    for key, f in (("fe", fe_block), ("halfspace", sf)):
+        sm = f.summary(params)
+        d = sm["dang_van"]
+        tau, at = dang_van(f.sigma, params.alpha_dv, axis=1)
+        i = np.unravel_index(int(np.nanargmax(tau)), tau.shape)
+        dv[key] = {"tau_dv_max": d["tau_dv_max"], "depth": d["depth"], "FI_sub": d["FI_sub"],
+                   "position": [float(c) for c in f.points[i[0], int(at[i]), i[1]]]}
     out = {"body": who, "section_x": float(pts[0, 0, 0, 0]), "fe": _section_maxima(fe),
-           "halfspace": _section_maxima(hs), "max_correction": float(np.abs(bs.sigma_c).max()),
-           "stats": bs.stats,
+           "halfspace": _section_maxima(hs), "block": {"fe": _section_maxima(fe_block), "halfspace": _section_maxima(sf)},
+           "dang_van": {"alpha_dv": params.alpha_dv, "tau_e": params.tau_e, **dv},
+           "max_correction": float(np.abs(bs.sigma_c).max()),
+           "max_correction_block": float(np.abs(bb.sigma_c).max()), "stats": bb.stats,
            "note": "sigma = half-space field of the elements on the body's tangent planes + FE correction of "
-                   "the real body (split method, one FE solve with the final load)"}
+                   "the real body (split method, one FE solve with the final load), on the whole block of the "
+                   "half-space field (the rolling pass; the wheel on circles about its axle, each line in its "
+                   "co-rotating frame)"}
     return out, pts, bs, hs.sigma
 
 
