@@ -52,7 +52,6 @@ from _provenance import write_sidecar  # noqa: E402
 OUT = ROOT / "studies" / "out" / "fe_truth_structure"
 RADII = (20.0, 30.0)          # mm: nodes nearer the contact centre are left out of the rigid fits
 SLICE = 6.0                   # mm: |x| of the cross-section slab of the fits
-FLANK_ANGLE = 45.0            # degrees: the flank share is FN at steeper rail contact angles
 RAIL_HEAD_Z = 36.0            # mm below the rail top: the head (its underside starts at 39 mm)
 RIM_DEPTH = 50.0              # mm below the tape circle: the rim (its inner face at 55 mm)
 GAUGE_HEIGHT = 14.0           # mm: the gauge point below the top
@@ -166,10 +165,10 @@ def measure(scene, opts: dict) -> dict:
            "s_nodes": s_grid[act].tolist(), "f_nodes": f.tolist(),
            "contact_centre": c.tolist(), "gauge_point": gp.tolist(), "approach": sol.approach,
            "checks": checks, "fits": fits, "rail_points_n": int(len(rail_yz))}
-    rec["s_flank"] = flank_boundary(grid)
-    rec["flank_share"] = share(rec, rec["s_flank"])
+    rec["s_flank"] = gt.flank_boundary(grid)
+    rec["flank_share"] = gt.share(rec, rec["s_flank"])
     rec["LV_resultant"] = rec["LV"]
-    rec["LV"] = normal_lv(rec, grid)
+    rec["LV"] = gt.normal_lv(rec, grid)
     return rec
 
 
@@ -181,30 +180,6 @@ def _grid_s(run, prob) -> np.ndarray:
     return np.interp(run.solution.uv[:, 1], rpatch.edges, prob.grid.s_edges) - float(prob.grid.s_ref)
 
 
-def flank_boundary(grid) -> float:
-    """Grid arc length (from s_ref) where the rail's contact angle reaches FLANK_ANGLE (the flank
-    side: smaller s, steeper angles)."""
-    s = np.asarray(grid.s, float) - float(grid.s_ref)
-    a = np.degrees(np.abs(np.asarray(grid.delta, float)))
-    order = np.argsort(a)
-    return float(np.interp(FLANK_ANGLE, a[order], s[order]))
-
-
-def normal_lv(rec: dict, grid) -> float:
-    """L/V of the normal forces alone: sum f sin|delta| / sum f cos delta, delta the rail's contact
-    angle (side frame) at each node's arc length on ``grid`` (the same rule for every model; the
-    truth is frictionless, the conformal model's small tangential forces are left out)."""
-    s = np.asarray(grid.s, float) - float(grid.s_ref)
-    a = np.interp(np.asarray(rec["s_nodes"]), s, np.asarray(grid.delta, float))
-    f = np.asarray(rec["f_nodes"])
-    return float((f * np.abs(np.sin(a))).sum() / (f * np.cos(a)).sum())
-
-
-def share(rec: dict, s_b: float) -> float:
-    s, f = np.asarray(rec["s_nodes"]), np.asarray(rec["f_nodes"])
-    return float(f[s < s_b].sum() / f.sum())
-
-
 def conformal_at(scene, dy: float = 0.0, droll: float = 0.0) -> dict:
     """Conformal contact with half-space numbers, the wheelset moved by dy (lateral, mm) and the
     rail cant changed by -droll (rad): the contact model placed where the truth's bodies are."""
@@ -214,9 +189,9 @@ def conformal_at(scene, dy: float = 0.0, droll: float = 0.0) -> dict:
     sc = replace(scene, geometry=replace(g, lateral_shift=g.lateral_shift + dy, rail_cant=g.rail_cant - droll))
     r = gt._conformal(sc, "halfspace")
     grid = curved_problem_from_wheel_rail(sc).grid
-    r["LV"] = normal_lv(r, grid)
-    r["s_flank"] = flank_boundary(grid)
-    r["flank_share"] = share(r, r["s_flank"])
+    r["LV"] = gt.normal_lv(r, grid)
+    r["s_flank"] = gt.flank_boundary(grid)
+    r["flank_share"] = gt.share(r, r["s_flank"])
     r["lateral_shift"], r["rail_cant"] = sc.geometry.lateral_shift, sc.geometry.rail_cant
     for k in ("profile_s", "profile_p"):
         r.pop(k, None)
@@ -269,10 +244,10 @@ def matched_existing(gt_parts: Path) -> list[dict]:
         rec = json.loads(path.read_text())
         scene = scs[rec["scene"]]
         grid = curved_problem_from_wheel_rail(scene).grid
-        s_b = flank_boundary(grid)
+        s_b = gt.flank_boundary(grid)
         truths = [("truth (section, 20)", rec["truth"])] + [(k, v) for k, v in rec["variants"].items() if "FN" in v]
         for label, t in truths:
-            t = dict(t, LV=normal_lv(t, grid), flank_share=share(t, s_b))
+            t = dict(t, LV=gt.normal_lv(t, grid), flank_share=gt.share(t, s_b))
             r = match_lv(scene, t["LV"])
             rows.append({"scene": rec["scene"], "truth": label, "options": t.get("options"),
                          "truth_values": {q: t[q] for q in ("FN", "pmax", "area", "flank_share", "LV")},
@@ -294,7 +269,7 @@ def run_scene(name: str, scene, opts: dict, parts: Path) -> dict:
                "wheel_load": scene.load.wheel_load, "truth": measure(scene, opts)}
     t = rec["truth"]
     from conformal.cases.conformal import curved_problem_from_wheel_rail
-    t["LV"] = normal_lv(t, curved_problem_from_wheel_rail(scene).grid)
+    t["LV"] = gt.normal_lv(t, curved_problem_from_wheel_rail(scene).grid)
     models = {"conformal half-space": conformal_at(scene)}
     for key, fit in t["fits"].items():
         models[f"conformal half-space, moved as the truth ({key})"] = conformal_at(scene, fit["dy_lateral"],
@@ -316,7 +291,7 @@ def build(out: Path) -> dict:
          f"(|x| < {SLICE:g} mm, nodes farther than R from the contact centre); dy: lateral motion of the "
          "rim against the head at the gauge point (track lateral, + = towards the field side: more "
          "flange), droll: roll of the head against the rim (+ = head top towards the field side). "
-         f"Flank share: FN at rail contact angles above {FLANK_ANGLE:g} degrees. Errors against the truth.", "",
+         f"Flank share: FN at rail contact angles above {gt.FLANK_ANGLE:g} degrees. Errors against the truth.", "",
          "| scene | model | lateral shift [mm] | FN [N] | pmax [N/mm²] | area [mm²] | flank share | L/V | "
          "FN err | pmax err | area err | flank diff | L/V diff |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for rec in recs:
@@ -349,6 +324,18 @@ def build(out: Path) -> dict:
                      f"{1e3 * fw['w'][0]:+.3f} mrad ({fw['n']} nodes, rms {fw['rms_residual']:.1e}); rail head lateral "
                      f"{fit['rail_head_lateral']:+.4f}, rim lateral {fit['wheel_rim_lateral']:+.4f}; relative dy "
                      f"{fit['dy_lateral']:+.4f} mm, droll {1e3 * fit['droll_rail']:+.3f} mrad")
+    mpath = out / "matched.json"
+    if mpath.exists():
+        rows = json.loads(mpath.read_text())
+        L += ["", "Every truth of studies/fe_ground_truth.py and the conformal half-space model at the SAME L/V "
+              "(vertical AND lateral load prescribed; its wheelset shift dy is then an output, like the approach):", "",
+              "| scene | truth | FN [N] | pmax [N/mm²] | area [mm²] | flank share | L/V | dy [µm] | FN err | pmax err | "
+              "area err | flank diff |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        for w in rows:
+            t, m, e = w["truth_values"], w["matched"], w["err"]
+            L.append(f"| {w['scene']} | {w['truth']} | {t['FN']:.0f} | {t['pmax']:.1f} | {t['area']:.2f} | "
+                     f"{100 * t['flank_share']:.1f} % | {t['LV']:.3f} | {1e3 * m['dy']:+.1f} | {100 * e['FN']:+.2f} % | "
+                     f"{100 * e['pmax']:+.2f} % | {100 * e['area']:+.2f} % | {100 * e['flank_share']:+.2f} |")
     md = "\n".join(L) + "\n"
     (out / "structure.md").write_text(md)
     gt._write_json(out / "structure.json", {"scenes": recs})
@@ -360,6 +347,8 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--scenes", nargs="*")
     ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument("--matched", action="store_true",
+                    help="also match the L/V of every flange truth of studies/out/fe_ground_truth (~7 min)")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     opts = gt.QUICK_TRUTH if args.quick else gt.TRUTH
@@ -370,6 +359,8 @@ def main(argv=None) -> int:
         if args.scenes and name not in args.scenes:
             continue
         run_scene(name, sc, opts, args.out / "parts")
+    if args.matched:
+        gt._write_json(args.out / "matched.json", matched_existing(gt.OUT / "parts"))
     build(args.out)
     write_sidecar(args.out, __file__, vars(args) | {"out": str(args.out)}, {"wall_s": time.perf_counter() - t0})
     return 0
