@@ -12,8 +12,12 @@ straight by the same margin and closed by clamped rectangles
 Compared at a PRESCRIBED WHEEL LOAD (a real rail has no approach relative to infinity),
 frictionless, with conformal + half-space numbers, conformal + FE numbers (the package's
 current default FE bodies) and fe_contact with its default disc bodies (half-space field on the
-cut faces): FN, pmax, contact area and the load split (share of FN on the flank side of the
-truth's pressure minimum between the root and flank lobes, where there is one).  The truth's
+cut faces): FN, pmax, contact area and the load split: the flank share (share of FN at rail
+contact angles above FLANK_ANGLE = 45 degrees; these scenes have no separate tread patch) and
+the L/V of the normal forces, and the share on the flank side of the truth's pressure minimum
+between two lobes where there is one.  Why the real sections differ at 6.25 mm (their rail head
+and rim move by micrometres that decide that contact) and the comparison at the same L/V:
+studies/fe_truth_structure.py.  The truth's
 own convergence: a finer mesh (fec_n) and a larger body (fec_section_size), each against the
 reference run; and the same bodies replaced by solid blocks (``fec_body = "block"``: both profiles
 continued straight and closed by clamped rectangles, no thin webs) at 20 and 40 patch sizes, which
