@@ -58,7 +58,7 @@ VARIANTS = {"finer mesh": {"fec_n": 8}, "larger body": {"fec_section_size": 40.0
 QUICK_TRUTH = {"fec_body": "section", "fec_n": 3, "fec_section_size": 10.0}
 QUICK_VARIANTS: dict = {}     # the quick run (the slow test): the coarse truth and conformal half-space only
 #: degrees: the load split is the share of FN at steeper rail contact angles (the flange flank;
-#: there is no separate tread patch at 6.2 or 6.25 mm: the tread gap is 0.45 mm or more)
+#: there is no separate tread patch at 6.2 or 6.25 mm: the tread gap is 0.44 mm or more)
 FLANK_ANGLE = 45.0
 DEEP_LOAD = 2500.0     # N, vertical wheel load of the deep pair (prescribed; about its 0.05 mm approach)
 
