@@ -410,9 +410,21 @@ class ContactModel:
     factorised; :meth:`solve` solves it at an approach or a normal force, as often as wanted,
     sharing the columns of the condensed flexibility W computed so far."""
 
-    def __init__(self, run, stats: dict):
+    def __init__(self, run, stats: dict, fields=None):
         self._run = run
         self.stats = stats
+        self._fields = fields
+
+    def displacements(self, sol: FEContactSolution) -> tuple[np.ndarray, np.ndarray]:
+        """Displacements (common frame, mm) of the mesh vertices of body 1 and body 2 under the
+        contact pressure of ``sol`` (a solution of this model): K u = B^T (a lambda) on each body,
+        one more solve with the factorised stiffness; body 2's include its rigid approach
+        ``sol.approach`` along the load direction.  Clamped far field only (the half-space field
+        on the cut faces is not reconstructed here).  For studies of the bodies' structural
+        deflection (the rail head's and the wheel rim's motion)."""
+        if self._fields is None:
+            raise InputError("displacements: not available for this model")
+        return self._fields(sol)
 
     def solve(self, *, approach: float | None = None, normal_force: float | None = None,
               approach_guess: float = 0.0) -> FEContactSolution:
@@ -667,4 +679,15 @@ def prepare_contact(body1: ContactBody, body2: ContactBody, *, direction=(0.0, 0
                                  active=A.copy(), approach=delta, direction=d, iterations=it,
                                  n_unknowns=int(f1.ndofs + f2.ndofs), stats=stats, tris=loc_tris, tri_area=loc_area)
 
-    return ContactModel(run, prep)
+    def fields(sol: FEContactSolution):
+        if halfspace:
+            raise InputError("displacements: only with the clamped far field (fec_far_field = \"clamped\")")
+        out = []
+        for fb, Bm in ((f1, B1), (f2, B2)):
+            rhs = np.asarray(Bm.T @ sol.force).ravel()
+            U = np.zeros(fb.ndofs)
+            U[fb.free] = fb.factor.solve(rhs[fb.free][:, None])[:, 0]
+            out.append(U[fb.dofmap[:, :len(fb.points)]].T)
+        return out[0], out[1] + sol.approach * sol.direction[None, :]
+
+    return ContactModel(run, prep, fields)
