@@ -85,12 +85,12 @@ monotone) and is reached from zero tractions (or ``p_start``).
 
 >>> import numpy as np
 >>> from conformal.grid import PlanarGrid
->>> from conformal.influence.halfspace import HalfSpaceInfluence
+>>> from conformal.influence.operator import build_operator
 >>> from conformal.materials import Material
 >>> g = PlanarGrid.centred(20, 20, 0.1, 0.1)
 >>> X, Y = g.mesh()
 >>> pn = 1000.0 * np.sqrt(np.clip(1 - (X**2 + Y**2) / 0.9**2, 0, None))
->>> op = HalfSpaceInfluence.for_grid(20, 20, 0.1, 0.1, Material.steel())
+>>> op, _ = build_operator(g, Material.steel())
 >>> sol = solve_tangential(op, g, pn, xi=1.0, eta=0.0, phi=0.0, mu_static=0.3, mu_kinetic=0.3)
 >>> sol.converged, bool(np.all(sol.status[pn > 0] == 2))     # huge creepage: full slip
 (True, True)
@@ -158,34 +158,6 @@ class TangentialSolution:
 
 
 # ----------------------------------------------------------------------------- the operator L
-class _SinglePrecisionProduct:
-    """(u_x, u_y) = A_tt p by the zero-padded FFTs of HalfSpaceInfluence, in single precision
-    (2.5x faster at 200 x 200; relative error about 1e-7).  Used for the Krylov products only.
-    Only the mx non-zero rows are transformed along y, and only mx rows are transformed back."""
-
-    def __init__(self, op):
-        self.mx, self.my = op.mx, op.my
-        self.Mx, self.My = op.padded_shape
-        k = [op.kernel_hat(i, j) for i, j in ((0, 0), (0, 1), (1, 1))]
-        # the half-space kernels are even-even (xx, yy) or odd-odd (xy): real transforms, and a
-        # real factor halves the cost of the products in Fourier space
-        real = all(np.abs(v.imag).max() <= 1e-9 * np.abs(v).max() for v in k)
-        self.k = [v.real.astype(np.float32) if real else v.astype(np.complex64) for v in k]
-
-    def __call__(self, p: np.ndarray) -> np.ndarray:
-        """p: (2, mx, my) float32 (or castable); returns (2, mx, my) float32."""
-        rows = sfft.rfft(p, n=self.My, axis=-1)
-        h = sfft.fft(rows, n=self.Mx, axis=-2, overwrite_x=True)
-        kxx, kxy, kyy = self.k
-        a0 = kxx * h[0]
-        a0 += kxy * h[1]
-        h[1] *= kyy
-        h[1] += kxy * h[0]
-        h[0] = a0
-        cols = sfft.ifft(h, axis=-2, overwrite_x=True)[:, : self.mx]
-        return sfft.irfft(cols, n=self.My, axis=-1)[:, :, : self.my]
-
-
 class _SlipOperator:
     """L p on the contact elements (steady: upwind difference of A p over dx; shift: A p) and its
     approximate inverse (the preconditioner), see the module docstring.
@@ -203,8 +175,8 @@ class _SlipOperator:
         self.products = 0
         self.coarse_products = 0.0  # products on coarser grids (nested start), in this grid's units
         self._ext = None
-        if steady and contact[-1].any():  # u' of the leading column lies outside the grid
-            self._ext = self._extended(op)
+        if steady and contact[-1].any():  # u' of the leading column lies outside the grid; operators
+            self._ext = op.extended(1)    # without a longer version fall back to u' = u there
         pop = self._ext if self._ext is not None else op
         rows = pop.mx if self._ext is not None else self.mx
         self._rows = rows
@@ -213,8 +185,7 @@ class _SlipOperator:
             has_up = self.idx // self.my + 1 < rows  # without an extended grid the leading column
             self._up = np.where(has_up, self.idx + self.my, self.idx)  # gets L p = 0 (u' = u)
             self._wgt = has_up / self.dx
-        self._fast = (_SinglePrecisionProduct(pop) if SINGLE_PRECISION and hasattr(pop, "kernel_hat")
-                      and hasattr(pop, "padded_shape") else None)
+        self._fast = pop.tangential_product32() if SINGLE_PRECISION else None
         # flat offsets of the contact elements (and their upstream neighbours) in a (2, rows*my) buffer
         self._off = np.concatenate([self.idx, rows * self.my + self.idx])
         if steady:
@@ -225,18 +196,6 @@ class _SlipOperator:
         self._buf64 = np.zeros((2, rows * self.my))
         self._pbuf = np.zeros((2, self.mx * self.my), dtype=np.float32)
         self._build_preconditioner()
-
-    @staticmethod
-    def _extended(op):
-        """The same operator on a grid one column longer (x + dx), so u' of the leading column is
-        exact; operators without a constructor for that fall back to u' = u there."""
-        from conformal.influence.halfspace import HalfSpaceInfluence
-        from conformal.materials import Material
-
-        if isinstance(op, HalfSpaceInfluence):
-            mat = Material.identical(op.G, op.nu)  # K does not enter A_tt
-            return HalfSpaceInfluence.for_grid(op.mx + 1, op.my, op.dx, op.dy, mat)
-        return None
 
     # --- products
     def grid_u(self, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -535,8 +494,8 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
 
     Parameters
     ----------
-    op : the influence operator of the grid (HalfSpaceInfluence or any x-invariant operator with
-        ``apply_tangential(px, py)``, e.g. CurvedInfluence).
+    op : the influence operator of the grid (:class:`conformal.influence.operator.InfluenceOperator`,
+        x-invariant: the planar half-space, curved strips, ...).
     grid : PlanarGrid (or CurvedGrid: x along the rolling direction, ``mesh()`` and ``area``).
     pn : (mx, my) pressure (N/mm²); elements with pn = 0 are exterior (zero traction).
     xi, eta, phi : creepages (steady: -, -, rad/mm) or rigid shifts (shift: mm, mm, rad).  With
@@ -799,14 +758,13 @@ def _coarse_start(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows, creep0,
     pressure and the rigid slip) and their cost in products of the fine grid, or (None, creep0, 0)
     where that is not possible."""
     from conformal.grid import PlanarGrid
-    from conformal.influence.halfspace import HalfSpaceInfluence
-    from conformal.materials import Material
 
-    if not (isinstance(op, HalfSpaceInfluence) and isinstance(grid, PlanarGrid)):
-        return None, creep0, 0.0
     mx, my = pn.shape
     fy = 2 if my >= 8 else 1
-    mxc, myc = -(-mx // 2), -(-my // fy)
+    cop = op.coarsened(2, fy)
+    if cop is None or not isinstance(grid, PlanarGrid):
+        return None, creep0, 0.0
+    mxc, myc = cop.mx, cop.my
 
     def block_mean(a):
         pad = np.zeros(a.shape[:-2] + (2 * mxc, fy * myc))
@@ -814,7 +772,6 @@ def _coarse_start(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows, creep0,
         return pad.reshape(a.shape[:-2] + (mxc, 2, myc, fy)).mean(axis=(-3, -1))
 
     cgrid = PlanarGrid(mxc, myc, 2 * grid.dx, fy * grid.dy, grid.xl, grid.yl)
-    cop = HalfSpaceInfluence.for_grid(mxc, myc, cgrid.dx, cgrid.dy, Material.identical(op.G, op.nu))
     pnc, wc = block_mean(pn), block_mean(w)
     carea = np.full(cgrid.shape, cgrid.area)
     FNc = float((pnc * carea).sum())
