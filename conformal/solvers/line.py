@@ -45,7 +45,7 @@ from dataclasses import replace
 
 from conformal.errors import InputError
 from conformal.grid import PlanarGrid
-from conformal.influence.halfplane import REFERENCE_FACTOR, UNIT_WIDTH, LineInfluence, halfplane_kernel  # noqa: F401
+from conformal.influence.halfplane import REFERENCE_FACTOR, UNIT_WIDTH  # noqa: F401
 from conformal.influence.operator import build_operator
 from conformal.materials import Material
 from conformal.problem import ContactProblem
