@@ -37,9 +37,12 @@ along x, so L^-1 = A^-1 D^-1 dx, where D^-1 is a cumulative sum from the leading
 and A^-1 is approximated by the inverse of the circulant (Strang) approximation of A on the
 unpadded mx x my grid, a 2 x 2 matrix per Fourier mode; the kernel is probed from the operator
 itself (two products), so any x-invariant operator works (half-space, curved strips).  Shift:
-A^-1 alone.  In slip elements whose |s|/g dominates the diagonal of L the tangent unknown is
-preconditioned by that diagonal alone.  The preconditioner costs one unpadded FFT pair, about a
-quarter of a padded product.
+A^-1 alone.  A slip element's row adds |s|/g to the diagonal of L: its tangent unknown gets the
+weighted blend of that inverse and the diagonal, weight w = diag / (diag + |s|/g), and the
+diagonal alone where |s|/g exceeds STIFF_RATIO diag (:meth:`_Newton.preconditioner`).  The
+preconditioner costs one unpadded FFT pair, about a quarter of a padded product.  The start on a
+coarser grid and the extension by one column come from the operator (``coarsened``,
+``extended``, :mod:`conformal.influence.operator`).
 
 Start.  Large problems (>= NESTED_FROM contact elements, planar half-space) start from the same
 problem on a grid of 2 x 2 merged elements (block means of pressure and rigid slip), solved to
@@ -74,6 +77,13 @@ best of 3; studies/steady_rolling_speed.py, CONTACT's GDsteady times in brackets
 * FX agrees with CONTACT's printed FX on every grid (-14332 / -14114 / -13987 / -13948 / -13935
   against -14330 / -14110 / -13990 / -13950 / -13940); relative to 300^2 the error of FX is
   5.0e-3 at 100^2 and 1.3e-3 at 200^2.
+* Slip rows weighted (issue 23 item 4; w above, replacing "the diagonal where |s|/g > diag, else
+  P unweighted"): GMRES iterations of the last Newton system to 1e-3 went from 20 / 30 / 38 to
+  13 / 18 / 26 at 100^2 / 200^2 / 400^2, products of the whole solve from 60 / 65 / 95 to
+  43 / 43 / 68 (+ 7-9 coarse), FX unchanged to 4e-8.  Tried and not kept: an unweighted input
+  with a weighted output (16 / 23 iterations at 100^2 / 200^2), no diagonal at all (50 / 78),
+  the diagonal projected on the tangent (no change), a periodic circulant of L + mean(|s|/g)
+  for the slip rows (17 / 22), other forcing terms and a tighter nested start (no change).
 * Element-wise Gauss-Seidel (CONTACT's SteadyGS) costs O(N^2) per sweep and O(mx) sweeps
   (6.8 s / 211 s in CONTACT); not pursued.
 
