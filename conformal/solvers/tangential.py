@@ -38,7 +38,7 @@ and A^-1 is approximated by the inverse of the circulant (Strang) approximation 
 unpadded mx x my grid, a 2 x 2 matrix per Fourier mode; the kernel is probed from the operator
 itself (two products), so any x-invariant operator works (half-space, curved strips).  Shift:
 A^-1 alone.  A slip element's row adds |s|/g to the diagonal of L: its tangent unknown gets the
-weighted blend of that inverse and the diagonal, weight w = diag / (diag + |s|/g), and the
+weighted blend of that inverse and the diagonal, weight w = (diag / (diag + |s|/g))^1.5, and the
 diagonal alone where |s|/g exceeds STIFF_RATIO diag (:meth:`_Newton.preconditioner`).  The
 preconditioner costs one unpadded FFT pair, about a quarter of a padded product.  The start on a
 coarser grid and the extension by one column come from the operator (``coarsened``,
@@ -79,11 +79,13 @@ best of 3; studies/steady_rolling_speed.py, CONTACT's GDsteady times in brackets
   5.0e-3 at 100^2 and 1.3e-3 at 200^2.
 * Slip rows weighted (issue 23 item 4; w above, replacing "the diagonal where |s|/g > diag, else
   P unweighted"): GMRES iterations of the last Newton system to 1e-3 went from 20 / 30 / 38 to
-  13 / 18 / 26 at 100^2 / 200^2 / 400^2, products of the whole solve from 60 / 65 / 95 to
-  43 / 43 / 68 (+ 7-9 coarse), FX unchanged to 4e-8.  Tried and not kept: an unweighted input
+  14 / 18 / 21 at 100^2 / 200^2 / 400^2, products of the whole solve from 60 / 65 / 95 to
+  43 / 41 / 58 (+ 7-8 coarse), FX unchanged to 1e-7.  Tried and not kept: an unweighted input
   with a weighted output (16 / 23 iterations at 100^2 / 200^2), no diagonal at all (50 / 78),
   the diagonal projected on the tangent (no change), a periodic circulant of L + mean(|s|/g)
-  for the slip rows (17 / 22), other forcing terms and a tighter nested start (no change).
+  for the slip rows (17 / 22), a downstream sweep of the upwind coupling between slip elements
+  (no change), cubic prolongation of the nested start (one Newton step more), other forcing
+  terms and a tighter nested start (no change).
 * Element-wise Gauss-Seidel (CONTACT's SteadyGS) costs O(N^2) per sweep and O(mx) sweeps
   (6.8 s / 211 s in CONTACT); not pursued.
 
@@ -124,7 +126,9 @@ from conformal.result import ADHESION, EXTERIOR, SLIP
 GMRES_RESTART = 60
 GMRES_MAXIT = 240
 #: slip elements with |s|/g larger than this times diag(L) get a diagonal preconditioner alone
-STIFF_RATIO = 2.0
+STIFF_RATIO = 3.0
+#: the weight of the long-range preconditioner in a slip row: (diag / (diag + |s|/g)) ** this
+SLIP_WEIGHT_POWER = 1.5
 #: Krylov products in single precision where the operator allows (studies switch it off to compare)
 SINGLE_PRECISION = True
 
@@ -416,16 +420,18 @@ class _Newton:
 
         Adhesion rows: P = L^-1 (cumulative sum and circulant A^-1, :meth:`_SlipOperator.precondition`).
         A slip row reads ``sigma x_t + t.(L d)`` (sigma = |s|/g), whose local stiffness is
-        diag(L) + sigma instead of diag(L).  With the weight w = diag / (diag + sigma) its tangent
-        unknown gets ``w t.P(w t r) + (1 - w) r / (diag + sigma)``: the long-range inverse where
-        sigma is small (near the stick-slip boundary), the diagonal where it dominates, and the
-        diagonal alone above :data:`STIFF_RATIO` diag.  Measured (circ case, last Newton system,
-        GMRES iterations to 1e-3): 20 / 30 / 38 at 100² / 200² / 400² with P applied unweighted
-        (diagonal above diag), 13 / 19 / 23 with the weights."""
+        diag(L) + sigma instead of diag(L).  With the weight w = (diag / (diag + sigma))^p
+        (p = :data:`SLIP_WEIGHT_POWER`) its tangent unknown gets
+        ``w t.P(w t r) + (1 - w) r / (diag + sigma)``: the long-range inverse where sigma is small
+        (near the stick-slip boundary), the diagonal where it dominates, and the diagonal alone
+        above :data:`STIFF_RATIO` diag.  Measured (circ case, last Newton system, GMRES iterations
+        to 1e-3): 20 / 30 / 38 at 100² / 200² / 400² with P unweighted (and the diagonal above
+        diag), 13 / 18 / 26 with w (p = 1, diagonal above 2 diag), 14 / 18 / 21 with p = 1.5 and
+        the diagonal above 3 diag."""
         L, nc = self.L, self.nc
         nA, nS = ia.size, isl.size
         diag = L.diag
-        w = np.where(sigma > STIFF_RATIO * diag, 0.0, diag / (diag + sigma))
+        w = np.where(sigma > STIFF_RATIO * diag, 0.0, (diag / (diag + sigma)) ** SLIP_WEIGHT_POWER)
         local = (1.0 - w) / (sigma + diag)
 
         def prec(r):
