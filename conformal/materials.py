@@ -12,6 +12,16 @@ from dataclasses import dataclass
 from conformal.errors import InputError
 
 
+def lame_lambda(G: float, nu: float) -> float:
+    """Lamé's first constant lambda = 2 G nu / (1 - 2 nu) (N/mm²) of an isotropic body with shear
+    modulus G and Poisson's ratio nu (the one place it is computed).
+
+    >>> lame_lambda(82000.0, 0.25)
+    82000.0
+    """
+    return 2.0 * G * nu / (1.0 - 2.0 * nu)
+
+
 @dataclass(frozen=True)
 class Material:
     """Body 1 and body 2 elastic constants (N/mm², -). Body 1 is the body the normal points into."""

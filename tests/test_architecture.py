@@ -74,3 +74,71 @@ def test_the_cycle_finder_finds_a_cycle():
             return {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}[m]
 
     assert _cycles(G) == [["a", "b", "c"]]
+
+
+# ----------------------------------------------------------------------------- the influence-operator protocol
+#: the operator classes; solvers receive them from conformal.influence.operator.build_operator
+OPERATOR_CLASSES = {"HalfSpaceInfluence", "CurvedInfluence", "LineInfluence", "FileInfluence"}
+
+
+def _protocol_violations(source: str, name: str) -> list[str]:
+    """Where a solver module reaches past the operator protocol: an operator class named (isinstance,
+    construction, import), a private name imported from another module, or a private attribute of
+    anything but ``self``/``cls`` (e.g. ``op._forward``, ``exact._result``)."""
+    import ast
+
+    out = []
+    for node in ast.walk(ast.parse(source)):
+        where = f"{name}:{getattr(node, 'lineno', '?')}"
+        if isinstance(node, ast.ImportFrom):
+            for a in node.names:
+                if a.name.startswith("_") or a.name in OPERATOR_CLASSES:
+                    out.append(f"{where} imports {a.name} from {node.module}")
+        elif isinstance(node, ast.Name) and node.id in OPERATOR_CLASSES:
+            out.append(f"{where} names {node.id}")
+        elif isinstance(node, ast.Attribute):
+            if node.attr in OPERATOR_CLASSES:
+                out.append(f"{where} names {node.attr}")
+            elif node.attr.startswith("_") and not node.attr.startswith("__"):
+                base = node.value
+                if not (isinstance(base, ast.Name) and base.id in ("self", "cls")):
+                    out.append(f"{where} reads the private {ast.unparse(node)}")
+    return out
+
+
+def test_solvers_use_influence_operators_only_through_the_protocol():
+    files = sorted((ROOT / "conformal" / "solvers").glob("*.py"))
+    assert len(files) >= 8
+    found = [v for f in files for v in _protocol_violations(f.read_text(), f.name)]
+    assert found == []
+
+
+def test_the_protocol_check_sees_isinstance_private_calls_and_private_imports():
+    src = ("from conformal.influence.halfspace import HalfSpaceInfluence\n"
+           "from conformal.solvers.exact import _result\n"
+           "def f(op, exact):\n"
+           "    if isinstance(op, HalfSpaceInfluence):\n"
+           "        return op._forward(1)\n"
+           "    return exact._tangential(self._ok)\n")
+    found = _protocol_violations(src, "m.py")
+    assert any("imports HalfSpaceInfluence" in v for v in found)
+    assert any("imports _result" in v for v in found)
+    assert any("m.py:4 names HalfSpaceInfluence" in v for v in found)
+    assert any("op._forward" in v for v in found)
+    assert any("exact._tangential" in v for v in found)
+    assert not any("self._ok" in v for v in found)
+
+
+def test_every_operator_class_has_every_protocol_member():
+    from conformal.influence.contact_file import FileInfluence
+    from conformal.influence.curved import CurvedInfluence
+    from conformal.influence.halfplane import LineInfluence
+    from conformal.influence.halfspace import HalfSpaceInfluence
+    from conformal.influence.operator import PROTOCOL_MEMBERS, InfluenceOperator
+
+    declared = {n for n in vars(InfluenceOperator) if not n.startswith("_")} | set(InfluenceOperator.__annotations__)
+    assert declared == set(PROTOCOL_MEMBERS)
+    for cls in (HalfSpaceInfluence, CurvedInfluence, LineInfluence, FileInfluence):
+        fields = getattr(cls, "__dataclass_fields__", {})
+        missing = [m for m in PROTOCOL_MEMBERS if not (hasattr(cls, m) or m in fields)]
+        assert missing == [], f"{cls.__name__} lacks {missing}"

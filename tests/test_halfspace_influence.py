@@ -92,3 +92,54 @@ def test_fft_product_equals_dense_matrix_and_is_symmetric():
     ux, uy = op.apply_tangential(p[0], p[1])
     np.testing.assert_allclose(np.concatenate([ux.ravel(), uy.ravel()]), D[:2 * N, :2 * N] @ p[:2].ravel(),
                                atol=1e-14)
+
+
+# ----------------------------------------------------------------------------- the operator protocol
+def test_extended_and_coarsened_operators_equal_the_ones_built_for_those_grids():
+    from conformal.grid import PlanarGrid
+    from conformal.influence.operator import build_operator
+
+    mat = Material(82000.0, 0.28, 40000.0, 0.3)              # dissimilar: K != 0 is kept
+    op, info = build_operator(PlanarGrid.centred(5, 4, 0.3, 0.2), mat)
+    assert info["influence"] == "halfspace" and op.coupled
+    longer = HalfSpaceInfluence.for_grid(7, 4, 0.3, 0.2, mat)
+    assert np.array_equal(op.extended(2).dense(), longer.dense())
+    coarse = HalfSpaceInfluence.for_grid(3, 2, 0.6, 0.4, mat)   # ceil(5/2) x 4/2 merged elements
+    assert np.array_equal(op.coarsened(2, 2).dense(), coarse.dense())
+    assert op.contact_modulus() == pytest.approx(mat.E_star, rel=1e-15)
+
+
+def test_single_precision_tangential_product_and_normal_preconditioner():
+    from conformal.grid import PlanarGrid
+    from conformal.influence.operator import build_operator
+
+    op, _ = build_operator(PlanarGrid.centred(9, 7, 0.2, 0.3), Material.steel())
+    p = np.random.default_rng(1).standard_normal((2, 9, 7))
+    u = np.stack(op.apply_tangential(*p))
+    u32 = op.tangential_product32()(p.astype(np.float32))
+    assert u32.dtype == np.float32
+    assert np.abs(u32 - u).max() < 1e-6 * np.abs(u).max()
+    # the preconditioner multiplies by |k| (module docstring of conformal.solvers.normal): positive definite
+    P = op.normal_preconditioner()
+    g = p[0]
+    assert float((g * P(g)).sum()) > 0.0
+
+
+def test_line_and_strip_operators_through_the_factory():
+    from conformal.grid import PlanarGrid
+    from conformal.influence.halfplane import LineInfluence
+    from conformal.errors import InputError
+    from conformal.influence.operator import build_operator
+
+    mat = Material.identical(80000.0, 0.3)
+    grid = PlanarGrid(10, 1, 0.1, 1.0, -0.5, -0.5)
+    op, info = build_operator(grid, mat, line=True)
+    assert info["influence"] == "halfplane"
+    ext = op.extended(3)
+    ref = LineInfluence.for_grid(PlanarGrid(13, 1, 0.1, 1.0, -0.5, -0.5), mat, ref_length=op.ref_length)
+    assert ext.ref_length == op.ref_length and np.array_equal(ext.dense(), ref.dense())
+    # strips offer no preconditioner, no single precision and no coarsening: None, not an error
+    assert op.normal_preconditioner() is None and op.tangential_product32() is None
+    assert op.coarsened(2, 1) is None and op.contact_modulus() == pytest.approx(mat.E_star)
+    with pytest.raises(InputError, match="influence"):
+        build_operator(grid, mat, influence="fe")

@@ -8,6 +8,7 @@ import pytest
 import conformal
 from conformal import reference as ref
 from conformal.errors import InputError
+from conformal.influence.halfplane import LineInfluence
 from conformal.materials import Material
 from conformal.problem import ContactProblem
 from conformal.result import ADHESION
@@ -56,7 +57,7 @@ def test_carter_steady_rolling():
     away = (np.abs(x) < 0.95) & (np.abs(x - (1.0 - 2 * 0.6)) > 2 * p.grid.dx)
     assert np.abs(r.field.px[:, 0] - carter)[away].max() < 0.02 * MU * p0
     # the reference length of the logarithm does not change the forces (only the approach)
-    op2 = line.LineInfluence.for_grid(p.grid, p.material, ref_length=50.0)
+    op2 = LineInfluence.for_grid(p.grid, p.material, ref_length=50.0)
     assert op2.ref_length == 50.0
 
 

@@ -277,6 +277,20 @@ def test_coarse_start_gives_the_same_solution(monkeypatch):
     assert np.abs(a.py - b.py).max() < 1e-5 * np.abs(b.py).max()
 
 
+def test_weighted_slip_preconditioner_changes_the_path_not_the_solution(monkeypatch):
+    """The slip rows' weighted preconditioner (tangential._Newton.preconditioner) against every slip
+    row preconditioned by its diagonal alone (STIFF_RATIO = 0): the same tractions, fewer products
+    (measured at 50 x 50: 31 against 43)."""
+    op, g, pn = circ(50)
+    a = solve(op, g, pn, xi=0.001)
+    monkeypatch.setattr(tang, "STIFF_RATIO", 0.0)
+    b = solve(op, g, pn, xi=0.001)
+    assert a.converged and b.converged
+    assert 0.2 < np.count_nonzero(a.status == SLIP) / np.count_nonzero(pn) < 0.4     # slip and adhesion
+    assert np.abs(a.px - b.px).max() < 1e-5 * np.abs(b.px).max()
+    assert a.products < 0.85 * b.products
+
+
 # ----------------------------------------------------------------------------- hard cases
 def test_full_slip_large_creepage():
     op, g, pn = circ(30)

@@ -60,6 +60,7 @@ import scipy.sparse as sp
 from conformal.errors import ConformalError, ConvergenceError, InputError, NoContactError
 from conformal.influence.factor import Factor, pardiso_available
 from conformal.influence.fe import trace_shape, vector_space
+from conformal.materials import lame_lambda
 from conformal.meshing.gmsh_body import BodyMesh, surface_frame, surface_point
 
 FAR_FIELDS = ("halfspace", "clamped")
@@ -305,7 +306,7 @@ def _fe_body(body: ContactBody, solver: str, max_dofs: int, order: int) -> _FEBo
     if ndofs > max_dofs:
         raise FEContactError(f"the {body.mesh.body.kind} body has {ndofs} unknowns, more than max_dofs = "
                              f"{max_dofs}; coarsen the mesh ([model] fec_n, fec_growth)")
-    lam = 2.0 * body.G * body.nu / (1.0 - 2.0 * body.nu)
+    lam = lame_lambda(body.G, body.nu)
     K = asm(linear_elasticity(lam, body.G), basis).tocsr()
     X_scalar = np.concatenate([pts, 0.5 * (pts[m.edges[0]] + pts[m.edges[1]])]) if order == 2 else pts
     fb = _FEBody(pts, dofmap, np.zeros(0, int), np.zeros(0, int), np.zeros(0, int), X_scalar, space,

@@ -36,18 +36,6 @@ from conformal.influence.halfspace import rectangle_influence
 from conformal.materials import Material
 
 
-def _rotation_x(angle: np.ndarray) -> np.ndarray:
-    """Rotation matrices about the x axis acting on (x, s, n) components, shape angle.shape + (3, 3)."""
-    c, s = np.cos(angle), np.sin(angle)
-    R = np.zeros(np.shape(angle) + (3, 3))
-    R[..., 0, 0] = 1.0
-    R[..., 1, 1] = c
-    R[..., 1, 2] = -s
-    R[..., 2, 1] = s
-    R[..., 2, 2] = c
-    return R
-
-
 def curved_halfspace_kernel(mx: int, dx: float, s_centres: np.ndarray, s_widths: np.ndarray,
                             delta: np.ndarray, material: Material, *, angle_correction: bool = True
                             ) -> np.ndarray:
@@ -102,8 +90,10 @@ def _rotate_pairs(K: np.ndarray, angle: np.ndarray) -> np.ndarray:
 class CurvedInfluence:
     """The influence operator of an mx x ms curved strip grid from an x-invariant kernel.
 
-    Same interface as :class:`~conformal.influence.halfspace.HalfSpaceInfluence`: ``apply(p)``
-    with p of shape (3, mx, ms), ``apply_normal(pn)``, ``apply_tangential(px, ps)``, ``dense()``.
+    The operator protocol of :mod:`conformal.influence.operator` (as
+    :class:`~conformal.influence.halfspace.HalfSpaceInfluence`): ``apply(p)`` with p of shape
+    (3, mx, ms), ``apply_normal(pn)``, ``apply_tangential(px, ps)``, ``dense()``; no
+    preconditioner, extension or coarsening of its own (those return None).
 
     >>> from conformal.materials import Material
     >>> s = np.arange(3) * 0.5
@@ -186,6 +176,27 @@ class CurvedInfluence:
         if not self.coupled:
             return np.zeros((2, self.mx, self.ms))
         return self._convolve(self._fhat["tn"], np.asarray(pn, dtype=float)[None])
+
+    # -------------------------------------------------------------- the operator protocol
+    def contact_modulus(self) -> float | None:
+        """None: a strip kernel carries no single pair of elastic constants."""
+        return None
+
+    def normal_preconditioner(self) -> None:
+        """None: no cheap approximate inverse of A_nn is known for a general strip kernel."""
+        return None
+
+    def tangential_product32(self) -> None:
+        """None: the strip products stay in double precision."""
+        return None
+
+    def extended(self, ncols: int) -> None:
+        """None: the kernel holds offsets up to mx - 1 only (a longer grid needs new numbers)."""
+        return None
+
+    def coarsened(self, fx: int, fy: int) -> None:
+        """None: coarser strips need new numbers (e.g. new FE influence numbers)."""
+        return None
 
     def self_influence(self) -> np.ndarray:
         """Self terms A_ii of each element along s, shape (ms, 3, 3)."""

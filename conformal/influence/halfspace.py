@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 from scipy import fft as sfft
@@ -88,14 +89,6 @@ _PARITY = {"L1": (-1, -1), "L2": (-1, -1), "R": (1, 1), "T1": (1, -1), "T2": (-1
 _PRIM_INDEX = {"L1": 0, "L2": 1, "R": 2, "T1": 3, "T2": 4}
 
 
-def _offsets(m: int, M: int) -> tuple[np.ndarray, np.ndarray]:
-    """Offsets d(k) in wrap-around order for a padded length M >= 2m-1, and the mask of used k."""
-    k = np.arange(M)
-    d = np.where(k <= m - 1, k, k - M)
-    used = (k <= m - 1) | (k >= M - m + 1)
-    return d, used
-
-
 def _wrap(D: np.ndarray, mx: int, my: int, Mx: int, My: int) -> np.ndarray:
     """Place D[i, j] (offset i - (mx-1), j - (my-1)) into wrap-around order on an Mx x My array."""
     C = np.zeros((Mx, My))
@@ -139,10 +132,7 @@ class HalfSpaceInfluence:
 
     @classmethod
     def for_grid(cls, mx: int, my: int, dx: float, dy: float, material: Material) -> "HalfSpaceInfluence":
-        op = cls(mx, my, dx, dy, material.G, material.nu, material.K)
-        op._fhat["shape"] = (sfft.next_fast_len(2 * mx - 1, real=True),
-                             sfft.next_fast_len(2 * my - 1, real=True))
-        return op
+        return _padded(cls(mx, my, dx, dy, material.G, material.nu, material.K))
 
     @property
     def coupled(self) -> bool:
@@ -277,6 +267,51 @@ class HalfSpaceInfluence:
             S[i, i] = self._component(i, i)[self.mx - 1, self.my - 1]
         return S
 
+    # -------------------------------------------------------------- the operator protocol
+    def contact_modulus(self) -> float:
+        """E* = G / (1 - nu) of the combined constants (N/mm²)."""
+        return self.G / (1.0 - self.nu)
+
+    def normal_preconditioner(self) -> Callable[[np.ndarray], np.ndarray]:
+        """z = P g, an approximate inverse of A_zz by FFT on the padded grid (after CONTACT's NormCG).
+
+        The half-space maps a pressure wave of wave number k to a displacement 2(1-nu)/(G |k|) times
+        it (Boussinesq), so P multiplies by |k| (the constant does not matter to CG).  The discrete
+        wave numbers 2 sin(k dx/2)/dx keep P positive definite.  (The inverse of the circulant
+        embedding of the discrete kernel is better for square elements but indefinite for
+        dx != dy: measured 146 to >1000 iterations at dx/dy = 0.3, against 13-16 with this P.)
+        """
+        Mx, My = self.padded_shape
+        kx = 2.0 * np.sin(np.pi * np.fft.fftfreq(Mx))[:, None] / self.dx
+        ky = 2.0 * np.sin(np.pi * np.fft.rfftfreq(My))[None, :] / self.dy
+        sym = np.hypot(kx, ky)
+        sym[0, 0] = sym[sym > 0].min() if (sym > 0).any() else 1.0
+
+        def apply(g: np.ndarray) -> np.ndarray:
+            gh = self._forward(g)
+            gh *= sym
+            return self._back(gh)
+
+        return apply
+
+    def tangential_product32(self) -> Callable[[np.ndarray], np.ndarray]:
+        """(u_x, u_y) = A_tt p in single precision (:class:`TangentialProduct32`)."""
+        return TangentialProduct32(self)
+
+    def extended(self, ncols: int) -> "HalfSpaceInfluence":
+        """The same numbers on a grid ``ncols`` elements longer in x (downstream)."""
+        return self._on_grid(self.mx + int(ncols), self.my, self.dx, self.dy)
+
+    def coarsened(self, fx: int, fy: int) -> "HalfSpaceInfluence":
+        """The operator of the grid of fx x fy merged elements (ceil(mx/fx) x ceil(my/fy) elements
+        of fx dx x fy dy), e.g. for a nested start or a coarse-grid correction."""
+        fx, fy = int(fx), int(fy)
+        return self._on_grid(-(-self.mx // fx), -(-self.my // fy), fx * self.dx, fy * self.dy)
+
+    def _on_grid(self, mx: int, my: int, dx: float, dy: float) -> "HalfSpaceInfluence":
+        """The operator of the same constants on another uniform grid."""
+        return _padded(HalfSpaceInfluence(mx, my, dx, dy, self.G, self.nu, self.K))
+
     def dense(self) -> np.ndarray:
         """The full 3N x 3N matrix (N = mx my; rows/cols ordered component-major, then ix, iy).
         For tests and small grids only."""
@@ -290,3 +325,37 @@ class HalfSpaceInfluence:
             for j in range(3):
                 out[i * N:(i + 1) * N, j * N:(j + 1) * N] = self._component(i, j)[dxi, dyi]
         return out
+
+
+def _padded(op: HalfSpaceInfluence) -> HalfSpaceInfluence:
+    """Record the zero-padded FFT size (Mx, My) >= (2mx-1, 2my-1) of a new operator."""
+    op._fhat["shape"] = (sfft.next_fast_len(2 * op.mx - 1, real=True), sfft.next_fast_len(2 * op.my - 1, real=True))
+    return op
+
+
+class TangentialProduct32:
+    """(u_x, u_y) = A_tt p by the zero-padded FFTs of :class:`HalfSpaceInfluence`, in single
+    precision (2.5x faster at 200 x 200; relative error about 1e-7), for Krylov products.  Only the
+    mx non-zero rows are transformed along y, and only mx rows are transformed back."""
+
+    def __init__(self, op: HalfSpaceInfluence):
+        self.mx, self.my = op.mx, op.my
+        self.Mx, self.My = op.padded_shape
+        k = [op.kernel_hat(i, j) for i, j in ((X, X), (X, Y), (Y, Y))]
+        # the half-space kernels are even-even (xx, yy) or odd-odd (xy): real transforms, and a
+        # real factor halves the cost of the products in Fourier space
+        real = all(np.abs(v.imag).max() <= 1e-9 * np.abs(v).max() for v in k)
+        self.k = [v.real.astype(np.float32) if real else v.astype(np.complex64) for v in k]
+
+    def __call__(self, p: np.ndarray) -> np.ndarray:
+        """p: (2, mx, my) float32 (or castable); returns (2, mx, my) float32."""
+        rows = sfft.rfft(p, n=self.My, axis=-1)
+        h = sfft.fft(rows, n=self.Mx, axis=-2, overwrite_x=True)
+        kxx, kxy, kyy = self.k
+        a0 = kxx * h[0]
+        a0 += kxy * h[1]
+        h[1] *= kyy
+        h[1] += kxy * h[0]
+        h[0] = a0
+        cols = sfft.ifft(h, axis=-2, overwrite_x=True)[:, : self.mx]
+        return sfft.irfft(cols, n=self.My, axis=-1)[:, :, : self.my]

@@ -66,7 +66,7 @@ import numpy as np
 
 from conformal.errors import ConvergenceError, InputError
 from conformal.grid import CurvedGrid, PlanarGrid
-from conformal.influence.curved import CurvedInfluence, curved_halfspace_kernel
+from conformal.influence.operator import InfluenceOperator, build_operator
 from conformal.materials import Material
 from conformal.problem import ContactProblem
 from conformal.result import Result, TractionField
@@ -212,46 +212,13 @@ def column_creepages(grid: CurvedGrid, xi: float, eta: float, phi: float
 
 # ----------------------------------------------------------------------------- influence numbers
 def influence_operator(grid: CurvedGrid, material: Material, model: ModelSpec, *, planar: bool = False,
-                       cache=None, rail_points=None, wheel_points=None) -> tuple[CurvedInfluence, dict]:
-    """The curved grid's influence operator: ``model.influence`` = "halfspace" (per curved grid,
-    frames rotated by the contact angles), "halfspace_planar" (the same numbers without the turn
-    between element frames: CONTACT's conformal approach) or "fe" (finite elements of the real wheel and rail,
-    cached; ``rail_points``, ``wheel_points``: the whole profiles the FE bodies are cut from).
-    Returns (operator, info with the timings and the FE statistics)."""
-    t0 = time.perf_counter()
-    if model.influence == "fe":
-        if planar:
-            raise InputError("[model] influence: finite-element influence numbers need the bodies' geometry: "
-                             "a wheel_rail scene (planar scenes: influence = \"halfspace\")")
-        from conformal.influence.fe import FESolveError, settings_from_options, wheel_rail_kernel
-
-        settings = settings_from_options(model.options)
-        try:
-            kernel, stats = wheel_rail_kernel(grid, material, settings, cache=cache, rail_points=rail_points,
-                                              wheel_points=wheel_points)
-        except (RuntimeError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:   # not ConformalError
-            raise FESolveError(f"[model] influence: the FE influence numbers failed on this {grid.mx} x {grid.ms} "
-                               f"grid ({type(exc).__name__}: {exc}); try influence = \"halfspace\" or other "
-                               "[grid] n / fe_* settings") from exc
-        info = {"influence": "fe", "fe": stats}
-    else:
-        # "halfspace_planar": CONTACT's conformal approach (its D = 4 with C3 = 2): the planar half-space
-        # numbers on the developed (x, s) grid, every element in its own local frame but no turn between
-        # the frames of two elements (Vollebregt 2014; CONTACT user guide, digit C3)
-        turned = model.influence == "halfspace"
-        kernel = curved_halfspace_kernel(grid.mx, grid.dx, grid.s - grid.s_ref, grid.ds, grid.delta, material,
-                                         angle_correction=turned)
-        info = {"influence": model.influence}
-        if model.influence == "halfspace_blanco":     # CONTACT's C3 = 4 (conformal.influence.blanco)
-            from conformal.influence.blanco import blanco_kernel, linear_fit
-
-            alpha = np.asarray(grid.delta, float)      # CONTACT's inclination per row (its curv_incln)
-            if model.options.get("blanco_method", "full") == "linear":
-                alpha = linear_fit(grid.s, alpha)
-            kernel = blanco_kernel(kernel, alpha, int(model.options.get("blanco_variant", 3)))
-    op = CurvedInfluence.from_kernel(kernel)
-    info["influence_s"] = time.perf_counter() - t0
-    return op, info
+                       cache=None, rail_points=None, wheel_points=None) -> tuple[InfluenceOperator, dict]:
+    """The curved grid's influence operator for ``model.influence`` (the factory
+    :func:`conformal.influence.operator.build_operator`; ``planar``: a planar scene, no bodies'
+    geometry for FE numbers; ``rail_points``, ``wheel_points``: the whole profiles the FE bodies
+    are cut from).  Returns (operator, info with the timings and the FE statistics)."""
+    return build_operator(grid, material, influence=model.influence, options=model.options, bodies=not planar,
+                          cache=cache, rail_points=rail_points, wheel_points=wheel_points)
 
 
 # ----------------------------------------------------------------------------- totals

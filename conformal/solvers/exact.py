@@ -24,7 +24,7 @@ import numpy as np
 
 from conformal.errors import InputError
 from conformal.grid import PlanarGrid
-from conformal.influence.halfspace import HalfSpaceInfluence
+from conformal.influence.operator import InfluenceOperator, build_operator
 from conformal.problem import ContactProblem
 from conformal.result import ADHESION, EXTERIOR, Result, TractionField
 from conformal.solvers.normal import NormalSolution, solve_normal
@@ -33,13 +33,15 @@ from conformal.solvers.normal import NormalSolution, solve_normal
 MAXOUT = 50
 
 
-def _needs_tangential(problem: ContactProblem, op: HalfSpaceInfluence) -> bool:
+def needs_tangential(problem: ContactProblem, op: InfluenceOperator) -> bool:
+    """Whether the problem has a tangential part: coupling, creepages, prescribed forces or rigid slip."""
     k = problem.kinematics
     return (op.coupled or k.fx_rel is not None or k.fy_rel is not None
             or any(v != 0.0 for v in (k.xi, k.eta, k.phi)) or problem.info.get("rigid_slip") is not None)
 
 
-def _check_kinematics(problem: ContactProblem) -> None:
+def check_kinematics(problem: ContactProblem) -> None:
+    """Finite creepages and prescribed forces |F|/(mu FN) < 1 (InputError otherwise)."""
     k = problem.kinematics
     for key in ("xi", "eta", "phi"):
         v = getattr(k, key)
@@ -100,7 +102,9 @@ def maxout_option(model) -> int:
     return maxout
 
 
-def _tangential(op, grid, pn, problem, extra_u, tol, maxit, p_start):
+def solve_tangential_stage(op, grid, pn, problem, extra_u, tol, maxit, p_start):
+    """The tangential problem of a planar contact problem for the pressure ``pn`` (one stage of
+    :func:`alternate`), with the problem's kinematics and friction."""
     from conformal.solvers.tangential import solve_tangential
 
     k, f = problem.kinematics, problem.friction
@@ -175,17 +179,12 @@ def solve(problem: ContactProblem) -> Result:
     if problem.model.influence != "halfspace":
         raise InputError(f"[model] influence: theory \"exact\" uses half-space influence numbers, got "
                          f"{problem.model.influence!r} (finite-element influence numbers: theory \"conformal\")")
-    _check_kinematics(problem)
+    check_kinematics(problem)
     maxout = maxout_option(problem.model)
     tol, maxit = problem.model.tol, problem.model.maxit
     mat = problem.material
-    if problem.info.get("influence_file") is not None:   # [model] influence_file: the file's numbers
-        from conformal.influence.contact_file import influence_operator
-
-        op = influence_operator(problem.info["influence_file"], mx=grid.mx, ms=grid.my, dx=grid.dx, ds=grid.dy,
-                                K=mat.K, G=mat.G)
-    else:
-        op = HalfSpaceInfluence.for_grid(grid.mx, grid.my, grid.dx, grid.dy, mat)
+    # [model] influence_file: the file's numbers
+    op, _ = build_operator(grid, mat, influence_file=problem.info.get("influence_file"))
     load = dict(normal_force=problem.normal_force, approach=problem.approach)
 
     start = problem.start    # a neighbouring solution on this grid: the iterations start there
@@ -198,11 +197,11 @@ def solve(problem: ContactProblem) -> Result:
     def tangential_stage(pn, extra_u, p_start):
         if p_start is None and start is not None and start[1] is not None:
             p_start = np.stack([start[1], start[2]])
-        return _tangential(op, grid, pn, problem, extra_u, tol, maxit, p_start)
+        return solve_tangential_stage(op, grid, pn, problem, extra_u, tol, maxit, p_start)
 
-    stages = alternate(op, normal_stage, tangential_stage, tangential=_needs_tangential(problem, op), tol=tol,
+    stages = alternate(op, normal_stage, tangential_stage, tangential=needs_tangential(problem, op), tol=tol,
                        maxout=maxout)
-    return _result(problem, grid, h, op, stages)
+    return planar_result(problem, grid, h, op, stages)
 
 
 @dataclass(frozen=True, eq=False)
@@ -281,7 +280,9 @@ def convergence_warnings(stages: Stages, tr: Tractions, tol: float, coupling: st
     return warnings
 
 
-def _result(problem, grid, h, op, stages: Stages) -> Result:
+def planar_result(problem, grid, h, op, stages: Stages) -> Result:
+    """The :class:`Result` of a planar contact problem from its solved stages (totals as CONTACT
+    prints them, module docstring)."""
     dA = grid.area
     kin = problem.kinematics
     normal, tang = stages.normal, stages.tang

@@ -52,8 +52,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from conformal.errors import InputError
-from conformal.grid import PlanarGrid
-from conformal.influence.halfspace import HalfSpaceInfluence
+from conformal.influence.operator import build_operator
 from conformal.problem import ContactProblem
 from conformal.solvers import exact, line
 from conformal.solvers.normal import solve_normal
@@ -152,12 +151,8 @@ def solve_history(problem: ContactProblem, steps, *, maxout: int | None = None,
         line.check_line_problem(problem)
         if any(s.approach is not None for s in steps):
             raise InputError("[[history]] approach: line contact (B = 0) needs normal_force per step")
-        op = line.LineInfluence.for_grid(grid, mat)
-        op_ext = line.LineInfluence.for_grid(PlanarGrid(mx + ext, my, grid.dx, grid.dy, grid.xl, grid.yl), mat,
-                                             ref_length=op.ref_length) if ext else op
-    else:
-        op = HalfSpaceInfluence.for_grid(mx, my, grid.dx, grid.dy, mat)
-        op_ext = HalfSpaceInfluence.for_grid(mx + ext, my, grid.dx, grid.dy, mat) if ext else op
+    op, _ = build_operator(grid, mat, line=line_contact)
+    op_ext = op.extended(ext) if ext else op
     load = dict(normal_force=problem.normal_force, approach=problem.approach)
     pn_prev = None
     p_prev = np.zeros((2, mx, my))
@@ -226,7 +221,7 @@ def solve_history(problem: ContactProblem, steps, *, maxout: int | None = None,
         tang = stages.tang
         kin = replace(problem.kinematics, xi=xi, eta=eta, phi=phi, rolling="shift" if kind == "shift" else "steady",
                       fx_rel=step.fx_rel, fy_rel=step.fy_rel)
-        res = exact._result(replace(problem, kinematics=kin, normal_force=load["normal_force"],
+        res = exact.planar_result(replace(problem, kinematics=kin, normal_force=load["normal_force"],
                                     approach=load["approach"]), grid, h, op, stages)
         # the tangential displacement of this step's tractions (the solver's ux includes the memory)
         u_now = u_total(op, tang.px, tang.py, stages.normal.pn)

@@ -36,79 +36,22 @@ Checks (tests/test_line_contact.py): 2-D Hertz (half-width and peak pressure, Jo
 Carter's steady rolling (force, adhesion width and traction, conformal.reference), and for
 dissimilar bodies the middle section of a long Hertzian contact (b = 20 a) of the 3-D exact theory.
 
->>> import numpy as np
->>> from conformal.materials import Material
->>> K = halfplane_kernel(4, 0.1, Material.identical(80000.0, 0.3), 10.0)
->>> K.shape, bool(np.allclose(K[..., 0, 0], K[..., 2, 2]))
-((7, 1, 1, 3, 3), True)
+The operator is :class:`conformal.influence.halfplane.LineInfluence` (built by the factory of
+:mod:`conformal.influence.operator`).
 """
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, replace
-
-import numpy as np
+from dataclasses import replace
 
 from conformal.errors import InputError
 from conformal.grid import PlanarGrid
-from conformal.influence.curved import CurvedInfluence
+from conformal.influence.halfplane import REFERENCE_FACTOR, UNIT_WIDTH  # noqa: F401
+from conformal.influence.operator import build_operator
 from conformal.materials import Material
 from conformal.problem import ContactProblem
 from conformal.result import Result
 from conformal.solvers import exact
 from conformal.solvers.normal import solve_normal
-
-#: the reference length L of the half-plane's logarithm, in grid lengths (mx dx)
-REFERENCE_FACTOR = 2.0
-#: element width across the line (mm): forces are per mm of line length
-UNIT_WIDTH = 1.0
-
-
-def _F(t: np.ndarray) -> np.ndarray:
-    """t ln|t| - t, with 0 at t = 0."""
-    at = np.abs(t)
-    return np.where(at > 0, t * np.log(np.where(at > 0, at, 1.0)), 0.0) - t
-
-
-def halfplane_kernel(mx: int, dx: float, material: Material, ref_length: float) -> np.ndarray:
-    """The x-invariant kernel (2mx-1, 1, 1, 3, 3) of a row of mx elements of length dx on two
-    elastic half-planes (module docstring), components (x, y, n)."""
-    if not (int(mx) >= 1 and dx > 0 and ref_length > 0):
-        raise InputError(f"line contact: need mx >= 1, dx > 0, L > 0 (got {mx}, {dx}, {ref_length})")
-    x = np.arange(-(mx - 1), mx) * float(dx)
-    h = 0.5 * float(dx)
-    base = -(_F(x + h) - _F(x - h) - dx * math.log(ref_length)) * (2.0 / math.pi)
-    K = np.zeros((2 * mx - 1, 1, 1, 3, 3))
-    E_star = material.G / (1.0 - material.nu)
-    K[:, 0, 0, 0, 0] = base / E_star     # u_x from p_x: plane strain
-    K[:, 0, 0, 2, 2] = base / E_star     # u_n from p_n
-    K[:, 0, 0, 1, 1] = base / material.G  # u_y from p_y: anti-plane shear
-    if material.K != 0.0:                 # dissimilar bodies (module docstring)
-        coupling = -(material.K / material.G) * 2.0 * np.clip(x, -h, h)
-        K[:, 0, 0, 0, 2] = coupling       # u_x from p_n
-        K[:, 0, 0, 2, 0] = -coupling      # u_n from p_x
-    return K
-
-
-@dataclass(frozen=True, eq=False)
-class LineInfluence(CurvedInfluence):
-    """The half-plane operator of a row of elements (ms = 1), with the material's G, nu, K and the
-    reference length L."""
-
-    G: float = 0.0
-    nu: float = 0.0
-    K: float = 0.0
-    ref_length: float = 0.0
-
-    @classmethod
-    def for_grid(cls, grid: PlanarGrid, material: Material, ref_length: float | None = None) -> "LineInfluence":
-        if grid.my != 1:
-            raise InputError(f"line contact: the grid has one element across the line (my = 1), got my = {grid.my}")
-        L = REFERENCE_FACTOR * grid.mx * grid.dx if ref_length is None else float(ref_length)
-        op = cls.from_kernel(halfplane_kernel(grid.mx, grid.dx, material, L))
-        for k, v in (("G", material.G), ("nu", material.nu), ("K", material.K), ("ref_length", L)):
-            object.__setattr__(op, k, float(v))
-        return op
 
 
 def line_grid(A: float, FN: float, material: Material, n: int = 40, scale: float = 1.1) -> tuple[float, PlanarGrid]:
@@ -134,9 +77,9 @@ def solve(problem: ContactProblem) -> Result:
     theory on the half-plane: normal problem, then steady rolling or shift as the kinematics say."""
     grid, h = problem.require_grid("line contact")
     check_line_problem(problem)
-    exact._check_kinematics(problem)
+    exact.check_kinematics(problem)
     tol, maxit = problem.model.tol, problem.model.maxit
-    op = LineInfluence.for_grid(grid, problem.material)
+    op, _ = build_operator(grid, problem.material, line=True)
     FN = problem.normal_force * grid.dy  # N per mm times the unit width
 
     def normal_stage(extra_un, p_start, tang):
@@ -144,11 +87,11 @@ def solve(problem: ContactProblem) -> Result:
                             extra_un=extra_un, p_start=p_start)
 
     def tangential_stage(pn, extra_u, p_start):
-        return exact._tangential(op, grid, pn, problem, extra_u, tol, maxit, p_start)
+        return exact.solve_tangential_stage(op, grid, pn, problem, extra_u, tol, maxit, p_start)
 
-    stages = exact.alternate(op, normal_stage, tangential_stage, tangential=exact._needs_tangential(problem, op),
+    stages = exact.alternate(op, normal_stage, tangential_stage, tangential=exact.needs_tangential(problem, op),
                              tol=tol, maxout=exact.maxout_option(problem.model))
-    res = exact._result(problem, grid, h, op, stages)
+    res = exact.planar_result(problem, grid, h, op, stages)
     extra = dict(res.extra, line_contact=True, reference_length=op.ref_length,
                  per_unit_length="FN, FX, FY in N/mm, MZ in N (per mm of line length)")
     extra.pop("hertz", None)

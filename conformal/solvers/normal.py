@@ -38,14 +38,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
 from conformal.solvers import checks
 from conformal.errors import InputError, NoContactError
 from conformal.grid import PlanarGrid
-from conformal.influence.halfspace import Z, HalfSpaceInfluence
+from conformal.influence.halfspace import Z
+from conformal.influence.operator import InfluenceOperator, build_operator
 from conformal.materials import Material
 
 #: use the FFT preconditioner from this many grid elements on (measured break-even, see
@@ -94,38 +94,6 @@ class NormalSolution:
         return h - self.approach * np.asarray(weights) + self.un
 
 
-def fft_preconditioner(op: HalfSpaceInfluence) -> Callable[[np.ndarray], np.ndarray]:
-    """z = P g, an approximate inverse of A_zz by FFT on the padded grid (after CONTACT's NormCG).
-
-    The half-space maps a pressure wave of wave number k to a displacement 2(1-nu)/(G |k|) times
-    it (Boussinesq), so P multiplies by |k| (the constant does not matter to CG).  The discrete
-    wave numbers 2 sin(k dx/2)/dx keep P positive definite.  (The inverse of the circulant
-    embedding of the discrete kernel is better for square elements but indefinite for
-    dx != dy: measured 146 to >1000 iterations at dx/dy = 0.3, against 13-16 with this P.)
-    """
-    Mx, My = op.padded_shape
-    kx = 2.0 * np.sin(np.pi * np.fft.fftfreq(Mx))[:, None] / op.dx
-    ky = 2.0 * np.sin(np.pi * np.fft.rfftfreq(My))[None, :] / op.dy
-    sym = np.hypot(kx, ky)
-    sym[0, 0] = sym[sym > 0].min() if (sym > 0).any() else 1.0
-
-    def apply(g: np.ndarray) -> np.ndarray:
-        gh = op._forward(g)
-        gh *= sym
-        return op._back(gh)
-
-    return apply
-
-
-def _preconditioner(op) -> Callable[[np.ndarray], np.ndarray] | None:
-    """The normal-problem preconditioner of an operator: the FFT one of the planar half-space, or
-    the operator's own ``normal_preconditioner()`` (curved strips), else none."""
-    if isinstance(op, HalfSpaceInfluence):
-        return fft_preconditioner(op)
-    make = getattr(op, "normal_preconditioner", None)
-    return make() if make is not None else None
-
-
 def _positive_weights(name: str, w, shape) -> np.ndarray | float:
     """Per-element weights as an array of the grid's shape, or the scalar 1.0 where they are all
     one (planar grids keep exactly the arithmetic of the planar solver)."""
@@ -157,11 +125,12 @@ def _self_zz(op, shape) -> np.ndarray | float:
     return float(S[Z, Z]) if S.ndim == 2 else np.broadcast_to(S[:, Z, Z], shape)
 
 
-def _e_star(op, material: Material | None, dA: float, a_self) -> float:
+def _e_star(op: InfluenceOperator, material: Material | None, dA: float, a_self) -> float:
     """Contact modulus for the starting guesses: the operator's, the material's, or from the self
     term of a square element, A_zz = 4 asinh(1) d / (pi E*) (only a first guess)."""
-    if hasattr(op, "G"):
-        return op.G / (1.0 - op.nu)
+    E_star = op.contact_modulus()
+    if E_star is not None:
+        return E_star
     if material is not None:
         return material.E_star
     return 4.0 * math.asinh(1.0) * math.sqrt(dA) / (math.pi * float(np.max(a_self)))
@@ -201,7 +170,7 @@ class _Weighted:
         return float(np.min(h / self.w))
 
 
-def solve_normal(op: HalfSpaceInfluence | None, grid: PlanarGrid, h: np.ndarray, *,
+def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, *,
                  normal_force: float | None = None, approach: float | None = None,
                  extra_un: np.ndarray | None = None, material: Material | None = None,
                  tol: float = 1e-6, maxit: int = 1000, p_start: np.ndarray | None = None,
@@ -210,9 +179,8 @@ def solve_normal(op: HalfSpaceInfluence | None, grid: PlanarGrid, h: np.ndarray,
 
     Parameters
     ----------
-    op : the influence operator of the grid, or None to build the half-space one from ``material``.
-        Any operator with ``apply_normal``, ``self_influence``, ``mx``, ``my`` serves (the curved
-        strips of conformal.influence.curved).
+    op : the influence operator of the grid (:class:`conformal.influence.operator.InfluenceOperator`),
+        or None to build the half-space one from ``material``.
     grid : the potential contact grid, planar or curved (``grid.area``: element area, a scalar or
         one per column); ``h`` has its shape (mm, before the approach; on a curved grid it may be
         < 0: the signed distance at a reference position of the bodies).
@@ -220,7 +188,8 @@ def solve_normal(op: HalfSpaceInfluence | None, grid: PlanarGrid, h: np.ndarray,
     extra_un : additional normal displacement difference (mm), e.g. A_zt p_t for K != 0.
     tol, maxit : stop when sum|dp| / sum p < tol; at most maxit iterations.
     p_start : a starting pressure (e.g. the previous outer iteration), optional.
-    precondition : use the FFT preconditioner (default: from PRECONDITION_FROM elements on).
+    precondition : use the operator's preconditioner where it has one (the FFT one of the planar
+        half-space; default: from PRECONDITION_FROM elements on).
     weights : w, the projection of the approach direction onto each element's normal (module
         docstring), > 0; default 1 (planar).
 
@@ -235,7 +204,7 @@ def solve_normal(op: HalfSpaceInfluence | None, grid: PlanarGrid, h: np.ndarray,
     if op is None:
         if material is None:
             raise InputError("solve_normal: give the influence operator or the material")
-        op = HalfSpaceInfluence.for_grid(grid.mx, grid.my, grid.dx, grid.dy, material)
+        op, _ = build_operator(grid, material)
     if (op.mx, op.my) != grid.shape:
         raise InputError(f"solve_normal: the influence operator is for a {op.mx} x {op.my} grid, "
                          f"the grid has {grid.mx} x {grid.my} elements")
@@ -246,7 +215,7 @@ def solve_normal(op: HalfSpaceInfluence | None, grid: PlanarGrid, h: np.ndarray,
     h_eff = h if extra_un is None else h + checks.field("extra_un", extra_un, grid.shape)
     if precondition is None:
         precondition = grid.size >= PRECONDITION_FROM
-    pc = _preconditioner(op) if precondition else None
+    pc = op.normal_preconditioner() if precondition else None
     dA, a = element_areas(grid)
     w = _positive_weights("[model] load direction: weights w", weights, grid.shape)
     weighted = _Weighted(a, w)

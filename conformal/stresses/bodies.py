@@ -32,6 +32,7 @@ from conformal.errors import InputError
 from conformal.influence.factor import Factor
 from conformal.influence.fe import (FESettings, _clamped_dofs, _free_surface, _loads, _residual_load, _space,
                                     rail_body_from_grid)
+from conformal.materials import lame_lambda
 from conformal.meshing.gmsh_body import mesh_body
 from conformal.stresses.halfspace import stresses as halfspace_stresses
 
@@ -306,7 +307,7 @@ def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FE
     spec = replace(settings.mesh, conform="all", order=1)
     bm = _mesh_isolated(model, patch, spec)
     m, space = _space(bm, 1)
-    lam = 2.0 * G * nu / (1.0 - 2.0 * nu)
+    lam = lame_lambda(G, nu)
     K = asm(linear_elasticity(lam, G), space.basis).tocsr()
     D = _clamped_dofs(m, space, bm)
     free = np.setdiff1d(np.arange(space.basis.N), D)

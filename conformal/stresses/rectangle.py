@@ -42,6 +42,8 @@ import math
 
 import numpy as np
 
+from conformal.materials import lame_lambda
+
 # corners of the loaded rectangle and their signs in the double difference D[.]
 _CORNERS = ((0.5, 0.5, 1.0), (0.5, -0.5, -1.0), (-0.5, 0.5, -1.0), (-0.5, -0.5, 1.0))
 _TINY = 1e-300
@@ -298,7 +300,7 @@ def _stress_from(func, x, y, z, G, nu, scale):
         u = func(x + 1j * h * ex, y + 1j * h * ey, z + 1j * h * ez)
         grad[..., :, l, :] = u.imag / h
     eps = 0.5 * (grad + np.swapaxes(grad, -3, -2))
-    lam = 2.0 * G * nu / (1.0 - 2.0 * nu)
+    lam = lame_lambda(G, nu)
     tr = eps[..., 0, 0, :] + eps[..., 1, 1, :] + eps[..., 2, 2, :]
     sigma = 2.0 * G * eps
     for k in range(3):

@@ -125,12 +125,12 @@ class SliceSolver:
 
     def __init__(self, a_over_b: float, nu: float, c: tuple[float, float, float], *, grid_n: int, tol: float,
                  maxit: int = 1000):
-        from conformal.influence.halfspace import HalfSpaceInfluence
+        from conformal.influence.operator import build_operator
         from conformal.solvers.normal import solve_normal
 
         self.problem = exact_problem(a_over_b, nu, 0.0, 0.0, 0.0, grid_n=grid_n, tol=tol)
         g, mat = self.problem.grid, self.problem.material
-        self.op = HalfSpaceInfluence.for_grid(g.mx, g.my, g.dx, g.dy, mat)
+        self.op, _ = build_operator(g, mat)
         self.normal = solve_normal(self.op, g, self.problem.h, normal_force=_FN, tol=tol, maxit=maxit)
         if not self.normal.converged:
             raise ConformalError(f"table node a/b = {a_over_b:g}, nu = {nu:g}: normal problem not converged")
