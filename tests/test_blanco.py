@@ -9,10 +9,20 @@ import pytest
 
 from conformal.errors import InputError
 from conformal.influence.blanco import blanco_kernel, linear_fit
-from conformal.influence.curved import _rotation_x, curved_halfspace_kernel
+from conformal.influence.curved import curved_halfspace_kernel
 from conformal.materials import Material
 
 DECKS = Path(__file__).resolve().parent / "reference" / "contact_decks"
+
+
+def _rotation_x(angle: np.ndarray) -> np.ndarray:
+    """Rotations about the x axis acting on (x, s, n) components (the test's own oracle)."""
+    c, s = np.cos(angle), np.sin(angle)
+    R = np.zeros(np.shape(angle) + (3, 3))
+    R[..., 0, 0] = 1.0
+    R[..., 1, 1], R[..., 1, 2] = c, -s
+    R[..., 2, 1], R[..., 2, 2] = s, c
+    return R
 
 
 def _strip():
