@@ -76,3 +76,18 @@ def test_cli_reference_lists_every_command():
                     "simulate", "stability", "inp", "stresses"):
         assert f"## `conformal {command}`" in text
     assert "`--allow-unconverged`" in text
+
+
+def test_result_field_reference_lists_every_field():
+    sys.path.insert(0, str(DOCS / "_ext"))
+    try:
+        import generated
+    finally:
+        sys.path.remove(str(DOCS / "_ext"))
+    from conformal import schema
+
+    text = generated.schema_markdown()
+    assert text.startswith("# Result fields (generated)")
+    for key, field in {**schema.SUMMARY, **schema.EXTRA}.items():
+        assert f"| `{key}` | {field.unit} |" in text, key
+    assert "| `FZ_track` | N |" in text

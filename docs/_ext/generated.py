@@ -1,10 +1,12 @@
 """Reference pages generated from the code when the documentation is built.
 
-Three generators, each a pure function from the package to Markdown text, and one Sphinx hook
+Four generators, each a pure function from the package to Markdown text, and one Sphinx hook
 (``builder-inited``) that writes their output under ``docs/reference/_generated/`` (not tracked):
 
 * :func:`scene_keys_markdown`: the scene keys, with units and defaults, from the model registry
   (``conformal.registry``) through ``conformal.scene.reference_markdown``.
+* :func:`schema_markdown`: the fields of the JSON summary and of ``Result.extra`` with their units,
+  from ``conformal.schema.markdown``.
 * :func:`cli_markdown`: every command and option of ``conformal`` from the argparse parser
   (``conformal.cli.build_parser``).
 * :func:`api_pages`: one page per module group of the package, each an ``automodule`` directive
@@ -36,6 +38,26 @@ def scene_keys_markdown() -> str:
                       "rad; a key that is not listed is refused with the closest known name. A `--` default "
                       "means: not set (the key is optional or one of a set of alternatives; see "
                       "[Scene files](../scene-files.md)).", "", body])
+
+
+# ------------------------------------------------------------------------------------ result fields
+
+
+def schema_markdown() -> str:
+    """The result fields (JSON summary and ``Result.extra``) as Markdown tables, from the schema.
+
+    The tables are :func:`conformal.schema.markdown`; this page adds its title and where it comes
+    from.
+    """
+    from conformal import schema
+
+    body = schema.markdown().split("\n", 1)[1]                  # drop its own title
+    return "\n".join(["# Result fields (generated)", "",
+                      "Generated from `conformal/schema.py` when the documentation is built "
+                      "(`conformal.schema.markdown`): every field of the JSON summary of `conformal solve` "
+                      "(`Result.to_dict()`) and every `Result.extra` key, with its unit and the models that "
+                      "write it. `tests/test_schema.py` fails when a model writes a field that is not listed "
+                      "here. See [Models](../models.md).", "", body])
 
 
 # ----------------------------------------------------------------------------------------- the CLI
@@ -146,7 +168,8 @@ def _write(path: Path, text: str) -> None:
 def generate(srcdir: Path) -> list[Path]:
     """Write the generated pages under ``srcdir/reference/_generated``; returns their paths."""
     folder = Path(srcdir) / "reference" / "_generated"
-    files = {"scene_keys.md": scene_keys_markdown(), "cli.md": cli_markdown(), **api_pages()}
+    files = {"scene_keys.md": scene_keys_markdown(), "schema.md": schema_markdown(), "cli.md": cli_markdown(),
+             **api_pages()}
     for name, text in files.items():
         _write(folder / name, text)
     for stale in folder.glob("*.md"):
