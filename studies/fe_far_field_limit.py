@@ -69,6 +69,12 @@ SIZES = (1.0, 2.0, 4.0, 8.0, 16.0)
 CLAMPED_SIZES = (2.0, 4.0, 8.0, 16.0)
 FINE_SIZES = (8.0, 16.0)
 STRAIGHT_SIZES = (4.0, 8.0, 16.0)
+P2_SIZES = (4.0, 8.0, 16.0)
+#: series name -> (far field, grading label) of its rows
+SERIES = {"halfspace": ("halfspace", "default"), "clamped": ("clamped", "default"), "fine": ("halfspace", "fine"),
+          "straight": ("halfspace", "straight"), "p2": ("halfspace", "p2"), "section": ("halfspace", "section"),
+          "section_clamped": ("clamped", "section")}
+SECTION_SIZES = (1.0, 2.0, 4.0, 8.0, 16.0)
 QUICK_SIZES = (4.0, 8.0, 16.0)
 GRID_N = 16          # elements across the overlap (the scenes' 30-40 cost 2-3 min per pair here)
 
@@ -153,13 +159,34 @@ class Case:
         edge = self.p[[0, -1], :].any() or self.p[:, [0, -1]].any()
         self.warning = "the half-space contact reaches the strip's edge" if edge else ""
 
+    def sections(self):
+        """The real rail and wheel as whole sections (``fe_closure = "section"``): the 60E1 section
+        below a UIC60 head, the wheel's rim and web below an S1002 profile
+        (conformal.geometry.sections), each opened at its support edge (the rail's foot, the
+        wheel's hub: bodies.section_profile); None where the profiles are not those."""
+        from conformal.errors import InputError
+        from conformal.geometry.sections import uic60_section, wheel_rim_section
+        from conformal.meshing.bodies import BodyModel, section_profile
+
+        rp, wp = self.rail.profile, self.wheel.profile
+        try:
+            rs = uic60_section(np.column_stack([rp.y, rp.z]))
+            ws = wheel_rim_section(np.column_stack([wp.y, wp.z]), -self.wheel.axle_z)
+        except InputError:
+            return None
+        return (BodyModel("rail", section_profile(rs.points, rs.n_profile, rs.clamped[0], rs.name)),
+                BodyModel("wheel", section_profile(ws.points, ws.n_profile, ws.clamped[0], ws.name),
+                          axle_z=self.wheel.axle_z))
+
     def kernels(self, settings, cache):
-        """(rail kernel, wheel kernel in the rail's element frames, stats) for FE settings."""
+        """(rail kernel, wheel kernel in the rail's element frames, stats) for FE settings (with
+        the closure "section": the bodies of :meth:`sections`)."""
         from conformal.influence.fe import body_influences, rotate_kernel
 
         m = self.material
-        kr, kw = body_influences([(self.rail, self.rpatch, m.G1, m.nu1, settings),
-                                  (self.wheel, self.wpatch, m.G2, m.nu2, settings)], cache)
+        rail, wheel = self.sections() if settings.mesh.closure == "section" else (self.rail, self.wheel)
+        kr, kw = body_influences([(rail, self.rpatch, m.G1, m.nu1, settings),
+                                  (wheel, self.wpatch, m.G2, m.nu2, settings)], cache)
         return kr.kernel, rotate_kernel(kw.kernel, self.rot), {"rail": kr.stats, "wheel": kw.stats}
 
     def slab(self) -> bool:
@@ -292,10 +319,12 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="the flat block, clamped, sizes 4, 8, 16 only")
     ap.add_argument("--cases", default="deep,groove,gauge", help="comma-separated: deep, groove, gauge")
     ap.add_argument("--out", default=None, help="output folder (default studies/out/fe_far_field_limit)")
-    ap.add_argument("--series", default="halfspace,clamped,fine,straight",
-                    help="comma-separated: halfspace, clamped, fine (refined grading), straight (slabs not limited)")
+    ap.add_argument("--series", default="halfspace,clamped,fine,straight,p2,section,section_clamped",
+                    help="comma-separated: halfspace, clamped, fine (refined grading), straight (slabs not "
+                         "limited), p2 (quadratic tetrahedra, default grading, sizes 4-16), section, "
+                         "section_clamped (real rail and wheel sections, closure \"section\")")
     ap.add_argument("--append", action="store_true",
-                    help="keep the rows of other cases from the existing JSON (rerun some cases only)")
+                    help="keep the rows of other cases and series from the existing JSON (rerun some only)")
     args = ap.parse_args(argv)
     out = output_dir("fe_far_field_limit", args)
     out.mkdir(parents=True, exist_ok=True)
@@ -308,7 +337,9 @@ def main(argv=None) -> int:
     keys = [k for k in args.cases.split(",") if k]
     if args.append and (out / "fe_far_field_limit.json").exists():
         old = json.loads((out / "fe_far_field_limit.json").read_text())["rows"]
-        rows = [r for r in old if r["case"] not in keys and (r["case"] != "flat" or args.quick)]
+        rerun = {SERIES[s] for s in series if s in SERIES}
+        rows = [r for r in old if (r["case"] not in keys or (r["far_field"], r["grading"]) not in rerun)
+                and (r["case"] != "flat" or args.quick)]
     if args.quick:
         rows += run_flat(QUICK_SIZES, "clamped", cache)
     else:
@@ -329,6 +360,15 @@ def main(argv=None) -> int:
             if "straight" in series and case.slab():
                 rows += run_case(case, STRAIGHT_SIZES, "halfspace", 1.0, cache, "straight", closure="straight")
                 _dump(out, rows)
+            if "section" in series and case.sections() is not None:
+                rows += run_case(case, SECTION_SIZES, "halfspace", 1.0, cache, "section", closure="section")
+                _dump(out, rows)
+            if "section_clamped" in series and case.sections() is not None:
+                rows += run_case(case, SECTION_SIZES[1:], "clamped", 1.0, cache, "section", closure="section")
+                _dump(out, rows)
+            if "p2" in series:
+                rows += run_case(case, P2_SIZES, "halfspace", 1.0, cache, "p2", order=2)
+                _dump(out, rows)
     summary = summarise(rows)
     _dump(out, rows, summary, converged(rows, summary))
     (out / "fe_far_field_limit.md").write_text(report(rows, summary))
@@ -342,8 +382,7 @@ def summarise(rows) -> dict:
     out = {}
     for case in dict.fromkeys(r["case"] for r in rows):
         keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio", "FN_rail_only", "FN_wheel_only"]
-        for far, grading in (("halfspace", "default"), ("clamped", "default"), ("halfspace", "fine"),
-                             ("halfspace", "straight")):
+        for far, grading in SERIES.values():
             for k in keys:
                 lim = limits(rows, case, far, grading, k)
                 if lim:
@@ -440,7 +479,9 @@ def _plot(rows, summary, path: Path) -> None:
         keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio"]
         for k, key in enumerate(keys):
             for far, grading, style in (("halfspace", "default", "-o"), ("clamped", "default", "--s"),
-                                        ("halfspace", "fine", ":^"), ("halfspace", "straight", "-.x")):
+                                        ("halfspace", "fine", ":^"), ("halfspace", "straight", "-.x"),
+                                        ("halfspace", "p2", ":D"), ("halfspace", "section", "-P"),
+                                        ("clamped", "section", "--P")):
                 sel = sorted((r for r in rows if r["case"] == case and r["far_field"] == far
                               and r["grading"] == grading and key in r), key=lambda r: r["size"])
                 if sel:
