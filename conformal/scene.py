@@ -55,7 +55,7 @@ MODEL_OPTIONS = {
     "fe_conform": "FE: conforming mesh", "fe_body_size": "FE: body size over the patch",
     "fe_solver": "FE: linear solver", "fe_collocation": "FE: collocation rule",
     "fe_far_field": "FE: far-field boundary condition",
-    "fe_closure": "FE: a profile ending inside the body: \"extend\" (straight, slabs limited; default) | \"straight\" | \"cut\"",
+    "fe_closure": "FE: a profile ending inside the body: \"extend\" (straight, slabs limited; default) | \"straight\" | \"cut\" | \"section\" (the real rail and wheel sections)",
     "influence_file": "exact: influence numbers read from a file (conformal.influence.contact_file)",
     **{k: "fe_contact: see conformal.fe_contact.problems" for k in ("fec_n", "fec_h", "fec_order", "fec_growth", "fec_h_max", "fec_body_size", "fec_patch", "fec_far_field", "fec_solver", "fec_estimate")},
 }

@@ -69,12 +69,12 @@ SIZES = (1.0, 2.0, 4.0, 8.0, 16.0)
 CLAMPED_SIZES = (2.0, 4.0, 8.0, 16.0)
 FINE_SIZES = (8.0, 16.0)
 STRAIGHT_SIZES = (4.0, 8.0, 16.0)
-P2_SIZES = (4.0, 8.0, 16.0)
+P2_SIZES = (4.0, 8.0, 16.0, 32.0)
 #: series name -> (far field, grading label) of its rows
 SERIES = {"halfspace": ("halfspace", "default"), "clamped": ("clamped", "default"), "fine": ("halfspace", "fine"),
           "straight": ("halfspace", "straight"), "p2": ("halfspace", "p2"), "section": ("halfspace", "section"),
           "section_clamped": ("clamped", "section")}
-SECTION_SIZES = (1.0, 2.0, 4.0, 8.0, 16.0)
+SECTION_SIZES = (1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
 QUICK_SIZES = (4.0, 8.0, 16.0)
 GRID_N = 16          # elements across the overlap (the scenes' 30-40 cost 2-3 min per pair here)
 
@@ -207,6 +207,27 @@ class Case:
         r = solve_curved(self.problem, CurvedInfluence.from_kernel(kernel), {"influence": "fe"})
         return float(r.FN / self.hs.FN)
 
+    def at_load(self, kernel) -> dict:
+        """At a prescribed load (the half-space solution's FN along the load direction) instead of
+        its approach: pmax, the contact area and the approach with the FE numbers over those with
+        the half-space numbers at the same load (what a real rail and wheel, which have no
+        approach relative to infinity, compare at)."""
+        if not hasattr(self, "_hs_load"):
+            self._hs_load = self._load_solution(self.hs_body["rail"] + self.hs_body["wheel"])
+        fe, hs = self._load_solution(kernel), self._hs_load
+        return {f"{k}_load": fe[k] / hs[k] for k in fe}
+
+    def _load_solution(self, kernel) -> dict:
+        from conformal.influence.curved import CurvedInfluence
+        from conformal.solvers.conformal import solve_curved
+
+        prob = replace(self.problem, approach=None, normal_force=float(self.hs.FN))
+        r = solve_curved(prob, CurvedInfluence.from_kernel(kernel), {"influence": "fe"})
+        p = np.asarray(r.field.pn, float)
+        g = self.problem.grid
+        dA = g.dx * np.broadcast_to(np.asarray(g.ds, float)[None, :], p.shape)
+        return {"pmax": float(p.max()), "area": float(((p > 0) * dA).sum()), "approach": float(r.approach)}
+
 
 def _identical(m, body: str):
     from conformal.materials import Material
@@ -295,7 +316,8 @@ def run_case(case, sizes, far: str, refine: float, cache, grading: str, **mesh) 
                "FN_ratio": case.fn_ratio(kr + kw),
                # one FE body against the other's half-space numbers: what each body's shape does
                "FN_rail_only": case.fn_ratio(kr + case.hs_body["wheel"]),
-               "FN_wheel_only": case.fn_ratio(case.hs_body["rail"] + kw), "time_s": time.perf_counter() - t0,
+               "FN_wheel_only": case.fn_ratio(case.hs_body["rail"] + kw), **case.at_load(kr + kw),
+               "time_s": time.perf_counter() - t0,
                "fe_s": sum(float(v.get("total_s", 0.0)) for v in st.values()),
                "dofs": [v.get("dofs") for v in st.values()],
                "body": {b: v.get("body") for b, v in st.items()}}
@@ -381,7 +403,8 @@ def main(argv=None) -> int:
 def summarise(rows) -> dict:
     out = {}
     for case in dict.fromkeys(r["case"] for r in rows):
-        keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio", "FN_rail_only", "FN_wheel_only"]
+        keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio", "FN_rail_only", "FN_wheel_only",
+                                                   "pmax_load", "area_load", "approach_load"]
         for far, grading in SERIES.values():
             for k in keys:
                 lim = limits(rows, case, far, grading, k)
@@ -421,6 +444,33 @@ def converged(rows, summary) -> list[dict]:
     return out
 
 
+def section_limits(rows, summary) -> list[dict]:
+    """Per case with a section series and quantity: the section series' R3 (its last three
+    sizes), the ratio of differences, the clamped section series' value at its largest size, and
+    the production default's value (closure "extend", half-space far field, the default size)
+    and distance from that R3."""
+    from conformal.meshing.gmsh_body import MeshSpec
+
+    size = MeshSpec().body_size
+    out = []
+    for case, per in summary.items():
+        for k, lim in per.get("halfspace/section", {}).items():
+            if "R3" not in lim:
+                continue
+            sel = sorted(r["size"] for r in rows if r["case"] == case and r["grading"] == "section"
+                         and r["far_field"] == "halfspace" and k in r)
+            cl = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section"
+                        and r["far_field"] == "clamped" and k in r)
+            at = [r[k] for r in rows if r["case"] == case and r["far_field"] == "halfspace"
+                  and r["grading"] == "default" and r["size"] == size and k in r]
+            row = {"case": case, "quantity": k, "limit": lim["R3"], "ratio": lim.get("ratio"),
+                   "sizes": f"{sel[-3]:g}-{sel[-1]:g}", "clamped_last": cl[-1][1] if cl else None}
+            if at:
+                row.update(default=at[0], default_off=at[0] / lim["R3"] - 1.0)
+            out.append(row)
+    return out
+
+
 def _dump(out: Path, rows, summary=None, conv=None) -> None:
     tmp = out / "fe_far_field_limit.json.tmp"
     tmp.write_text(json.dumps({"rows": rows, "summary": summary or {}, "converged": conv or []}, indent=1,
@@ -453,7 +503,20 @@ def report(rows, summary) -> str:
         head.append(f"{case}: the {first[1]} section is a slab (its profile's ends point the same way); from size "
                     f"{first[0]:g} on its margin is limited to the section's width, so its 'limit' is that of the "
                     "limited body, not of a large one: the series 'straight' (not limited) grows without bound.")
-    lines = head + ["", "| case | quantity | far field / grading | value at size " + " / ".join(f"{s:g}" for s in SIZES)
+    sec = [c for c in section_limits(rows, summary)]
+    if sec:
+        head += ["", "Real sections (``fe_closure = \"section\"``: the 60E1 rail and the wheel's rim and web, "
+                 "conformal.geometry.sections): the limit of the last three sizes of the section series "
+                 "(half-space far field) and the production default's (closure \"extend\") distance from it; "
+                 "a ratio of differences far from 0.5 means the series has not reached the 1/size regime "
+                 "(the bodies' structure, not the contact, still changes).", "",
+                 "| case | quantity | sizes | section series R3 | ratio | clamped section, largest size | "
+                 "default (extend) | default - section R3 |", "|---|---|---|---|---|---|---|---|"]
+        for c in sec:
+            head.append(f"| {c['case']} | {c['quantity']} | {c['sizes']} | {c['limit']:.4f} | {f(c['ratio'], '{:.2f}')} | "
+                        f"{f(c.get('clamped_last'))} | {f(c.get('default'))} | {f(c.get('default_off'), '{:+.2%}')} |")
+    sizes = sorted({r["size"] for r in rows if "size" in r and r["case"] != "flat"} | set(SIZES))
+    lines = head + ["", "| case | quantity | far field / grading | value at size " + " / ".join(f"{s:g}" for s in sizes)
              + " | R2 | R3 | ratio of differences |", "|---|---|---|---|---|---|---|"]
     for case, per in summary.items():
         for series, d in per.items():
@@ -461,7 +524,7 @@ def report(rows, summary) -> str:
             for k, lim in d.items():
                 by = {r["size"]: r[k] for r in rows if r["case"] == case and r["far_field"] == far
                       and r["grading"] == grading and k in r}
-                vals = " / ".join(f"{by[s]:.4f}" if s in by else "-" for s in SIZES)
+                vals = " / ".join(f"{by[s]:.4f}" if s in by else "-" for s in sizes)
                 lines.append(f"| {case} | {k} | {series} | {vals} | {lim['R2']:.4f} | "
                              f"{lim.get('R3', float('nan')):.4f} | {lim.get('ratio', float('nan')):.2f} |")
     return "\n".join(lines) + "\n"
