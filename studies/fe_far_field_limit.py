@@ -30,7 +30,14 @@ corner of UIC60 against the S1002 flange root (6.2 mm shift, 0.03 mm), all on gr
 (GRID_N).  Series: the half-space far field at sizes 1-16 (the default 16 among them), clamped at
 2-16, the half-space far field with every element size halved at 8 and 16, and where a body's
 section is a slab (the UIC60 head) the unlimited straight continuation at 4-16
-(``fe_closure = "straight"``: its compliance grows without bound, the default limits it).  The
+(``fe_closure = "straight"``: its compliance grows without bound, the default limits it); with
+quadratic tetrahedra (``p2``: the default grading, sizes 4-32); and for the real S1002/UIC60 pair
+the whole sections (``section``, ``section_clamped``: ``fe_closure = "section"``, the 60E1 rail's
+head, web and foot and the wheel's rim and web cut by the body's disc, sizes 1-64 and 2-16;
+``section_fine``: every element size halved, sizes 16 and 32).
+Besides the quantities at the prescribed approach, each row has pmax, the contact area and the
+approach at a prescribed load (the half-space solution's FN along the load direction) over those
+of the half-space numbers at that load (``pmax_load``, ``area_load``, ``approach_load``).  The
 report gives, per case and quantity, the limit (R3 of the half-space series), an error bar (the
 largest of |R2 - R3|, the clamped R3 and the refined R2 against it) and the default's distance
 from it.
@@ -73,7 +80,7 @@ P2_SIZES = (4.0, 8.0, 16.0, 32.0)
 #: series name -> (far field, grading label) of its rows
 SERIES = {"halfspace": ("halfspace", "default"), "clamped": ("clamped", "default"), "fine": ("halfspace", "fine"),
           "straight": ("halfspace", "straight"), "p2": ("halfspace", "p2"), "section": ("halfspace", "section"),
-          "section_clamped": ("clamped", "section")}
+          "section_clamped": ("clamped", "section"), "section_fine": ("halfspace", "section_fine")}
 SECTION_SIZES = (1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
 QUICK_SIZES = (4.0, 8.0, 16.0)
 GRID_N = 16          # elements across the overlap (the scenes' 30-40 cost 2-3 min per pair here)
@@ -344,7 +351,10 @@ def main(argv=None) -> int:
     ap.add_argument("--series", default="halfspace,clamped,fine,straight,p2,section,section_clamped",
                     help="comma-separated: halfspace, clamped, fine (refined grading), straight (slabs not "
                          "limited), p2 (quadratic tetrahedra, default grading, sizes 4-16), section, "
-                         "section_clamped (real rail and wheel sections, closure \"section\")")
+                         "section_clamped, section_fine (real rail and wheel sections, closure \"section\"; "
+                         "fine: every element size halved, sizes 16 and 32)")
+    ap.add_argument("--report", action="store_true",
+                    help="only rebuild the report (md, png) from the existing JSON")
     ap.add_argument("--append", action="store_true",
                     help="keep the rows of other cases and series from the existing JSON (rerun some only)")
     args = ap.parse_args(argv)
@@ -357,6 +367,13 @@ def main(argv=None) -> int:
     rows: list[dict] = []
     series = set(args.series.split(","))
     keys = [k for k in args.cases.split(",") if k]
+    if args.report:
+        rows = json.loads((out / "fe_far_field_limit.json").read_text())["rows"]
+        summary = summarise(rows)
+        _dump(out, rows, summary, converged(rows, summary))
+        (out / "fe_far_field_limit.md").write_text(report(rows, summary))
+        _plot(rows, summary, out / "fe_far_field_limit.png")
+        return 0
     if args.append and (out / "fe_far_field_limit.json").exists():
         old = json.loads((out / "fe_far_field_limit.json").read_text())["rows"]
         rerun = {SERIES[s] for s in series if s in SERIES}
@@ -387,6 +404,9 @@ def main(argv=None) -> int:
                 _dump(out, rows)
             if "section_clamped" in series and case.sections() is not None:
                 rows += run_case(case, SECTION_SIZES[1:], "clamped", 1.0, cache, "section", closure="section")
+                _dump(out, rows)
+            if "section_fine" in series and case.sections() is not None:
+                rows += run_case(case, (16.0, 32.0), "halfspace", 0.5, cache, "section_fine", closure="section")
                 _dump(out, rows)
             if "p2" in series:
                 rows += run_case(case, P2_SIZES, "halfspace", 1.0, cache, "p2", order=2)
@@ -436,8 +456,10 @@ def converged(rows, summary) -> list[dict]:
                 others.append(abs(fine["R2"] - lim["R2"]))
             at = [r[k] for r in rows if r["case"] == case and r["far_field"] == "halfspace"
                   and r["grading"] == "default" and r["size"] == size and k in r]
+            p2 = per.get("halfspace/p2", {}).get(k, {})
             row = {"case": case, "quantity": k, "limit": lim["R3"], "err": max(others), "ratio": lim.get("ratio"),
-                   "clamped_R3": cl.get("R3"), "fine_R2": fine.get("R2")}
+                   "clamped_R3": cl.get("R3"), "fine_R2": fine.get("R2"), "p2_R3": p2.get("R3"),
+                   "p2_ratio": p2.get("ratio")}
             if at:
                 row.update(default=at[0], default_off=at[0] / lim["R3"] - 1.0)
             out.append(row)
@@ -445,28 +467,34 @@ def converged(rows, summary) -> list[dict]:
 
 
 def section_limits(rows, summary) -> list[dict]:
-    """Per case with a section series and quantity: the section series' R3 (its last three
-    sizes), the ratio of differences, the clamped section series' value at its largest size, and
-    the production default's value (closure "extend", half-space far field, the default size)
-    and distance from that R3."""
+    """Per case with a section series and quantity: the value at its largest size as the limit
+    (the series leaves the 1/size regime: the real bodies' structure, not the contact, changes
+    with the size until the disc holds the section and the wheel's disc reaches its cap), the
+    change from the size before as its error bar, the clamped section series' value at its
+    largest size, and the production default's value (closure "extend", half-space far field,
+    the default size) and distance from that limit."""
     from conformal.meshing.gmsh_body import MeshSpec
 
     size = MeshSpec().body_size
     out = []
     for case, per in summary.items():
-        for k, lim in per.get("halfspace/section", {}).items():
-            if "R3" not in lim:
-                continue
-            sel = sorted(r["size"] for r in rows if r["case"] == case and r["grading"] == "section"
+        for k in per.get("halfspace/section", {}):
+            sel = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section"
                          and r["far_field"] == "halfspace" and k in r)
             cl = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section"
                         and r["far_field"] == "clamped" and k in r)
+            fine = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section_fine"
+                          and k in r)
             at = [r[k] for r in rows if r["case"] == case and r["far_field"] == "halfspace"
                   and r["grading"] == "default" and r["size"] == size and k in r]
-            row = {"case": case, "quantity": k, "limit": lim["R3"], "ratio": lim.get("ratio"),
-                   "sizes": f"{sel[-3]:g}-{sel[-1]:g}", "clamped_last": cl[-1][1] if cl else None}
+            lim = sel[-1][1]
+            row = {"case": case, "quantity": k, "limit": lim, "err": abs(sel[-1][1] - sel[-2][1]),
+                   "values": " / ".join(f"{v:.4f}" for _, v in sel[-3:]),
+                   "sizes": " / ".join(f"{s:g}" for s, _ in sel[-3:]),
+                   "clamped_last": cl[-1][1] if cl else None,
+                   "fine": " / ".join(f"{v:.4f} ({s:g})" for s, v in fine) or "-"}
             if at:
-                row.update(default=at[0], default_off=at[0] / lim["R3"] - 1.0)
+                row.update(default=at[0], default_off=at[0] / lim - 1.0)
             out.append(row)
     return out
 
@@ -483,8 +511,8 @@ def report(rows, summary) -> str:
 
     conv = converged(rows, summary)
     head = ["| case | quantity | limit (R3, half-space far field) | error bar | ratio of differences 4-8-16 "
-            f"| clamped R3 | refined R2 | default (size {MeshSpec().body_size:g}) | default - limit |",
-            "|---|---|---|---|---|---|---|---|---|"]
+            f"| clamped R3 | refined R2 | P2 R3 (ratio) | default (size {MeshSpec().body_size:g}) | default - limit |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
 
     def f(v, fmt="{:.4f}"):
         return "-" if v is None else fmt.format(v)
@@ -492,8 +520,10 @@ def report(rows, summary) -> str:
     for c in conv:
         r = c.get("ratio")
         regime = f(r, "{:.2f}") + ("" if r is not None and 0.4 <= r <= 0.7 else " (not 1/size)")
+        p2 = f(c.get("p2_R3")) + ("" if c.get("p2_ratio") is None else f" ({c['p2_ratio']:.2f})")
         head.append(f"| {c['case']} | {c['quantity']} | {c['limit']:.4f} | {c['err']:.4f} | {regime} | "
-                    f"{f(c['clamped_R3'])} | {f(c['fine_R2'])} | {f(c.get('default'))} | "
+                    f"{f(c['clamped_R3'])} | {f(c['fine_R2'])} | "
+                    f"{p2} | {f(c.get('default'))} | "
                     f"{f(c.get('default_off'), '{:+.2%}')} |")
     slabs = sorted({(r["case"], b, r["size"]) for r in rows for b, v in (r.get("body") or {}).items()
                     if v and v.get("margin_limited_by") == "section width" and r["grading"] == "default"})
@@ -503,18 +533,18 @@ def report(rows, summary) -> str:
         head.append(f"{case}: the {first[1]} section is a slab (its profile's ends point the same way); from size "
                     f"{first[0]:g} on its margin is limited to the section's width, so its 'limit' is that of the "
                     "limited body, not of a large one: the series 'straight' (not limited) grows without bound.")
-    sec = [c for c in section_limits(rows, summary)]
+    sec = section_limits(rows, summary)
     if sec:
         head += ["", "Real sections (``fe_closure = \"section\"``: the 60E1 rail and the wheel's rim and web, "
-                 "conformal.geometry.sections): the limit of the last three sizes of the section series "
-                 "(half-space far field) and the production default's (closure \"extend\") distance from it; "
-                 "a ratio of differences far from 0.5 means the series has not reached the 1/size regime "
-                 "(the bodies' structure, not the contact, still changes).", "",
-                 "| case | quantity | sizes | section series R3 | ratio | clamped section, largest size | "
-                 "default (extend) | default - section R3 |", "|---|---|---|---|---|---|---|---|"]
+                 "conformal.geometry.sections): the value at the largest size as the limit, with the change "
+                 "from the size before, and the production default's (closure \"extend\") distance from it.",
+                 "", "| case | quantity | sizes | section series | limit (largest size) | clamped section, "
+                 "largest size | every element halved | default (extend) | default - limit |",
+                 "|---|---|---|---|---|---|---|---|---|"]
         for c in sec:
-            head.append(f"| {c['case']} | {c['quantity']} | {c['sizes']} | {c['limit']:.4f} | {f(c['ratio'], '{:.2f}')} | "
-                        f"{f(c.get('clamped_last'))} | {f(c.get('default'))} | {f(c.get('default_off'), '{:+.2%}')} |")
+            head.append(f"| {c['case']} | {c['quantity']} | {c['sizes']} | {c['values']} | {c['limit']:.4f} +- "
+                        f"{c['err']:.4f} | {f(c.get('clamped_last'))} | {c['fine']} | {f(c.get('default'))} | "
+                        f"{f(c.get('default_off'), '{:+.2%}')} |")
     sizes = sorted({r["size"] for r in rows if "size" in r and r["case"] != "flat"} | set(SIZES))
     lines = head + ["", "| case | quantity | far field / grading | value at size " + " / ".join(f"{s:g}" for s in sizes)
              + " | R2 | R3 | ratio of differences |", "|---|---|---|---|---|---|---|"]
@@ -544,7 +574,7 @@ def _plot(rows, summary, path: Path) -> None:
             for far, grading, style in (("halfspace", "default", "-o"), ("clamped", "default", "--s"),
                                         ("halfspace", "fine", ":^"), ("halfspace", "straight", "-.x"),
                                         ("halfspace", "p2", ":D"), ("halfspace", "section", "-P"),
-                                        ("clamped", "section", "--P")):
+                                        ("clamped", "section", "--P"), ("halfspace", "section_fine", ":P")):
                 sel = sorted((r for r in rows if r["case"] == case and r["far_field"] == far
                               and r["grading"] == grading and key in r), key=lambda r: r["size"])
                 if sel:
@@ -558,7 +588,8 @@ def _plot(rows, summary, path: Path) -> None:
         if ax is axes[0][0]:
             ax.set_ylabel("FE / half-space")
         ax.set_title(case, fontsize=10)
-        ax.set_ylim(0.85, 1.2)
+        vals = [r[k] for r in rows if r["case"] == case for k in keys if k in r]
+        ax.set_ylim(min(0.85, min(vals, default=1) - 0.02), max(1.2, max(vals, default=1) + 0.02))
     handles = {}
     for ax in axes[0]:
         for h, lab in zip(*ax.get_legend_handles_labels()):
@@ -566,7 +597,8 @@ def _plot(rows, summary, path: Path) -> None:
     fig.legend(list(handles.values()), list(handles.keys()), loc="lower center", ncol=4, fontsize=7)
     fig.suptitle("Compliance per body (C_rail, C_wheel) and FN per pair at a prescribed approach, FE over "
                  "half-space;\nstars: Richardson limits (R3) of the half-space far field's series", fontsize=10)
-    fig.tight_layout(rect=(0, 0.06 + 0.025 * math.ceil(len(handles) / 4), 1, 1))
+    fig.set_figheight(4.0 + 0.22 * math.ceil(len(handles) / 4))
+    fig.tight_layout(rect=(0, 0.04 + 0.034 * math.ceil(len(handles) / 4), 1, 1))
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
