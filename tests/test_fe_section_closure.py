@@ -128,3 +128,21 @@ def test_fe_closure_section_needs_known_sections():
     deep = replace(deep, model=replace(deep.model, options={**dict(deep.model.options), "fe_closure": "section"}))
     with pytest.raises(InputError, match="no known section"):
         fe_profiles(deep)
+
+
+def test_p2_clamped_triangle_with_an_edge_the_volume_lacks():
+    """P2 (fe_order = 2): a clamped triangle whose edge no tetrahedron has (gmsh's volume mesh
+    took the other diagonal of a surface quad; the deep pair's wheel at size 4) gets no dof on
+    that edge instead of failing the solve; the free surface still refuses it."""
+    from conformal.influence.factor import FESolveError
+    from conformal.influence.fe import vector_space
+
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.3, 0.3, -1]], dtype=float)
+    tets = np.array([[0, 1, 2, 3], [0, 2, 1, 4]])
+    _, space = vector_space(pts, tets, 2)
+    tri = np.array([[0, 3, 4]])                      # edge 3-4 crosses the shared face: no tet has it
+    with pytest.raises(FESolveError, match="edge not found"):
+        space.scalar_nodes(tri)
+    nodes = space.scalar_nodes(tri, strict=False)
+    assert nodes.shape == (1, 6) and (nodes[0, :3] == tri[0]).all()
+    assert nodes[0, 4] == -1 and nodes[0, 3] >= space.nverts and nodes[0, 5] >= space.nverts
