@@ -146,3 +146,16 @@ def test_p2_clamped_triangle_with_an_edge_the_volume_lacks():
     nodes = space.scalar_nodes(tri, strict=False)
     assert nodes.shape == (1, 6) and (nodes[0, :3] == tri[0]).all()
     assert nodes[0, 4] == -1 and nodes[0, 3] >= space.nverts and nodes[0, 5] >= space.nverts
+
+
+def test_project_beside_a_long_segment_whose_nearest_vertex_is_elsewhere():
+    """Profile2D.project beside the middle of a long straight piece (a continuation of 350 mm,
+    a web) whose nearest vertex is the far end of another long piece: the point's own segment is
+    found (the S1002 wheel at 6.3 mm, its flange back continued 350 mm, failed to mesh before)."""
+    fine = np.column_stack([np.linspace(0.0, 5.0, 51), np.zeros(51)])
+    pts = np.vstack([[[0.0, -300.0]], fine, [[-20.0, -150.0]]])
+    prof = Profile2D.from_points(pts)
+    q = np.array([1.0, -150.0])
+    s = float(prof.project(q))
+    assert s == pytest.approx(150.0, abs=1e-9)                 # on the first (long) segment
+    assert np.linalg.norm(prof.point(s) - q) == pytest.approx(1.0, abs=1e-9)

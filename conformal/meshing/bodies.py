@@ -126,7 +126,13 @@ class Profile2D:
         _, k = tree.query(q)
         best_s = S[k].copy()
         best_d = np.full(len(q), np.inf)
-        for seg in (k - 1, k):
+        # segments much longer than the sampling (a straight continuation, grow_profile; a
+        # section's web or foot) are tried for every point: beside the middle of one, the nearest
+        # vertex may be the far end of another (an S1002 wheel continued 350 mm along its flange
+        # back and its tread: its flange-back face was taken for a clamped one)
+        seg_len = np.diff(S)
+        long = np.flatnonzero(seg_len > 10.0 * np.median(seg_len)) if len(seg_len) > 2 else np.zeros(0, int)
+        for seg in [k - 1, k] + [np.full(len(q), i) for i in long]:
             valid = (seg >= 0) & (seg < len(P) - 1)
             i = np.where(valid, seg, 0)
             a, b = P[i], P[i + 1]
