@@ -394,7 +394,8 @@ FE = Method("fe", "fe_", "FE influence numbers of the real wheel and rail ([mode
                 Option("far_field", "str", "halfspace", "", "far-field boundary condition: \"halfspace\" | "
                        "\"clamped\"", checked=False),
                 Option("closure", "str", "extend", "", "a profile ending inside the body: \"extend\" (straight, "
-                       "slabs limited) | \"straight\" | \"cut\"", checked=False),
+                       "slabs limited) | \"straight\" | \"cut\" | \"section\" (the real rail and wheel sections)",
+                       checked=False),
             ))
 
 FE_CONTACT = Method("fe_contact", "fec_", "meshed bodies of the direct FE contact (theory fe_contact, "

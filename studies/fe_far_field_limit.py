@@ -30,7 +30,14 @@ corner of UIC60 against the S1002 flange root (6.2 mm shift, 0.03 mm), all on gr
 (GRID_N).  Series: the half-space far field at sizes 1-16 (the default 16 among them), clamped at
 2-16, the half-space far field with every element size halved at 8 and 16, and where a body's
 section is a slab (the UIC60 head) the unlimited straight continuation at 4-16
-(``fe_closure = "straight"``: its compliance grows without bound, the default limits it).  The
+(``fe_closure = "straight"``: its compliance grows without bound, the default limits it); with
+quadratic tetrahedra (``p2``: the default grading, sizes 4-32); and for the real S1002/UIC60 pair
+the whole sections (``section``, ``section_clamped``: ``fe_closure = "section"``, the 60E1 rail's
+head, web and foot and the wheel's rim and web cut by the body's disc, sizes 1-64 and 2-16;
+``section_fine``: every element size halved, sizes 16 and 32).
+Besides the quantities at the prescribed approach, each row has pmax, the contact area and the
+approach at a prescribed load (the half-space solution's FN along the load direction) over those
+of the half-space numbers at that load (``pmax_load``, ``area_load``, ``approach_load``).  The
 report gives, per case and quantity, the limit (R3 of the half-space series), an error bar (the
 largest of |R2 - R3|, the clamped R3 and the refined R2 against it) and the default's distance
 from it.
@@ -69,6 +76,12 @@ SIZES = (1.0, 2.0, 4.0, 8.0, 16.0)
 CLAMPED_SIZES = (2.0, 4.0, 8.0, 16.0)
 FINE_SIZES = (8.0, 16.0)
 STRAIGHT_SIZES = (4.0, 8.0, 16.0)
+P2_SIZES = (4.0, 8.0, 16.0, 32.0)
+#: series name -> (far field, grading label) of its rows
+SERIES = {"halfspace": ("halfspace", "default"), "clamped": ("clamped", "default"), "fine": ("halfspace", "fine"),
+          "straight": ("halfspace", "straight"), "p2": ("halfspace", "p2"), "section": ("halfspace", "section"),
+          "section_clamped": ("clamped", "section"), "section_fine": ("halfspace", "section_fine")}
+SECTION_SIZES = (1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
 QUICK_SIZES = (4.0, 8.0, 16.0)
 GRID_N = 16          # elements across the overlap (the scenes' 30-40 cost 2-3 min per pair here)
 
@@ -153,13 +166,34 @@ class Case:
         edge = self.p[[0, -1], :].any() or self.p[:, [0, -1]].any()
         self.warning = "the half-space contact reaches the strip's edge" if edge else ""
 
+    def sections(self):
+        """The real rail and wheel as whole sections (``fe_closure = "section"``): the 60E1 section
+        below a UIC60 head, the wheel's rim and web below an S1002 profile
+        (conformal.geometry.sections), each opened at its support edge (the rail's foot, the
+        wheel's hub: bodies.section_profile); None where the profiles are not those."""
+        from conformal.errors import InputError
+        from conformal.geometry.sections import uic60_section, wheel_rim_section
+        from conformal.meshing.bodies import BodyModel, section_profile
+
+        rp, wp = self.rail.profile, self.wheel.profile
+        try:
+            rs = uic60_section(np.column_stack([rp.y, rp.z]))
+            ws = wheel_rim_section(np.column_stack([wp.y, wp.z]), -self.wheel.axle_z)
+        except InputError:
+            return None
+        return (BodyModel("rail", section_profile(rs.points, rs.n_profile, rs.clamped[0], rs.name)),
+                BodyModel("wheel", section_profile(ws.points, ws.n_profile, ws.clamped[0], ws.name),
+                          axle_z=self.wheel.axle_z))
+
     def kernels(self, settings, cache):
-        """(rail kernel, wheel kernel in the rail's element frames, stats) for FE settings."""
+        """(rail kernel, wheel kernel in the rail's element frames, stats) for FE settings (with
+        the closure "section": the bodies of :meth:`sections`)."""
         from conformal.influence.fe import body_influences, rotate_kernel
 
         m = self.material
-        kr, kw = body_influences([(self.rail, self.rpatch, m.G1, m.nu1, settings),
-                                  (self.wheel, self.wpatch, m.G2, m.nu2, settings)], cache)
+        rail, wheel = self.sections() if settings.mesh.closure == "section" else (self.rail, self.wheel)
+        kr, kw = body_influences([(rail, self.rpatch, m.G1, m.nu1, settings),
+                                  (wheel, self.wpatch, m.G2, m.nu2, settings)], cache)
         return kr.kernel, rotate_kernel(kw.kernel, self.rot), {"rail": kr.stats, "wheel": kw.stats}
 
     def slab(self) -> bool:
@@ -179,6 +213,27 @@ class Case:
 
         r = solve_curved(self.problem, CurvedInfluence.from_kernel(kernel), {"influence": "fe"})
         return float(r.FN / self.hs.FN)
+
+    def at_load(self, kernel) -> dict:
+        """At a prescribed load (the half-space solution's FN along the load direction) instead of
+        its approach: pmax, the contact area and the approach with the FE numbers over those with
+        the half-space numbers at the same load (what a real rail and wheel, which have no
+        approach relative to infinity, compare at)."""
+        if not hasattr(self, "_hs_load"):
+            self._hs_load = self._load_solution(self.hs_body["rail"] + self.hs_body["wheel"])
+        fe, hs = self._load_solution(kernel), self._hs_load
+        return {f"{k}_load": fe[k] / hs[k] for k in fe}
+
+    def _load_solution(self, kernel) -> dict:
+        from conformal.influence.curved import CurvedInfluence
+        from conformal.solvers.conformal import solve_curved
+
+        prob = replace(self.problem, approach=None, normal_force=float(self.hs.FN))
+        r = solve_curved(prob, CurvedInfluence.from_kernel(kernel), {"influence": "fe"})
+        p = np.asarray(r.field.pn, float)
+        g = self.problem.grid
+        dA = g.dx * np.broadcast_to(np.asarray(g.ds, float)[None, :], p.shape)
+        return {"pmax": float(p.max()), "area": float(((p > 0) * dA).sum()), "approach": float(r.approach)}
 
 
 def _identical(m, body: str):
@@ -268,7 +323,8 @@ def run_case(case, sizes, far: str, refine: float, cache, grading: str, **mesh) 
                "FN_ratio": case.fn_ratio(kr + kw),
                # one FE body against the other's half-space numbers: what each body's shape does
                "FN_rail_only": case.fn_ratio(kr + case.hs_body["wheel"]),
-               "FN_wheel_only": case.fn_ratio(case.hs_body["rail"] + kw), "time_s": time.perf_counter() - t0,
+               "FN_wheel_only": case.fn_ratio(case.hs_body["rail"] + kw), **case.at_load(kr + kw),
+               "time_s": time.perf_counter() - t0,
                "fe_s": sum(float(v.get("total_s", 0.0)) for v in st.values()),
                "dofs": [v.get("dofs") for v in st.values()],
                "body": {b: v.get("body") for b, v in st.items()}}
@@ -292,10 +348,15 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="the flat block, clamped, sizes 4, 8, 16 only")
     ap.add_argument("--cases", default="deep,groove,gauge", help="comma-separated: deep, groove, gauge")
     ap.add_argument("--out", default=None, help="output folder (default studies/out/fe_far_field_limit)")
-    ap.add_argument("--series", default="halfspace,clamped,fine,straight",
-                    help="comma-separated: halfspace, clamped, fine (refined grading), straight (slabs not limited)")
+    ap.add_argument("--series", default="halfspace,clamped,fine,straight,p2,section,section_clamped",
+                    help="comma-separated: halfspace, clamped, fine (refined grading), straight (slabs not "
+                         "limited), p2 (quadratic tetrahedra, default grading, sizes 4-16), section, "
+                         "section_clamped, section_fine (real rail and wheel sections, closure \"section\"; "
+                         "fine: every element size halved, sizes 16 and 32)")
+    ap.add_argument("--report", action="store_true",
+                    help="only rebuild the report (md, png) from the existing JSON")
     ap.add_argument("--append", action="store_true",
-                    help="keep the rows of other cases from the existing JSON (rerun some cases only)")
+                    help="keep the rows of other cases and series from the existing JSON (rerun some only)")
     args = ap.parse_args(argv)
     out = output_dir("fe_far_field_limit", args)
     out.mkdir(parents=True, exist_ok=True)
@@ -306,9 +367,18 @@ def main(argv=None) -> int:
     rows: list[dict] = []
     series = set(args.series.split(","))
     keys = [k for k in args.cases.split(",") if k]
+    if args.report:
+        rows = json.loads((out / "fe_far_field_limit.json").read_text())["rows"]
+        summary = summarise(rows)
+        _dump(out, rows, summary, converged(rows, summary))
+        (out / "fe_far_field_limit.md").write_text(report(rows, summary))
+        _plot(rows, summary, out / "fe_far_field_limit.png")
+        return 0
     if args.append and (out / "fe_far_field_limit.json").exists():
         old = json.loads((out / "fe_far_field_limit.json").read_text())["rows"]
-        rows = [r for r in old if r["case"] not in keys and (r["case"] != "flat" or args.quick)]
+        rerun = {SERIES[s] for s in series if s in SERIES}
+        rows = [r for r in old if (r["case"] not in keys or (r["far_field"], r["grading"]) not in rerun)
+                and (r["case"] != "flat" or args.quick)]
     if args.quick:
         rows += run_flat(QUICK_SIZES, "clamped", cache)
     else:
@@ -329,6 +399,18 @@ def main(argv=None) -> int:
             if "straight" in series and case.slab():
                 rows += run_case(case, STRAIGHT_SIZES, "halfspace", 1.0, cache, "straight", closure="straight")
                 _dump(out, rows)
+            if "section" in series and case.sections() is not None:
+                rows += run_case(case, SECTION_SIZES, "halfspace", 1.0, cache, "section", closure="section")
+                _dump(out, rows)
+            if "section_clamped" in series and case.sections() is not None:
+                rows += run_case(case, SECTION_SIZES[1:], "clamped", 1.0, cache, "section", closure="section")
+                _dump(out, rows)
+            if "section_fine" in series and case.sections() is not None:
+                rows += run_case(case, (16.0, 32.0), "halfspace", 0.5, cache, "section_fine", closure="section")
+                _dump(out, rows)
+            if "p2" in series:
+                rows += run_case(case, P2_SIZES, "halfspace", 1.0, cache, "p2", order=2)
+                _dump(out, rows)
     summary = summarise(rows)
     _dump(out, rows, summary, converged(rows, summary))
     (out / "fe_far_field_limit.md").write_text(report(rows, summary))
@@ -341,9 +423,9 @@ def main(argv=None) -> int:
 def summarise(rows) -> dict:
     out = {}
     for case in dict.fromkeys(r["case"] for r in rows):
-        keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio", "FN_rail_only", "FN_wheel_only"]
-        for far, grading in (("halfspace", "default"), ("clamped", "default"), ("halfspace", "fine"),
-                             ("halfspace", "straight")):
+        keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio", "FN_rail_only", "FN_wheel_only",
+                                                   "pmax_load", "area_load", "approach_load"]
+        for far, grading in SERIES.values():
             for k in keys:
                 lim = limits(rows, case, far, grading, k)
                 if lim:
@@ -374,10 +456,45 @@ def converged(rows, summary) -> list[dict]:
                 others.append(abs(fine["R2"] - lim["R2"]))
             at = [r[k] for r in rows if r["case"] == case and r["far_field"] == "halfspace"
                   and r["grading"] == "default" and r["size"] == size and k in r]
+            p2 = per.get("halfspace/p2", {}).get(k, {})
             row = {"case": case, "quantity": k, "limit": lim["R3"], "err": max(others), "ratio": lim.get("ratio"),
-                   "clamped_R3": cl.get("R3"), "fine_R2": fine.get("R2")}
+                   "clamped_R3": cl.get("R3"), "fine_R2": fine.get("R2"), "p2_R3": p2.get("R3"),
+                   "p2_ratio": p2.get("ratio")}
             if at:
                 row.update(default=at[0], default_off=at[0] / lim["R3"] - 1.0)
+            out.append(row)
+    return out
+
+
+def section_limits(rows, summary) -> list[dict]:
+    """Per case with a section series and quantity: the value at its largest size as the limit
+    (the series leaves the 1/size regime: the real bodies' structure, not the contact, changes
+    with the size until the disc holds the section and the wheel's disc reaches its cap), the
+    change from the size before as its error bar, the clamped section series' value at its
+    largest size, and the production default's value (closure "extend", half-space far field,
+    the default size) and distance from that limit."""
+    from conformal.meshing.gmsh_body import MeshSpec
+
+    size = MeshSpec().body_size
+    out = []
+    for case, per in summary.items():
+        for k in per.get("halfspace/section", {}):
+            sel = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section"
+                         and r["far_field"] == "halfspace" and k in r)
+            cl = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section"
+                        and r["far_field"] == "clamped" and k in r)
+            fine = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section_fine"
+                          and k in r)
+            at = [r[k] for r in rows if r["case"] == case and r["far_field"] == "halfspace"
+                  and r["grading"] == "default" and r["size"] == size and k in r]
+            lim = sel[-1][1]
+            row = {"case": case, "quantity": k, "limit": lim, "err": abs(sel[-1][1] - sel[-2][1]),
+                   "values": " / ".join(f"{v:.4f}" for _, v in sel[-3:]),
+                   "sizes": " / ".join(f"{s:g}" for s, _ in sel[-3:]),
+                   "clamped_last": cl[-1][1] if cl else None,
+                   "fine": " / ".join(f"{v:.4f} ({s:g})" for s, v in fine) or "-"}
+            if at:
+                row.update(default=at[0], default_off=at[0] / lim - 1.0)
             out.append(row)
     return out
 
@@ -394,8 +511,8 @@ def report(rows, summary) -> str:
 
     conv = converged(rows, summary)
     head = ["| case | quantity | limit (R3, half-space far field) | error bar | ratio of differences 4-8-16 "
-            f"| clamped R3 | refined R2 | default (size {MeshSpec().body_size:g}) | default - limit |",
-            "|---|---|---|---|---|---|---|---|---|"]
+            f"| clamped R3 | refined R2 | P2 R3 (ratio) | default (size {MeshSpec().body_size:g}) | default - limit |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
 
     def f(v, fmt="{:.4f}"):
         return "-" if v is None else fmt.format(v)
@@ -403,8 +520,10 @@ def report(rows, summary) -> str:
     for c in conv:
         r = c.get("ratio")
         regime = f(r, "{:.2f}") + ("" if r is not None and 0.4 <= r <= 0.7 else " (not 1/size)")
+        p2 = f(c.get("p2_R3")) + ("" if c.get("p2_ratio") is None else f" ({c['p2_ratio']:.2f})")
         head.append(f"| {c['case']} | {c['quantity']} | {c['limit']:.4f} | {c['err']:.4f} | {regime} | "
-                    f"{f(c['clamped_R3'])} | {f(c['fine_R2'])} | {f(c.get('default'))} | "
+                    f"{f(c['clamped_R3'])} | {f(c['fine_R2'])} | "
+                    f"{p2} | {f(c.get('default'))} | "
                     f"{f(c.get('default_off'), '{:+.2%}')} |")
     slabs = sorted({(r["case"], b, r["size"]) for r in rows for b, v in (r.get("body") or {}).items()
                     if v and v.get("margin_limited_by") == "section width" and r["grading"] == "default"})
@@ -414,7 +533,20 @@ def report(rows, summary) -> str:
         head.append(f"{case}: the {first[1]} section is a slab (its profile's ends point the same way); from size "
                     f"{first[0]:g} on its margin is limited to the section's width, so its 'limit' is that of the "
                     "limited body, not of a large one: the series 'straight' (not limited) grows without bound.")
-    lines = head + ["", "| case | quantity | far field / grading | value at size " + " / ".join(f"{s:g}" for s in SIZES)
+    sec = section_limits(rows, summary)
+    if sec:
+        head += ["", "Real sections (``fe_closure = \"section\"``: the 60E1 rail and the wheel's rim and web, "
+                 "conformal.geometry.sections): the value at the largest size as the limit, with the change "
+                 "from the size before, and the production default's (closure \"extend\") distance from it.",
+                 "", "| case | quantity | sizes | section series | limit (largest size) | clamped section, "
+                 "largest size | every element halved | default (extend) | default - limit |",
+                 "|---|---|---|---|---|---|---|---|---|"]
+        for c in sec:
+            head.append(f"| {c['case']} | {c['quantity']} | {c['sizes']} | {c['values']} | {c['limit']:.4f} +- "
+                        f"{c['err']:.4f} | {f(c.get('clamped_last'))} | {c['fine']} | {f(c.get('default'))} | "
+                        f"{f(c.get('default_off'), '{:+.2%}')} |")
+    sizes = sorted({r["size"] for r in rows if "size" in r and r["case"] != "flat"} | set(SIZES))
+    lines = head + ["", "| case | quantity | far field / grading | value at size " + " / ".join(f"{s:g}" for s in sizes)
              + " | R2 | R3 | ratio of differences |", "|---|---|---|---|---|---|---|"]
     for case, per in summary.items():
         for series, d in per.items():
@@ -422,7 +554,7 @@ def report(rows, summary) -> str:
             for k, lim in d.items():
                 by = {r["size"]: r[k] for r in rows if r["case"] == case and r["far_field"] == far
                       and r["grading"] == grading and k in r}
-                vals = " / ".join(f"{by[s]:.4f}" if s in by else "-" for s in SIZES)
+                vals = " / ".join(f"{by[s]:.4f}" if s in by else "-" for s in sizes)
                 lines.append(f"| {case} | {k} | {series} | {vals} | {lim['R2']:.4f} | "
                              f"{lim.get('R3', float('nan')):.4f} | {lim.get('ratio', float('nan')):.2f} |")
     return "\n".join(lines) + "\n"
@@ -440,7 +572,9 @@ def _plot(rows, summary, path: Path) -> None:
         keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio"]
         for k, key in enumerate(keys):
             for far, grading, style in (("halfspace", "default", "-o"), ("clamped", "default", "--s"),
-                                        ("halfspace", "fine", ":^"), ("halfspace", "straight", "-.x")):
+                                        ("halfspace", "fine", ":^"), ("halfspace", "straight", "-.x"),
+                                        ("halfspace", "p2", ":D"), ("halfspace", "section", "-P"),
+                                        ("clamped", "section", "--P"), ("halfspace", "section_fine", ":P")):
                 sel = sorted((r for r in rows if r["case"] == case and r["far_field"] == far
                               and r["grading"] == grading and key in r), key=lambda r: r["size"])
                 if sel:
@@ -454,7 +588,8 @@ def _plot(rows, summary, path: Path) -> None:
         if ax is axes[0][0]:
             ax.set_ylabel("FE / half-space")
         ax.set_title(case, fontsize=10)
-        ax.set_ylim(0.85, 1.2)
+        vals = [r[k] for r in rows if r["case"] == case for k in keys if k in r]
+        ax.set_ylim(min(0.85, min(vals, default=1) - 0.02), max(1.2, max(vals, default=1) + 0.02))
     handles = {}
     for ax in axes[0]:
         for h, lab in zip(*ax.get_legend_handles_labels()):
@@ -462,7 +597,8 @@ def _plot(rows, summary, path: Path) -> None:
     fig.legend(list(handles.values()), list(handles.keys()), loc="lower center", ncol=4, fontsize=7)
     fig.suptitle("Compliance per body (C_rail, C_wheel) and FN per pair at a prescribed approach, FE over "
                  "half-space;\nstars: Richardson limits (R3) of the half-space far field's series", fontsize=10)
-    fig.tight_layout(rect=(0, 0.06 + 0.025 * math.ceil(len(handles) / 4), 1, 1))
+    fig.set_figheight(4.0 + 0.22 * math.ceil(len(handles) / 4))
+    fig.tight_layout(rect=(0, 0.04 + 0.034 * math.ceil(len(handles) / 4), 1, 1))
     fig.savefig(path, dpi=120)
     plt.close(fig)
 

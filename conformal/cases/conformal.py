@@ -41,6 +41,39 @@ def scene_profiles(scene) -> tuple[np.ndarray | None, np.ndarray | None]:
     return rc.sample(0.1)[1], wc.sample(0.1)[1]
 
 
+def fe_profiles(scene) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The profiles the FE bodies are built from: :func:`scene_profiles`, or with ``[model]
+    fe_closure = "section"`` the boundaries of the real cross-sections (the 60E1 rail under a
+    UIC 60 / 60E1 head, the wheel's rim and web under a profile from its flange back at
+    y = -70: :mod:`conformal.geometry.sections`), each less its support edge (the rail's foot,
+    the wheel's hub face: :func:`conformal.meshing.bodies.section_profile`), which the FE body
+    closes again and cuts by its disc.  Raises InputError where a profile has no known section."""
+    rail, wheel = scene_profiles(scene)
+    if dict(scene.model.options).get("fe_closure") != "section":
+        return rail, wheel
+    from conformal.geometry.sections import uic60_section, wheel_rim_section
+    from conformal.meshing.bodies import section_profile
+
+    if rail is None or wheel is None:
+        raise InputError("[model] fe_closure = \"section\": needs a wheel_rail scene with rail and wheel profiles")
+    geo = scene.geometry
+    try:
+        rs = uic60_section(rail)
+    except InputError as exc:
+        raise InputError(f"[model] fe_closure = \"section\": rail profile {geo.rail_profile}: no known section "
+                         f"(a symmetric UIC 60 / 60E1 head is needed: {exc})") from None
+    try:
+        ws = wheel_rim_section(wheel, float(geo.wheel_radius))
+    except InputError as exc:
+        raise InputError(f"[model] fe_closure = \"section\": wheel profile {geo.wheel_profile}: no known section "
+                         f"(a profile from its flange back at y = -70 is needed: {exc})") from None
+    out = []
+    for s in (rs, ws):
+        p = section_profile(s.points, s.n_profile, s.clamped[0], s.name)
+        out.append(np.column_stack([p.y, p.z]))
+    return out[0], out[1]
+
+
 CREEPAGES = ("surface", "reference", "wheel_surface")
 
 
@@ -203,7 +236,7 @@ class StripBuilder:
             normal = dict(approach=float(approach))
         else:
             normal = dict(normal_force=load.wheel_load) if load.wheel_load is not None else dict(approach=0.0)
-        rail_points, wheel_points = scene_profiles(scene)   # whole profiles for the FE bodies
+        rail_points, wheel_points = fe_profiles(scene)   # whole profiles (or sections) for the FE bodies
         profiles = dict(rail_points=rail_points, wheel_points=wheel_points)
         return CurvedProblem(grid=grid, h=h_strip, material=scene.material, friction=scene.friction,
                              kinematics=kin, model=scene.model, xi_s=np.asarray(xi_s, float),

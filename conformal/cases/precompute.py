@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 from typing import Callable
 
-from conformal.cases.conformal import curved_problem_from_wheel_rail, scene_profiles
+from conformal.cases.conformal import curved_problem_from_wheel_rail, fe_profiles
 from conformal.cases.wheelrail import curved_problems_from_wheel_rail
 from conformal.errors import ConformalError, InputError
 from conformal.influence.cache import Cache
@@ -52,7 +52,7 @@ def plan(scene, sweep: Sweep, settings=None, cache=None,
     items, failed, seen = [], [], set()
     for v in sweep.values:
         sc = _scene_at(scene, sweep.key, v)
-        rail_pts, wheel_pts = scene_profiles(sc)
+        rail_pts, wheel_pts = fe_profiles(sc)
         try:
             problems = _solver_grids(sc, curved_problems_from_wheel_rail)
         except ConformalError as exc:

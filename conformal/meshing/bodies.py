@@ -126,7 +126,13 @@ class Profile2D:
         _, k = tree.query(q)
         best_s = S[k].copy()
         best_d = np.full(len(q), np.inf)
-        for seg in (k - 1, k):
+        # segments much longer than the sampling (a straight continuation, grow_profile; a
+        # section's web or foot) are tried for every point: beside the middle of one, the nearest
+        # vertex may be the far end of another (an S1002 wheel continued 350 mm along its flange
+        # back and its tread: its flange-back face was taken for a clamped one)
+        seg_len = np.diff(S)
+        long = np.flatnonzero(seg_len > 10.0 * np.median(seg_len)) if len(seg_len) > 2 else np.zeros(0, int)
+        for seg in [k - 1, k] + [np.full(len(q), i) for i in long]:
             valid = (seg >= 0) & (seg < len(P) - 1)
             i = np.where(valid, seg, 0)
             a, b = P[i], P[i + 1]
@@ -281,6 +287,7 @@ class BodyExtent:
     cut_hi: bool = False
     x_ref_radius: float | None = None  # wheel: radius at which x is arc length
     wheel_limited: bool = False        # the margin was cut to fit the wheel (bodies._disc)
+    closed: bool = False               # a whole section: the profile's ends joined straight, cut by the disc
 
     @property
     def theta_lo(self) -> float:
@@ -607,3 +614,68 @@ def body_extent(body: BodyModel, patch: StripPatch, size: float = 1.0) -> BodyEx
     return BodyExtent(-half, half, float(s_lo), float(s_hi), float(R - r_patch), (float(c[0]), float(c[1])),
                       float(R), (float(q_lo[0]), float(q_lo[1])), (float(q_hi[0]), float(q_hi[1])),
                       (float(mid[0]), float(mid[1])), bool(cut_lo), bool(cut_hi), r_ref, wheel_limited)
+
+
+def section_profile(points: np.ndarray, n_profile: int, support_edge: int, name: str = "section") -> Profile2D:
+    """The boundary of a whole cross-section as one open profile: the closed polygon ``points``
+    (its first ``n_profile`` points the contact profile, then the closure on the material side,
+    as :mod:`conformal.geometry.sections` builds them) opened at its support edge
+    ``support_edge`` (points i -> i + 1, cyclic: the rail's foot, the wheel's hub face), so that it
+    runs from that edge's end round the section to its start.  The contact profile's points keep
+    their arc lengths (the part before them gets s < 0), so a patch given on the contact profile
+    is on the section profile at the same s; :func:`closed_section_extent` joins the two ends
+    again by the straight support edge.
+
+    >>> sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    >>> p = section_profile(sq, 2, 2)          # open at the edge (1, 1) -> (0, 1)
+    >>> p.y.tolist(), p.z.tolist(), p.s.tolist()
+    ([0.0, 0.0, 1.0, 1.0], [1.0, 0.0, 0.0, 1.0], [-1.0, 0.0, 1.0, 2.0])
+    """
+    P = np.asarray(points, dtype=float)
+    k = int(support_edge) % len(P)
+    if not 0 < n_profile <= len(P) or k < n_profile - 1:
+        raise InputError(f"section {name}: the support edge {support_edge} must not be part of the profile")
+    Q = np.concatenate([P[k + 1:], P[:k + 1]])
+    before = len(P) - (k + 1)
+    seg = np.hypot(*np.diff(Q[:before + 1], axis=0).T) if before else np.zeros(0)
+    return Profile2D(Q[:, 0], Q[:, 1], name, s_start=-float(seg.sum()))
+
+
+def closed_section_extent(body: BodyModel, patch: StripPatch, size: float) -> BodyExtent:
+    """Body limits of a whole section (``fe_closure = "section"``): the body's profile is the
+    section's boundary less its support edge (:func:`section_profile`), the section the polygon
+    closed by that straight edge, and the body that section cut by the disc of ``size`` patch
+    sizes around the patch (:func:`_disc`; a wheel's disc limited as there).  Where the disc
+    contains the whole section only the length along x grows with the size.  ``s_lo .. s_hi``
+    span the parts of the profile inside the disc (the free surface: the profile, the web, the
+    foot's upper face, the rim faces); the disc's arcs, the support edge and the end faces are
+    the artificial boundary."""
+    if not (size > 0 and math.isfinite(size)):
+        raise InputError(f"[model] fe_body_size: must be > 0, got {size}")
+    prof = body.profile
+    e = patch.edges
+    if e[0] < prof.s[0] - 1e-9 or e[-1] > prof.s[-1] + 1e-9:
+        raise InputError(f"profile {prof.name}: the grid spans s = {e[0]:.3f} .. {e[-1]:.3f} mm, beyond the section")
+    P = np.stack([prof.y, prof.z], axis=1)
+    if _segments_intersect(np.array([P[-1], P[0]]), P[1:-1]):
+        raise InputError(f"profile {prof.name}: the support edge between its ends crosses the section")
+    c, r_patch, R, margin, limited = _disc(body, patch, size)
+    dist = np.linalg.norm(P - c, axis=1)
+    inside = dist <= R
+    s_in = list(prof.s[inside])
+    for i in np.flatnonzero(inside[:-1] != inside[1:]):        # where a segment crosses the circle
+        a, b = P[i], P[i + 1]
+        d = b - a
+        f = a - c
+        A, B, C = d @ d, 2 * (f @ d), f @ f - R * R
+        disc = max(B * B - 4 * A * C, 0.0)
+        for t in ((-B - math.sqrt(disc)) / (2 * A), (-B + math.sqrt(disc)) / (2 * A)):
+            if 0.0 <= t <= 1.0:
+                s_in.append(prof.s[i] + t * (prof.s[i + 1] - prof.s[i]))
+    s_lo, s_hi = float(min(s_in)), float(max(s_in))
+    half = patch.n_columns * 0.5 * patch.dx + margin
+    s_mid = 0.5 * (e[0] + e[-1])
+    r_ref = None if body.below else float(body.radius_at(s_mid))
+    q = (float(c[0]), float(c[1]))
+    return BodyExtent(-half, half, s_lo, s_hi, float(margin), q, float(R), q, q, q, False, False, r_ref,
+                      limited, closed=True)

@@ -26,11 +26,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from conformal.errors import ConformalError, InputError
-from conformal.meshing.bodies import BodyExtent, BodyModel, StripPatch, body_extent, grow_profile
+from conformal.meshing.bodies import (BodyExtent, BodyModel, StripPatch, body_extent, closed_section_extent,
+                                      grow_profile, inward_normal)
 
 SAMPLING = 0
 CONFORM = ("all", "column", "none")
-CLOSURES = ("extend", "straight", "cut")
+CLOSURES = ("extend", "straight", "cut", "section")
 
 
 class MeshingError(ConformalError):
@@ -62,7 +63,9 @@ class MeshSpec:
     # a profile that ends inside the body's disc: continued straight along its end tangent
     # ("extend", bodies.grow_profile; a section whose ends point the same way, a slab, is
     # limited to a margin of its width; "straight": not limited), or cut straight to the disc's
-    # arc ("cut", the earlier closure, which leaves the body smaller than body_size says)
+    # arc ("cut", the earlier closure, which leaves the body smaller than body_size says); or the
+    # profile is a whole section's boundary less its support edge ("section", bodies.section_profile:
+    # the body is that section cut by the disc)
     closure: str = "extend"
 
     def __post_init__(self):
@@ -186,30 +189,20 @@ def _cut_positions(patch: StripPatch, conform: str) -> np.ndarray:
     return np.unique(np.array(cuts))
 
 
-def _build(gmsh, body: BodyModel, patch: StripPatch, ext: BodyExtent, spec: MeshSpec, joints=()):
-    occ = gmsh.model.occ
-    prof = body.profile
-    e = patch.edges
-    tol = 1e-6 * max(1.0, patch.size)
-    # the joints of a straight continuation (grow_profile) split the curve: the continuation is
-    # one straight line, not the last span of a spline through 0.1 mm points (which would bulge)
-    lo = [ext.s_lo] + [j for j in joints if ext.s_lo + tol < j < e[0] - tol]
-    hi = [j for j in joints if e[-1] + tol < j < ext.s_hi - tol] + [ext.s_hi]
-    breaks = np.array(([v for v in lo if v < e[0] - 1e-9]) + list(e) + [v for v in hi if v > e[-1] + 1e-9])
-    pieces = prof.pieces(breaks)
-    x0 = 0.0 if body.revolved else ext.x_lo
-
-    def pt(y, z):
-        return occ.addPoint(x0, float(y), float(z))
-
+# ----------------------------------------------------------------------------- gmsh helpers
+# (shared with conformal.meshing.section_body)
+def profile_curves(occ, pieces: list[np.ndarray], pt) -> tuple[list[int], list[int]]:
+    """OpenCASCADE curves through consecutive profile pieces (arrays of (y, z) points, each
+    starting where the one before ends; ``pt(y, z)`` adds a point and returns its tag): a spline
+    through smooth parts, split at kinks (turns over 10 degrees, where a spline through the
+    corner would overshoot the polyline), a line where two points remain.  Returns the curve
+    tags in order and the point tags of the pieces' ends (the first piece's start included)."""
     corner = [pt(*pieces[0][0])]
     curves = []
     for piece in pieces:
         inner = [pt(*q) for q in piece[1:-1]]
         end = pt(*piece[-1])
         tags = [corner[-1]] + inner + [end]
-        # a spline through smooth parts; split at kinks (turns over 10 degrees), where a spline
-        # through the corner would overshoot the polyline
         seg = np.diff(piece, axis=0)
         seg /= np.linalg.norm(seg, axis=1, keepdims=True)
         kinks = 1 + np.flatnonzero(np.einsum("ij,ij->i", seg[:-1], seg[1:]) < math.cos(math.radians(10.0)))
@@ -217,6 +210,105 @@ def _build(gmsh, body: BodyModel, patch: StripPatch, ext: BodyExtent, spec: Mesh
             part = tags[a:b + 1]
             curves.append(occ.addLine(part[0], part[1]) if len(part) == 2 else occ.addSpline(part))
         corner.append(end)
+    return curves, corner
+
+
+def sweep_pieces(occ, face: int, body: BodyModel, xs: np.ndarray, x0: float, r_ref: float | None) -> None:
+    """Sweep a cross-section face (drawn at x = ``x0``, or at angle 0 for a wheel) from xs[0] to
+    xs[-1] piece by piece between the positions ``xs`` (along x, or arc length at the radius
+    ``r_ref`` about the axle for a wheel): each piece is swept from the end face of the one
+    before, so neighbouring pieces share that face (OpenCASCADE keeps it as one shape) and the
+    volumes are conforming without a boolean; then synchronise."""
+    f = [(2, face)]
+    if body.revolved:
+        occ.rotate(f, 0, 0, body.axle_z, 0, 1, 0, xs[0] / r_ref)
+    else:
+        occ.translate(f, xs[0] - x0, 0, 0)
+    for xa, xb in zip(xs[:-1], xs[1:]):
+        if body.revolved:
+            out = occ.revolve(f, 0, 0, body.axle_z, 0, 1, 0, (xb - xa) / r_ref)
+        else:
+            out = occ.extrude(f, xb - xa, 0, 0)
+        f = [out[0]]                       # the end face of this piece starts the next one
+    occ.synchronize()
+
+
+def graded_size(field, tag: int, entities: list[int], where: str, sampling: int, h0: float, h_max: float,
+                growth: float) -> int:
+    """Mesh size graded from ``entities`` (gmsh tags; ``where``: "CurvesList" or "SurfacesList"):
+    a Distance field ``tag`` from them (``sampling`` points per entity) and a linear Threshold
+    field ``tag + 1``, h = min(h_max, h0 + growth * distance) (native, fast).  Returns the
+    Threshold's tag."""
+    field.add("Distance", tag)
+    field.setNumbers(tag, where, entities)
+    field.setNumber(tag, "Sampling", sampling)
+    _threshold(field, tag + 1, tag, h0, h_max, growth)
+    return tag + 1
+
+
+#: gmsh options of every body mesh: the size from the background field only, 2-D Frontal-Delaunay
+#: ("Mesh.Algorithm" 6), no optimiser inside generate, linear elements
+MESH_OPTIONS = (("Mesh.MeshSizeFromPoints", 0), ("Mesh.MeshSizeFromCurvature", 0),
+                ("Mesh.MeshSizeExtendFromBoundary", 0), ("Mesh.Algorithm", 6), ("Mesh.Optimize", 0),
+                ("Mesh.ElementOrder", 1))
+
+
+def set_mesh_options(gmsh, algorithm3d: int, *extra: tuple[str, float]) -> None:
+    """MESH_OPTIONS, the 3-D algorithm (10: HXT, 1: Delaunay) and ``extra`` (name, value) pairs."""
+    for name, value in MESH_OPTIONS + (("Mesh.Algorithm3D", algorithm3d),) + extra:
+        gmsh.option.setNumber(name, value)
+
+
+def _build(gmsh, body: BodyModel, patch: StripPatch, ext: BodyExtent, spec: MeshSpec, joints=()):
+    occ = gmsh.model.occ
+    prof = body.profile
+    e = patch.edges
+    tol = 1e-6 * max(1.0, patch.size)
+    # the joints of a straight continuation (grow_profile) split the curve: the continuation is
+    # one straight line, not the last span of a spline through 0.1 mm points (which would bulge)
+    s0, s1 = (prof.s[0], prof.s[-1]) if ext.closed else (ext.s_lo, ext.s_hi)
+    lo = [s0] + [j for j in joints if s0 + tol < j < e[0] - tol]
+    hi = [j for j in joints if e[-1] + tol < j < s1 - tol] + [s1]
+    breaks = np.array(([v for v in lo if v < e[0] - 1e-9]) + list(e) + [v for v in hi if v > e[-1] + 1e-9])
+    pieces = prof.pieces(breaks)
+    x0 = 0.0 if body.revolved else ext.x_lo
+
+    def pt(y, z):
+        return occ.addPoint(x0, float(y), float(z))
+
+    curves, corner = profile_curves(occ, pieces, pt)
+    if ext.closed:
+        face = _closed_section_face(gmsh, body, patch, ext, curves, corner, x0)
+    else:
+        face = _disc_section_face(occ, ext, curves, corner, pt)
+    _sweep(gmsh, body, patch, ext, spec, face, x0)
+
+
+def _closed_section_face(gmsh, body, patch, ext, curves, corner, x0) -> int:
+    """A whole section (closure "section"): the profile closed by the straight support edge, cut
+    by the disc; of the pieces the cut leaves, the one holding the patch."""
+    occ = gmsh.model.occ
+    curves.append(occ.addLine(corner[-1], corner[0]))
+    face = occ.addPlaneSurface([occ.addCurveLoop(curves)])
+    disk = occ.addDisk(x0, ext.centre[0], ext.centre[1], ext.radius, ext.radius, zAxis=[1, 0, 0], xAxis=[0, 1, 0])
+    out, _ = occ.intersect([(2, face)], [(2, disk)])
+    faces = [t for d, t in out if d == 2]
+    if not faces:
+        raise MeshingError(f"the {body.kind} section and the body's disc do not overlap")
+    if len(faces) == 1:
+        return faces[0]
+    occ.synchronize()
+    s_mid = 0.5 * (patch.edges[0] + patch.edges[-1])
+    yz = body.profile.point(s_mid) + 1e-3 * patch.size * inward_normal(body, s_mid)
+    probe = [x0, float(yz[0]), float(yz[1])]
+    gap = [np.linalg.norm(np.array(gmsh.model.getClosestPoint(2, f, probe)[0]) - probe) for f in faces]
+    keep = faces[int(np.argmin(gap))]
+    occ.remove([(2, f) for f in faces if f != keep], recursive=True)
+    return keep
+
+
+def _disc_section_face(occ, ext, curves, corner, pt) -> int:
+    """The profile between s_lo and s_hi closed by the disc's arc (and end cuts)."""
     # artificial boundary: end cut (profile end inside the disc), two arcs (< pi each), end cut
     cen = pt(*ext.centre)
     q_hi = pt(*ext.q_hi) if ext.cut_hi else corner[-1]
@@ -228,8 +320,11 @@ def _build(gmsh, body: BodyModel, patch: StripPatch, ext: BodyExtent, spec: Mesh
     if ext.cut_lo:
         curves.append(occ.addLine(q_lo, corner[0]))
     loop = occ.addCurveLoop(curves)
-    face = occ.addPlaneSurface([loop])
+    return occ.addPlaneSurface([loop])
 
+
+def _sweep(gmsh, body, patch, ext, spec, face, x0) -> None:
+    """Sweep the section face along x (extrusion) or about the axle (revolution)."""
     # sweep the section piece by piece between the cut positions (x_lo, the cuts, x_hi), so that
     # the column edges are edges of the pieces: each piece is swept from the end face of the one
     # before, so neighbouring pieces share that face (OpenCASCADE keeps it as one shape) and the
@@ -239,18 +334,7 @@ def _build(gmsh, body: BodyModel, patch: StripPatch, ext: BodyExtent, spec: Mesh
     # measured worn wheel with a 202 x 83 strip.
     xs = np.concatenate([[ext.x_lo], _cut_positions(patch, spec.conform), [ext.x_hi]])
     xs = np.unique(xs[(xs >= ext.x_lo) & (xs <= ext.x_hi)])
-    f = [(2, face)]
-    if body.revolved:
-        occ.rotate(f, 0, 0, body.axle_z, 0, 1, 0, xs[0] / ext.x_ref_radius)
-    else:
-        occ.translate(f, xs[0] - x0, 0, 0)
-    for xa, xb in zip(xs[:-1], xs[1:]):
-        if body.revolved:
-            out = occ.revolve(f, 0, 0, body.axle_z, 0, 1, 0, (xb - xa) / ext.x_ref_radius)
-        else:
-            out = occ.extrude(f, xb - xa, 0, 0)
-        f = [out[0]]                       # the end face of this piece starts the next one
-    occ.synchronize()
+    sweep_pieces(gmsh.model.occ, face, body, xs, x0, ext.x_ref_radius)
 
 
 def _curve_midpoint(gmsh, tag: int) -> np.ndarray:
@@ -287,17 +371,12 @@ def _size_field(gmsh, body, patch, ext, spec, h_e):
     h_max = max(spec.h_max * ext.depth, h_patch)
     f = gmsh.model.mesh.field
     length = max(patch.n_columns * patch.dx, e[-1] - e[0])
-    f.add("Distance", 1)
-    f.setNumbers(1, "CurvesList", obs_curves)
-    f.setNumber(1, "Sampling", SAMPLING or int(min(2000, max(20, 2 * length / h_patch))))
-    _threshold(f, 2, 1, h_patch, h_max, spec.growth)
-    last = 2
+    last = graded_size(f, 1, obs_curves, "CurvesList", SAMPLING or int(min(2000, max(20, 2 * length / h_patch))),
+                       h_patch, h_max, spec.growth)
     if spec.h_load is not None and col_curves:
         h_load = spec.h_load * h_e
-        f.add("Distance", 3)
-        f.setNumbers(3, "CurvesList", col_curves)
-        f.setNumber(3, "Sampling", int(min(2000, max(20, 4 * (e[-1] - e[0]) / h_load))))
-        _threshold(f, 4, 3, h_load, h_max, spec.growth)
+        graded_size(f, 3, col_curves, "CurvesList", int(min(2000, max(20, 4 * (e[-1] - e[0]) / h_load))),
+                    h_load, h_max, spec.growth)
         f.add("Min", 5)
         f.setNumbers(5, "FieldsList", [2, 4])
         last = 5
@@ -338,6 +417,10 @@ def _extract(gmsh, body: BodyModel, ext: BodyExtent, h_element: float):
     # profile beyond it, e.g. a gauge face, may run close to an s-end cut): a tenth of the depth
     # separates the two kinds with a wide margin on either side.
     tol = max(1e-2 * h_element, 0.1 * ext.depth)
+    if ext.closed:
+        # a whole section: the disc's arcs may cross a web 16.5 mm thick (8 mm from its faces) and
+        # the support edge lies 15-20 mm from the nearest profile point, whatever the body size
+        tol = max(1e-2 * h_element, min(tol, 0.5))
     free, clamped = [], []
     for _, s in gmsh.model.getBoundary(gmsh.model.getEntities(3), oriented=False):
         types, _, conn = gmsh.model.mesh.getElements(2, s)
@@ -412,11 +495,7 @@ def _generate(gmsh, body, patch, ext, spec, h_e, threads, algorithm3d, joints=()
             # measured on a 51 x 39 patch: HXT without gmsh's full optimiser meshes in 3-4 s
             # (Delaunay 4-6 s, HXT + optimiser 10-20 s); a cheap pass on tets with quality
             # gamma < 0.2 then removes the slivers (min gamma 0.07 instead of 1e-24).
-            for name, value in (("Mesh.MeshSizeFromPoints", 0), ("Mesh.MeshSizeFromCurvature", 0),
-                                ("Mesh.MeshSizeExtendFromBoundary", 0), ("Mesh.Algorithm", 6),
-                                ("Mesh.Algorithm3D", algorithm3d), ("Mesh.Optimize", 0),
-                                ("Mesh.LcIntegrationPrecision", 1e-3), ("Mesh.ElementOrder", 1)):
-                gmsh.option.setNumber(name, value)
+            set_mesh_options(gmsh, algorithm3d, ("Mesh.LcIntegrationPrecision", 1e-3))
             t1 = time.perf_counter()
             step = "meshing"
             gmsh.model.mesh.generate(3)
@@ -472,8 +551,8 @@ def closure_report(original, body: BodyModel, patch: StripPatch, ext: BodyExtent
     hi = max(0.0, float(ext.s_hi - original.s[-1]))
     out = {"disc_radius_mm": float(ext.radius), "margin_mm": float(ext.depth),
            "margin_requested_mm": float(size * patch.size),
-           "closure_lo": "cut" if ext.cut_lo else ("extended" if lo > 0 else "profile"),
-           "closure_hi": "cut" if ext.cut_hi else ("extended" if hi > 0 else "profile"),
+           "closure_lo": "section" if ext.closed else "cut" if ext.cut_lo else ("extended" if lo > 0 else "profile"),
+           "closure_hi": "section" if ext.closed else "cut" if ext.cut_hi else ("extended" if hi > 0 else "profile"),
            "extension_lo_mm": lo, "extension_hi_mm": hi,
            "margin_limited_by": ("wheel radius" if ext.wheel_limited else "section width" if slab else
                                  "profile end" if ext.depth < size * patch.size * (1 - 1e-9) else "")}
@@ -508,11 +587,19 @@ def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
     joints: tuple[float, ...] = ()
     size = spec.body_size
     if extent is None:
-        if spec.closure in ("extend", "straight"):
+        if spec.closure == "section":
+            ext = closed_section_extent(body, patch, spec.body_size)
+            # the section's straight edges (web, foot, rim faces) stay lines: split the curve at
+            # the ends of every segment much longer than the profile's sampling
+            seg = np.diff(original.s)
+            long = np.flatnonzero(seg > 10.0 * np.median(seg))
+            joints = tuple(sorted({float(v) for v in np.concatenate([original.s[long], original.s[long + 1]])}))
+        elif spec.closure in ("extend", "straight"):
             body, closure = grow_profile(body, patch, spec.body_size, limit_slab=spec.closure == "extend")
             joints = tuple(float(v) for v in (original.s[0], original.s[-1]))
             size = closure.size
-        ext = body_extent(body, patch, size)
+        if spec.closure != "section":
+            ext = body_extent(body, patch, size)
     else:
         ext = extent
     h_e = min(patch.dx, float(patch.s_widths.min()))

@@ -25,7 +25,8 @@ from conformal.errors import InputError
 from conformal.geometry.sections import Section
 from conformal.meshing.bodies import BodyExtent, BodyModel, StripPatch
 from conformal.meshing.gmsh_body import (BodyMesh, MeshingError, MeshSpec, _drop_flat, _orient,
-                                         _restore_sigpipe, cross_section_coordinates)
+                                         _restore_sigpipe, cross_section_coordinates, graded_size,
+                                         profile_curves, set_mesh_options, sweep_pieces)
 
 
 def _segment_distance(q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -97,20 +98,8 @@ def mesh_section_body(body: BodyModel, section: Section, patch: StripPatch, slav
 
         breaks = np.unique(np.array([0.0, ss_lo, sp_lo, sp_hi, ss_hi, prof.length]))
         pieces = prof.pieces(breaks)
-        first = pt(*pieces[0][0])
-        last = first
-        curves = []
-        for piece in pieces:
-            inner = [pt(*q) for q in piece[1:-1]]
-            end = pt(*piece[-1])
-            tags = [last] + inner + [end]
-            seg = np.diff(piece, axis=0)
-            seg /= np.linalg.norm(seg, axis=1, keepdims=True)
-            kinks = 1 + np.flatnonzero(np.einsum("ij,ij->i", seg[:-1], seg[1:]) < math.cos(math.radians(10.0)))
-            for a, b in zip(np.concatenate([[0], kinks]), np.concatenate([kinks, [len(tags) - 1]])):
-                part = tags[a:b + 1]
-                curves.append(occ.addLine(part[0], part[1]) if len(part) == 2 else occ.addSpline(part))
-            last = end
+        curves, corner = profile_curves(occ, pieces, pt)
+        first, last = corner[0], corner[-1]
         for q in section.closure:
             nxt = pt(*q)
             curves.append(occ.addLine(last, nxt))
@@ -119,18 +108,7 @@ def mesh_section_body(body: BodyModel, section: Section, patch: StripPatch, slav
         face = occ.addPlaneSurface([occ.addCurveLoop(curves)])
         xs_cuts = np.array([x_lo, -xs, -xp, xp, xs, x_hi])
         xs_cuts = np.unique(xs_cuts)
-        f = [(2, face)]
-        if body.revolved:
-            occ.rotate(f, 0, 0, body.axle_z, 0, 1, 0, xs_cuts[0] / r_ref)
-        else:
-            occ.translate(f, xs_cuts[0] - x0, 0, 0)
-        for xa, xb in zip(xs_cuts[:-1], xs_cuts[1:]):
-            if body.revolved:
-                out = occ.revolve(f, 0, 0, body.axle_z, 0, 1, 0, (xb - xa) / r_ref)
-            else:
-                out = occ.extrude(f, xb - xa, 0, 0)
-            f = [out[0]]
-        occ.synchronize()
+        sweep_pieces(occ, face, body, xs_cuts, x0, r_ref)
         # the patch faces: a point of each surface (mid-parameter) on the profile inside the patch
         tol = 1e-3 * max(1.0, h0)
         patch_faces = []
@@ -145,23 +123,10 @@ def mesh_section_body(body: BodyModel, section: Section, patch: StripPatch, slav
         if not patch_faces:
             raise MeshingError(f"{body.kind} section body: the patch faces were not found")
         fld = gmsh.model.mesh.field
-        fld.add("Distance", 1)
-        fld.setNumbers(1, "SurfacesList", patch_faces)
         size = max(2 * xp, sp_hi - sp_lo)
-        fld.setNumber(1, "Sampling", int(min(300, max(20, 3 * size / h0))))
-        fld.add("Threshold", 2)
-        fld.setNumber(2, "InField", 1)
-        fld.setNumber(2, "SizeMin", h0)
-        fld.setNumber(2, "SizeMax", h_max)
-        fld.setNumber(2, "DistMin", 0.0)
-        fld.setNumber(2, "DistMax", max((h_max - h0) / growth, 1e-9))
-        fld.setNumber(2, "Sigmoid", 0)
-        fld.setAsBackgroundMesh(2)
-        for name, value in (("Mesh.MeshSizeFromPoints", 0), ("Mesh.MeshSizeFromCurvature", 0),
-                            ("Mesh.MeshSizeExtendFromBoundary", 0), ("Mesh.Algorithm", 6),
-                            ("Mesh.Algorithm3D", 10), ("Mesh.Optimize", 0), ("Mesh.ElementOrder", 1),
-                            ("Mesh.MeshSizeMax", h_max), ("Mesh.MeshSizeMin", h0)):
-            gmsh.option.setNumber(name, value)
+        fld.setAsBackgroundMesh(graded_size(fld, 1, patch_faces, "SurfacesList",
+                                            int(min(300, max(20, 3 * size / h0))), h0, h_max, growth))
+        set_mesh_options(gmsh, 10, ("Mesh.MeshSizeMax", h_max), ("Mesh.MeshSizeMin", h0))
         t1 = time.perf_counter()
         try:
             gmsh.model.mesh.generate(3)
