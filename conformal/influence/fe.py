@@ -660,7 +660,8 @@ def body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
             comp_all[space.dofmap[c]] = c
         near_null = _rigid_modes(space.basis.doflocs.T[free], comp_all[free])
     try:
-        if not rhs.any():   # split method, flat body, half-space far field: the correction is zero
+        corrected = bool(rhs.any())   # False: split method, flat body, half-space far field: no correction
+        if not corrected:
             Uf, iterations, t_fac = np.zeros_like(rhs), 0, time.perf_counter()
         else:
             fac = _Factor(Kff, solver, settings.amg_tol, near_null, release=True)
@@ -704,7 +705,8 @@ def body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
     stats.update({"method": settings.method, "order": order, "solver": solver,
                   "mesh_s": t_mesh - t0, "assemble_s": t_asm - t_mesh, "rhs_s": t_rhs - t_asm,
                   "factor_s": t_fac - t_rhs, "solve_s": t_solve - t_fac, "observe_s": t_obs - t_solve,
-                  "total_s": t_obs - t0, "peak_rss_gib": _peak_rss_gib(), "amg_iterations": iterations})
+                  "total_s": t_obs - t0, "peak_rss_gib": _peak_rss_gib(), "amg_iterations": iterations,
+                  "corrected": corrected})
     return BodyInfluence(kernel, body.kind, patch, G, nu, settings, stats)
 
 
