@@ -41,15 +41,15 @@ def test_variant_3_turns_the_displacements_into_the_frame_of_I():
     assert np.allclose(blanco_kernel(K, delta, 3), ref, rtol=0, atol=1e-15 * np.abs(K).max())
 
 
-def test_variant_4_is_the_projects_turned_frames_with_the_opposite_inclination():
+def test_variant_4_is_the_projects_turned_frames():
     """Variant 4, R(alpha/2) A R(alpha/2), equals the project's own turned-frame numbers
-    (influence = "halfspace") for alpha = -delta: the two turn the frames in opposite senses
-    (CONTACT's inclination is +delta: groove_li case 5 below)."""
+    (influence = "halfspace") for alpha = delta, CONTACT's inclination (groove_li case 5 below):
+    both turn the frames in the sense the FE bodies have (test_curved_influence, frames21)."""
     s, delta, K = _strip()
     turned = curved_halfspace_kernel(4, 0.3, s, np.full(6, 0.3), delta, Material.steel())
     scale = np.abs(turned).max()
-    assert np.abs(blanco_kernel(K, -delta, 4) - turned).max() < 1e-14 * scale
-    assert np.abs(blanco_kernel(K, delta, 4) - turned).max() > 0.05 * scale
+    assert np.abs(blanco_kernel(K, delta, 4) - turned).max() < 1e-14 * scale
+    assert np.abs(blanco_kernel(K, -delta, 4) - turned).max() > 0.05 * scale
 
 
 def test_no_change_of_inclination_leaves_the_half_space_numbers():

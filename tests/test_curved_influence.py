@@ -60,3 +60,40 @@ def test_coupling_products_are_the_off_diagonal_blocks(delta):
     # quasi-identical bodies on a flat strip: no coupling at all, exactly as the planar operator
     flat = _strip(material=Material.steel())
     assert not flat.coupled and not np.any(flat.apply_coupling_nt(p[0], p[1]))
+
+
+@pytest.mark.slow
+def test_turned_frames_couple_normal_and_tangential_as_the_fe_bodies_do(tmp_path):
+    """The sense of the turn between element frames (frames21): on the deep pair (R10 rail corner
+    against a R10.2 flange root, contact angles -70 .. -3 degrees over an 8 x 8 grid) the FE numbers
+    of the real bodies (identical materials, so the only normal-tangential coupling is geometric)
+    have u_n at I due to p_s at J of the sign of R((delta_J - delta_I) / 2) A R((delta_J - delta_I) / 2)
+    and the size within 45 % (measured 0.63-1.1 of it at n = 12); the opposite sense
+    (the project's numbers before frames21) has the opposite sign, off by 150-200 %.  About 30 s."""
+    from pathlib import Path
+
+    from conformal.cases.conformal import curved_problem_from_wheel_rail
+    from conformal.influence.cache import Cache
+    from conformal.influence.fe import FESettings, wheel_rail_kernel
+    from conformal.scene import load_scene
+
+    scene = Path(__file__).resolve().parents[1] / "meshes" / "scenes" / "deep_conformal_pair.toml"
+    sc = load_scene(scene).with_("grid.n", 8).with_model(theory="conformal", influence="halfspace")
+    pr = curved_problem_from_wheel_rail(sc)
+    g = pr.grid
+    fe, _ = wheel_rail_kernel(g, sc.material, FESettings(), cache=Cache(tmp_path), rail_points=pr.rail_points,
+                              wheel_points=pr.wheel_points, workers=1)
+    turned = curved_halfspace_kernel(g.mx, g.dx, g.s - g.s_ref, g.ds, g.delta, sc.material)
+    k0 = g.mx - 1
+    I, J = np.nonzero(np.abs(np.subtract.outer(np.arange(g.ms), np.arange(g.ms))) >= 1)
+    keep = np.abs(g.delta[I] - g.delta[J]) > np.radians(5.0)
+    I, J = I[keep], J[keep]
+    ns, sn = turned[k0, I, J, 2, 1], turned[k0, I, J, 1, 2]     # u_n due to p_s, u_s due to p_n
+    assert np.all(np.abs(ns) > 0.05 * np.abs(turned[k0, I, J, 2, 2]))
+    r_ns, r_sn = fe[k0, I, J, 2, 1] / ns, fe[k0, I, J, 1, 2] / sn
+    # the same sign everywhere (the opposite sense gives ratios of -0.5 .. -2)
+    assert r_ns.min() > 0.4 and r_ns.max() < 1.5, (r_ns.min(), r_ns.max())
+    assert r_sn.min() > 0.5 and r_sn.max() < 2.0, (r_sn.min(), r_sn.max())
+    # the antisymmetric (rotation) part of the pair: the mean ratio within 20 %
+    rot = (fe[k0, I, J, 2, 1] - fe[k0, I, J, 1, 2]) / (ns - sn)
+    assert abs(rot.mean() - 1.0) < 0.2, rot.mean()

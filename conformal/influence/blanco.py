@@ -15,8 +15,7 @@ the corrected numbers B are
 2. the same without the correction of B_xn (B_xn = A_xn);
 3. the half-space at J with its displacements turned into I's frame: B = R(alpha) A;
 4. the split form B = R(alpha / 2) A R(alpha / 2) (for A_ns = -A_sn, as for the half-space,
-   this is the project's own turned-frame numbers, conformal.influence.curved, with
-   alpha_J - alpha_I = delta_I - delta_J).
+   this is the project's own turned-frame numbers, conformal.influence.curved, with alpha = delta).
 
 ``alpha`` is the surface inclination per element along s; CONTACT's "fast" method (IF_METH = 0)
 replaces it by its least-squares straight line over s (a constant radius of curvature),

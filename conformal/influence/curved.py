@@ -15,7 +15,9 @@ Products use a zero-padded FFT along x and dense (3 ms x 3 ms) blocks per freque
 
 The half-space twin, :func:`curved_halfspace_kernel`, flattens the strip (offset x, s_I - s_J)
 and rotates between the element frames by the difference of contact angles, split half on each
-side so that reciprocity (a symmetric matrix) is kept.  On a flat strip it equals the planar
+side so that reciprocity (a symmetric matrix) is kept: u_I = R(a/2) A R(a/2) p_J with
+a = delta_J - delta_I (the frame of element I is R(delta_I) applied to the side frame's; Blanco-Lorenzo's
+variant 4, conformal.influence.blanco).  On a flat strip it equals the planar
 half-space numbers exactly.
 
 >>> import numpy as np
@@ -46,7 +48,7 @@ def curved_halfspace_kernel(mx: int, dx: float, s_centres: np.ndarray, s_widths:
     mx, dx : number and length (mm) of the elements along the rolling direction.
     s_centres, s_widths : arc-length centres and widths (mm) of the ms elements along the profile.
     delta : contact angle (rad) of each element along s.
-    angle_correction : rotate between element frames by delta_I - delta_J (split symmetrically).
+    angle_correction : rotate between element frames by delta_J - delta_I (split symmetrically).
     """
     s_centres, s_widths, delta = (np.asarray(v, dtype=float) for v in (s_centres, s_widths, delta))
     ms = s_centres.size
@@ -67,7 +69,11 @@ def curved_halfspace_kernel(mx: int, dx: float, s_centres: np.ndarray, s_widths:
             K[:, :, J] = rectangle_influence(kx[:, :, 0] + 0 * ds[:, :, J], ds[:, :, J] + 0 * kx[:, :, 0],
                                              dx, float(s_widths[J]), G=material.G, nu=material.nu, K=material.K)
     if angle_correction and np.ptp(delta) > 0:
-        K = _rotate_pairs(K, 0.5 * (delta[:, None] - delta[None, :]))
+        # element I's frame is the side frame turned by R(delta_I) (s = (cos, sin), n = (-sin, cos) of
+        # delta in (y, z)); with the half-space numbers in the frame of the mean angle,
+        # u_I = R((delta_J - delta_I) / 2) A R((delta_J - delta_I) / 2) p_J (Blanco-Lorenzo's split
+        # form, CONTACT's C3 = 4 variant 4; its coupling sign agrees with the FE bodies, docs/incoming/frames21.md)
+        K = _rotate_pairs(K, 0.5 * (delta[None, :] - delta[:, None]))
     return K
 
 
