@@ -10,6 +10,7 @@ from __future__ import annotations
 import pytest
 
 from _paths import CONTACT_CASES, DEMO, reference_cases
+from _scenes import SWEEP_SCENE
 
 
 @pytest.fixture(scope="session")
@@ -42,28 +43,6 @@ def quadratic_scene():
                                 "grid": {"n": n, "scale": scale}, "model": {"theory": theory}})
 
     return make
-
-
-SWEEP_SCENE = """\
-name = "sweep"
-[material]
-G = 82000.0
-nu = 0.28
-[friction]
-mu = 0.3
-[geometry]
-kind = "wheel_rail"
-wheel_profile = "S1002"
-rail_profile = "UIC60"
-lateral_shift = 0.0
-[load]
-wheel_load = 50000.0
-[grid]
-n = 6
-[model]
-theory = "conformal"
-fe_body_size = 0.7
-"""
 
 
 @pytest.fixture

@@ -2,7 +2,7 @@
 
 The whole model is this module: its declaration (:data:`MODEL`, one :class:`~conformal.registry.Model`
 call with its option, capabilities and memory) and its ``solve(problem) -> Result``.  It is added
-with one registry line, ``MODELS.with_model(example_model.MODEL)`` (tests/test_registry.py).
+with one registry line, ``MODELS.with_model(example_model.MODEL)`` (tests/unit/test_registry.py).
 
 Equal curvatures A = B = 1/(2R) (a sphere on a plane, relative radius R) under a normal force N
 (Johnson 1985, eqs. 4.22-4.23 with the contact modulus E* = G/(1-nu) of the combined constants)::

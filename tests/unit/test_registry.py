@@ -1,6 +1,6 @@
 """The model registry (conformal.registry): declarations agree with the code that reads them, scene
 validation and the CLI come from it, options nest by method with the flat keys still accepted, and
-a model is added with its own module and one registry line (tests/example_model.py)."""
+a model is added with its own module and one registry line (tests/unit/example_model.py)."""
 from __future__ import annotations
 
 import dataclasses
@@ -154,7 +154,7 @@ def test_cli_theory_help_and_reference_come_from_the_registry():
 
 # ----------------------------------------------------------------------------- adding a model
 def test_a_model_is_added_with_its_module_and_one_registry_line():
-    """tests/example_model.py declares and solves Hertz's circular contact; one line adds it.  Its
+    """tests/unit/example_model.py declares and solves Hertz's circular contact; one line adds it.  Its
     closed form (Johnson eqs. 4.22-4.23) agrees with the package's Hertz theory (elliptic integrals,
     conformal.theories.hertz) at A = B."""
     from conformal.models import solve_problem

@@ -172,7 +172,7 @@ def test_prescribed_force_near_frictionless_dissimilar_rollers():
 def test_planar_theories_warn_on_a_conformal_patch_and_the_conformal_theory_does_not():
     """The 16-degree flange patch: hertz (a half-space theory) says it is questionable there; the
     warning used to come from the conformal theory, the one made for such patches (that it no
-    longer warns: tests/test_conformal.py::test_wheel_rail_scene_runs_the_conformal_theory)."""
+    longer warns: tests/validation/test_conformal.py::test_wheel_rail_scene_runs_the_conformal_theory)."""
     from _paths import SCENES
 
     r = conformal.solve(SCENES / "flange_s1002_uic60.toml", model__theory="hertz")

@@ -10,7 +10,6 @@ import json
 import math
 import subprocess
 import sys
-from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -20,10 +19,9 @@ from conformal.geometry import patches as gp
 from conformal.geometry.search import pair_locus, wheel_locus
 from conformal.geometry.wheelrail import profile_curves
 from conformal.grid import PlanarGrid
-from conformal.scene import load_scene
 from _paths import CONTACT_CASES, REFERENCE, ROOT
+from _scenes import MBENCH, mbench_case_scene
 
-MBENCH = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"
 CASES = json.loads((CONTACT_CASES).read_text())["cases"]["mbench_a22"]["right"]
 BEFORE = json.loads((REFERENCE / "mbench_a22_right_sweep_before.json").read_text())["cases"]
 
@@ -31,11 +29,8 @@ BEFORE = json.loads((REFERENCE / "mbench_a22_right_sweep_before.json").read_text
 def mbench_case(y, element_size=0.2):
     """The Manchester A-2.2 right-wheel case at lateral shift y with CONTACT's yaw, roll and pitch
     velocity (studies/manchester_a22.scene_for)."""
-    inp = next(c["inputs"] for c in CASES if c["inputs"]["Y_WS_mm"] == y)
-    s = load_scene(MBENCH)
-    geo = replace(s.geometry, lateral_shift=y, yaw=inp["YAW_WS_rad"], roll=inp["ROLL_WS_rad"],
-                  element_size=element_size)
-    return replace(s, geometry=geo, kinematics=replace(s.kinematics, pitch_velocity=inp["VPITCH_rad_per_s"]))
+    return mbench_case_scene(next(c["inputs"] for c in CASES if c["inputs"]["Y_WS_mm"] == y),
+                             element_size=element_size)
 
 
 def test_cubic_pieces_equal_the_bspline():

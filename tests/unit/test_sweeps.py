@@ -1,5 +1,6 @@
 """Issue 23: the vertical balance with the height as unknown, solved sweeps, a light import."""
 import csv
+from functools import partial
 import json
 import subprocess
 import sys
@@ -13,14 +14,13 @@ from conformal.cli import main
 from conformal.scene import load_scene
 from conformal.dispatch import solve_scene
 from _paths import ROOT
+from _scenes import MBENCH, mbench_scene
 
-MBENCH = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"
 WORN = ROOT / "meshes" / "scenes" / "flange_worn_three_patches.toml"
 
 
-def mbench(y, theory="exact", element_size=0.4):
-    s = load_scene(MBENCH)
-    return s.with_(geometry__lateral_shift=y, geometry__yaw=0.0024 * y, geometry__element_size=element_size).with_model(theory=theory)
+#: the Manchester pair (tests/_scenes.py): exact theory, 0.4 mm elements
+mbench = partial(mbench_scene, theory="exact", element_size=0.4)
 
 
 @pytest.mark.parametrize("y,theory", [(0.0, "exact"), (3.0, "exact"), (7.0, "exact"), (3.0, "hertz")])

@@ -1,5 +1,6 @@
 """Wheel-rail scenes: patches, grids from the true profiles, vertical balance, kinematics, CLI."""
 import csv
+from functools import partial
 import json
 import math
 
@@ -15,16 +16,14 @@ from conformal.cases.wheelrail import (curved_problems_from_wheel_rail, place_sc
 from conformal.scene import load_scene
 from conformal.dispatch import solve_scene
 from _paths import CONTACT_CASES, ROOT, reference_cases
+from _scenes import MBENCH, mbench_scene as _mbench_scene
 
-MBENCH = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"
 SWEEP = ROOT / "meshes" / "scenes" / "s1002_uic60_sweep.toml"
 REF = CONTACT_CASES
 
 
-def mbench_scene(y=5.0, side="right", theory="hertz", element_size=0.5, **geo):
-    s = load_scene(MBENCH)
-    changes = dict(lateral_shift=y, yaw=0.0024 * y, side=side, element_size=element_size, **geo)
-    return s.with_(model__theory=theory, **{f"geometry__{k}": v for k, v in changes.items()})
+#: the Manchester pair (tests/_scenes.py) with this file's defaults: Hertz, 0.5 mm elements
+mbench_scene = partial(_mbench_scene, theory="hertz", element_size=0.5)
 
 
 def test_planar_h_from_true_profiles():

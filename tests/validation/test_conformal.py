@@ -12,22 +12,21 @@ from conformal.errors import ConvergenceError, InputError
 from conformal.grid import PlanarGrid
 from conformal.materials import Material
 from conformal.result import SLIP
-from conformal.scene import load_scene, scene_from_dict
+from conformal.scene import load_scene
 from conformal.dispatch import solve_scene
 from conformal.cases import conformal as CC
 from conformal.solvers import conformal as C
 from conformal.solvers.normal import solve_normal
 from conformal.theories.hertz import hertz_from_curvatures, hertz_from_semiaxes
 from _paths import SCENES
+from _scenes import hertz_scene as _hertz_scene
 
 STEEL = Material.steel()
 
 
 def hertz_scene(theory, kinematics=None, material=None, n=24, **model):
-    return scene_from_dict({"material": material or {"G": 82000.0, "nu": 0.28}, "friction": {"mu": 0.3},
-                            "geometry": {"kind": "hertz", "a": 6.0, "b": 3.0}, "load": {"normal_force": 1e5},
-                            "kinematics": kinematics or {}, "grid": {"n": n},
-                            "model": {"theory": theory, **model}})
+    return _hertz_scene(6.0, 3.0, 1e5, theory=theory, material=material, kinematics=kinematics, grid={"n": n},
+                        **model)
 
 
 @pytest.fixture(scope="module")

@@ -132,7 +132,7 @@ def test_wheelrail_deck_against_contact(name, cases):
 
 #: conformal (D = 4) module-1 cases against CONTACT (its .ref_out), with tolerances (%; angle in
 #: degrees) set from the agreement measured with the same formulation built by hand
-#: (tests/test_contact_conformal.py, docs/validation/flange-contact.md "CONTACT's conformal formulation"): groove_li pitch
+#: (tests/validation/test_contact_conformal.py, docs/validation/flange-contact.md "CONTACT's conformal formulation"): groove_li pitch
 #: creepage +0.15 .. +0.17 %, pmax 0.04 %, area 0.22 %, TILDE_FN 0.07 %; mbench_conf FN -1.1 / +0.1 %,
 #: FX -1.3 / 0.0 %, FS -1.1 / -0.5 %, pmax -0.3 / -0.2 %, 320 / 128 elements for 321 / 129, track
 #: forces -0.9, -0.4, -1.0 %.  The issue's targets: the groove's pitch within 1 %, the flange FN within 2 %.

@@ -6,11 +6,10 @@ import pytest
 from scipy.integrate import quad
 
 from conformal.errors import InputError
-from conformal.problem import problems_from_scene
-from conformal.scene import scene_from_dict
 from conformal.theories import coefficients as coef
 from conformal.theories import empirical as emp
 from _paths import CONTACT_CASES, reference_cases
+from _scenes import hertz_problem
 
 REF = CONTACT_CASES
 G, NU, MU, FN = 82000.0, 0.28, 0.33, 106700.0
@@ -18,11 +17,8 @@ A, B = 6.3036, 12.6072          # tractcurv's Hertz ellipse, a/b = 0.5
 
 
 def problem(theory, **kin):
-    model = {"theory": theory, **kin.pop("model", {})}
-    data = {"material": {"G": G, "nu": NU}, "friction": {"mu": MU},
-            "geometry": {"kind": "hertz", "a": A, "b": B}, "load": {"normal_force": FN},
-            "kinematics": kin, "model": model}
-    return problems_from_scene(scene_from_dict(data))[0]
+    model = kin.pop("model", {})
+    return hertz_problem(A, B, FN, theory=theory, material={"G": G, "nu": NU}, mu=MU, kinematics=kin, **model)
 
 
 @pytest.mark.parametrize("k", [1.0, 0.9999, 0.97, 0.5, 0.05, 1e-3])

@@ -7,12 +7,11 @@ import pytest
 
 from conformal.errors import InputError
 from conformal.grid import PlanarGrid
-from conformal.problem import problems_from_scene
 from conformal.result import ADHESION, EXTERIOR, SLIP
-from conformal.scene import scene_from_dict
 from conformal.theories import coefficients as coef
 from conformal.theories import fastsim as fs
 from _paths import CONTACT_CASES, reference_cases
+from _scenes import hertz_problem
 
 REF = CONTACT_CASES
 CASES = reference_cases()
@@ -219,13 +218,8 @@ def test_batch_equals_single_and_grid():
 
 
 def problem(model=None, grid=None, **kin):
-    data = {"material": {"G": G, "nu": NU}, "friction": {"mu": 0.3},
-            "geometry": {"kind": "hertz", "a": 8.0, "b": 4.0}, "load": {"normal_force": 82000.0},
-            "kinematics": kin or {"eta": -0.000625, "phi": 0.000625},
-            "model": {"theory": "fastsim", **(model or {})}}
-    if grid:
-        data["grid"] = grid
-    return problems_from_scene(scene_from_dict(data))[0]
+    return hertz_problem(8.0, 4.0, 82000.0, theory="fastsim", material={"G": G, "nu": NU}, mu=0.3,
+                         kinematics=kin or {"eta": -0.000625, "phi": 0.000625}, grid=grid, **(model or {}))
 
 
 def test_solve_from_scene():

@@ -5,7 +5,7 @@ Known answer: a flat FE block with the half-space far field IS a half-space, so 
 numbers must converge to the closed forms of Love (1929) / Kalker (1990) as the mesh is refined.
 The plain FE ("direct") method meshes the singular near field of the loaded element and is the
 one whose numbers depend on h; the split method (the default) carries that field analytically
-and its numbers on a flat block are exact at any h (tests/test_fe_influence.py), so on a curved
+and its numbers on a flat block are exact at any h (tests/validation/test_fe_influence.py), so on a curved
 body only its mesh sensitivity is checked here.
 
 Measured (2026-11-24, 2-core machine shared with other jobs):

@@ -6,21 +6,17 @@ import numpy as np
 import pytest
 
 from conformal.errors import ConformalError, InputError
-from conformal.problem import problems_from_scene
-from conformal.scene import scene_from_dict
 from conformal.theories import coefficients as coef
 from conformal.theories import linear
 from _paths import CONTACT_CASES, reference_cases
+from _scenes import hertz_problem
 
 REF = CONTACT_CASES
 
 
 def problem(**kin):
-    model = kin.pop("model", {"theory": "linear"})
-    data = {"material": {"G": 82000.0, "nu": 0.28}, "friction": {"mu": 0.33},
-            "geometry": {"kind": "hertz", "a": 6.3036, "b": 12.6072},
-            "load": {"normal_force": 106700.0}, "kinematics": kin, "model": model}
-    return problems_from_scene(scene_from_dict(data))[0]
+    model = dict(kin.pop("model", {"theory": "linear"}))
+    return hertz_problem(6.3036, 12.6072, 106700.0, mu=0.33, kinematics=kin, **model)
 
 
 def test_forces_at_a_table_node():

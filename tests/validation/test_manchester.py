@@ -7,11 +7,10 @@ import pytest
 
 from conformal.geometry.patches import find_patches
 from conformal.cases.wheelrail import place_scene, problems_from_wheel_rail, solve_wheel_rail
-from conformal.scene import load_scene
-from _paths import CONTACT_CASES, ROOT, reference_cases
+from _paths import CONTACT_CASES, reference_cases
+from _scenes import mbench_case_scene
 
 REF = CONTACT_CASES
-SCENE = ROOT / "meshes" / "scenes" / "mbench_right_y5.toml"
 
 
 @pytest.fixture(scope="module")
@@ -19,14 +18,6 @@ def ref():
     if not REF.is_file():
         pytest.skip("shared reference data not available")
     return reference_cases()["mbench_a22"]
-
-
-def scene_for(side, case, theory="exact", element_size=0.4):
-    inp = case["inputs"]
-    s = load_scene(SCENE)
-    return s.with_(geometry__side=side, geometry__lateral_shift=inp["Y_WS_mm"], geometry__yaw=inp["YAW_WS_rad"],
-                   geometry__roll=inp["ROLL_WS_rad"], geometry__element_size=element_size,
-                   kinematics__pitch_velocity=inp["VPITCH_rad_per_s"], model__theory=theory)
 
 
 @pytest.mark.slow
@@ -38,7 +29,7 @@ def test_reference_points_at_contacts_wheelset_heights(ref):
     for side in ("right", "left"):
         for case in ref[side]:
             out = case["outputs"]["patches"][0]
-            pl = place_scene(scene_for(side, case, theory="hertz"))
+            pl = place_scene(mbench_case_scene(case["inputs"], side, theory="hertz"))
             p = find_patches(pl.pair.wheel(case["outputs"]["Z_WS"]), pl.pair.rail, pl.top)[0]
             m = pl.pair.mirror
             label = (side, case["inputs"]["Y_WS_mm"])
@@ -65,7 +56,7 @@ def test_contact_positions_with_own_vertical_balance(ref):
         for k in cases:
             case = ref[side][k]
             out = case["outputs"]["patches"][0]
-            probs = problems_from_wheel_rail(scene_for(side, case))
+            probs = problems_from_wheel_rail(mbench_case_scene(case["inputs"], side))
             main = max(probs, key=lambda p: p.normal_force)
             err = abs(main.info["y_rail"] - out["YCP(R)"])
             worst = max(worst, err)
@@ -110,7 +101,7 @@ def test_forces_with_the_exact_solver(ref):
     for side, k in FORCE_CASES:
         case = ref[side][k]
         out = case["outputs"]["patches"][0]
-        sc = scene_for(side, case, element_size=0.2)
+        sc = mbench_case_scene(case["inputs"], side, element_size=0.2)
         r = solve_wheel_rail(sc)
         assert r.converged and len(r.patches) == 1, (side, k)
         main = r.patches[0]
