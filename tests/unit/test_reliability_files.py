@@ -357,7 +357,7 @@ def _small_items(folder: Path):
     from conformal.scene import scene_from_dict
     import tomllib
 
-    from _paths import SWEEP_SCENE
+    from _scenes import SWEEP_SCENE
 
     items, _ = plan(scene_from_dict(tomllib.loads(SWEEP_SCENE), ROOT), parse_sweep("shift=0,3"), cache=folder)
     return items
@@ -401,7 +401,7 @@ def test_one_cache_key_gives_one_mesh(tmp_path):
 KERNEL_SCRIPT = textwrap.dedent("""\
     import sys, tomllib, numpy as np
     sys.path.insert(0, sys.argv[1] + "/tests")
-    from _paths import SWEEP_SCENE
+    from _scenes import SWEEP_SCENE
     from conformal.cases.precompute import plan
     from conformal.influence.fe import body_influence
     from conformal.jobs import parse_sweep

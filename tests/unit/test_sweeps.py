@@ -30,7 +30,7 @@ def test_balance_equals_bracketing_search(y, theory):
     within 2e-5 mm and the same normal forces within 1e-4 (its z tolerance BALANCE_ZTOL = 1e-4 mm
     moves FN by about 1.5 dz/approach ~ 1e-5 relative), with a few geometry searches instead of
     about 28 (tread, flange)."""
-    sc = mbench(y, theory)
+    sc = mbench(y, theory=theory)
     pl = place_scene(sc)
     counts = []
     z, st, fns = balance_height(pl, sc, counts_out=counts)
