@@ -27,7 +27,7 @@ import numpy as np
 
 from conformal.files import atomic_path, save_figure
 
-# the element status flags of conformal.result.TractionField (tests/test_plots3d.py checks they agree)
+# the element status flags of conformal.result.TractionField (tests/unit/test_plots3d.py checks they agree)
 EXTERIOR, ADHESION, SLIP = 0, 1, 2
 
 

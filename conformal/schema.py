@@ -5,7 +5,7 @@ Units: mm, N, N/mm², rad (angles named ``*_deg`` in degrees), s; creepages dime
 rad/mm.  Forces act on body 1 (the rail) in the contact frame unless the name says ``_track``
 (the track frame: x along the track, y lateral, z vertical) or ``_side``.  The JSON's field names
 are a public interface: add, never rename.  ``where`` names the models or scenes that write a key
-(``wheel-rail``: the wheel-rail cases, any theory).  tests/test_schema.py checks that the results of
+(``wheel-rail``: the wheel-rail cases, any theory).  tests/unit/test_schema.py checks that the results of
 every theory carry only documented keys.
 
 >>> SUMMARY["FN"].unit, EXTRA["FZ_track"].unit, EXTRA["elastic_energy"].unit

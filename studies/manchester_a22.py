@@ -9,7 +9,7 @@ S1002 on UIC60 1:40, 10 kN per wheel, yaw 2.4 mrad/mm, CONTACT's roll and pitch 
    forces), patches on planar grids (0.2 mm elements as CONTACT by default) with the exact
    half-space theory; creepages at the patch reference point against CONTACT's CKSI, CETA, CPHI.
 
-Force metric (the same as tests/test_manchester.py): |F - F_CONTACT| <= max(1 % |F_CONTACT|,
+Force metric (the same as tests/validation/test_manchester.py): |F - F_CONTACT| <= max(1 % |F_CONTACT|,
 0.002 mu FN_CONTACT).  A relative error alone is meaningless for forces near zero: FX = 0.28 N at
 y_ws = 0 is the balance of xi against the lateral spin term, and a creepage difference of
 1.35e-6 (a rolling radius 0.6 um different) moves it by 5 N, so the floor is 0.002 mu FN = 6 N.

@@ -34,7 +34,7 @@ sensitive):
    rolling, exact theory); and every half-space row as a ratio to CONTACT's time for it.
 
 ``--quick``: n = 25, 50, 100, a 21 x 15 FE patch instead of 51 x 39, the smallest FE scene only,
-the Manchester sequence at 0, 5 and 7 mm only (0.4 mm elements), one demo run (used by tests/test_performance_study.py).  Writes
+the Manchester sequence at 0, 5 and 7 mm only (0.4 mm elements), one demo run (used by tests/studies/test_performance_study.py).  Writes
 studies/out/performance/{performance.md, performance.json, run.json}.
 
     python studies/performance.py [--quick] [--sizes 50 100 200 300 400] [--worn] [--tests]

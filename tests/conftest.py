@@ -1,38 +1,16 @@
-"""Shared fixtures and reference data for the tests.
+"""Shared fixtures for every test (tests/unit, tests/validation, tests/studies).
 
-The reference data (CONTACT's outputs of the standard cases, tests/reference/contact_cases.json)
-is parsed once per session (:func:`reference_cases`), whichever test module asks first.
+Paths (ROOT, REFERENCE, SCENES, ...) and the reference loader are importable constants of
+tests/_paths.py; shared scene builders are in tests/_scenes.py.  The reference data (CONTACT's
+outputs of the standard cases, tests/reference/contact_cases.json) is parsed once per session
+(:func:`_paths.reference_cases`), whichever test module asks first.
 """
 from __future__ import annotations
 
-import json
-from functools import lru_cache
-from pathlib import Path
-
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-REFERENCE = ROOT / "tests" / "reference"
-CONTACT_CASES = REFERENCE / "contact_cases.json"
-SCENES = ROOT / "meshes" / "scenes"
-DEMO = ROOT / "conformal" / "data" / "scenes" / "demo.toml"
-
-
-@lru_cache(maxsize=1)
-def _contact_cases() -> dict:
-    return json.loads(CONTACT_CASES.read_text(encoding="utf-8"))["cases"]
-
-
-def reference_cases() -> dict:
-    """CONTACT's reference cases by name (parsed once; do not modify the returned mapping)."""
-    return _contact_cases()
-
-
-def reference_case(name: str) -> dict:
-    """One reference case; skips the test where the reference file is missing."""
-    if not CONTACT_CASES.is_file():
-        pytest.skip("reference data not available")
-    return _contact_cases()[name]
+from _paths import CONTACT_CASES, DEMO, reference_cases
+from _scenes import SWEEP_SCENE
 
 
 @pytest.fixture(scope="session")
@@ -65,28 +43,6 @@ def quadratic_scene():
                                 "grid": {"n": n, "scale": scale}, "model": {"theory": theory}})
 
     return make
-
-
-SWEEP_SCENE = """\
-name = "sweep"
-[material]
-G = 82000.0
-nu = 0.28
-[friction]
-mu = 0.3
-[geometry]
-kind = "wheel_rail"
-wheel_profile = "S1002"
-rail_profile = "UIC60"
-lateral_shift = 0.0
-[load]
-wheel_load = 50000.0
-[grid]
-n = 6
-[model]
-theory = "conformal"
-fe_body_size = 0.7
-"""
 
 
 @pytest.fixture

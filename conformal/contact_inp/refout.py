@@ -119,7 +119,7 @@ def _labelled(text: str) -> dict[str, str]:
 def compare_wheelrail(ours: dict, ref: dict, mu: float) -> dict[str, float]:
     """Deviations of a module-1 result from CONTACT's, each in units of its tolerance (> 1: outside):
     patch forces FN, FX, FS and the track forces within max(1 % |F|, 0.002 mu FN) (the Manchester
-    metric of tests/test_manchester.py), contact angle 0.005 rad, lateral position on the rail
+    metric of tests/validation/test_manchester.py), contact angle 0.005 rad, lateral position on the rail
     0.2 mm, pmax 3 %, elements in contact 10 %.  Patches are matched in order of y on the rail;
     a different number of patches is reported as ``n_patches``."""
     out: dict[str, float] = {}

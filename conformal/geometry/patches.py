@@ -68,7 +68,7 @@ class Patch:
         the Manchester benchmark's xi to 6e-8 at y_ws = 0 (-5.665e-5) and 3e-7 at 0.5 mm
         (4.948e-4), where the wheel surface point on the normal line (``wheel_point``, overlap
         pen(P) < penetration on wide patches) is 1.4e-6 and 1.5e-5 off; the latter made FX 3 %
-        too small at 0.5 mm (tests/test_wheelrail.py, studies/manchester_a22.py)."""
+        too small at 0.5 mm (tests/unit/test_wheelrail.py, studies/manchester_a22.py)."""
         return self.point + self.penetration * self.normal
 
 

@@ -21,7 +21,7 @@ Sections:
   standard's compound curve.  Two free dimensions (head underside depth at the flank, 39.2 mm,
   and the foot slope) are set so that the section's area, centroid height and second moment
   match the values the standard publishes for 60E1 (76.70 cm², 80.9 mm above the foot,
-  3038.3 cm⁴) within 1 % (:func:`section_properties`, tests/test_fe_truth.py).
+  3038.3 cm⁴) within 1 % (:func:`section_properties`, tests/validation/test_fe_truth.py).
 * :func:`wheel_rim_section` -- a monobloc wheel's rim and straight web: the S1002 (or any) tread
   and flange profile from the flange back (y = -70) to the field side, a 5 x 5 mm chamfer to the
   field face of a 135 mm wide rim (y = +65), the rim's inner face ``rim_depth`` = 55 mm below

@@ -90,7 +90,7 @@ class InfluenceOperator(Protocol):
         """The operator of the grid of fx x fy merged elements, or None."""
 
 
-#: the members every operator has (tests/test_architecture.py checks the classes against it)
+#: the members every operator has (tests/unit/test_architecture.py checks the classes against it)
 PROTOCOL_MEMBERS = ("mx", "my", "coupled", "apply", "apply_normal", "apply_tangential", "apply_coupling_nt",
                     "apply_coupling_tn", "self_influence", "dense", "contact_modulus", "normal_preconditioner",
                     "tangential_product32", "extended", "coarsened")

@@ -40,7 +40,7 @@ the flat strip.  The stages are the planar solvers themselves (conformal.solvers
 .tangential, and the alternation of conformal.solvers.exact), so it reproduces the exact theory:
 the same contact and slip areas; forces and tractions equal up to the solvers' tolerance (the
 operators agree to 2e-15; measured 1e-8 to 2e-7 in the forces at tol 1e-6,
-tests/test_conformal.py).
+tests/validation/test_conformal.py).
 
 Wheel-rail scenes (``[model] theory = "conformal"``): one curved strip on the rail covers every
 contact patch of the wheel (built by :mod:`conformal.cases.conformal`); ``[model]`` keys: influence

@@ -9,7 +9,7 @@ velocities over the rolling speed) the mirrored problem is +x rolling with
     xi' = -xi,   eta' = eta,   phi' = -phi,   h'(x', y) = h(-x', y),
 
 and its solution maps back as p_x(x) = -p'_x(-x), p_y(x) = p'_y(-x), p_n(x) = p'_n(-x) (slip and
-displacements alike), FX = -FX', FY = FY', MZ = -MZ'.  Consequences (tests/test_inputs.py): for a
+displacements alike), FX = -FX', FY = FY', MZ = -MZ'.  Consequences (tests/unit/test_inputs.py): for a
 geometry symmetric in x the creep forces from xi and eta do not depend on the direction, the
 adhesion zone moves to the new leading edge x = -a, and the lateral force from spin changes sign.
 A shift (rolling = "shift") has no direction; mirroring it changes nothing.

@@ -30,7 +30,7 @@ displacement is defined only up to a constant times the force (2-D elasticity), 
 that change the force carry a uniform slip that depends on the datum, which vanishes as the force
 settles (steady state, Carter) and in shifts at constant force.
 
-Checks (tests/test_history.py): Cattaneo's growing tangential force (stick radius
+Checks (tests/validation/test_history.py): Cattaneo's growing tangential force (stick radius
 c/a = (1 - Q/(mu P))^(1/3) and the shift), Mindlin-Deresiewicz unloading (the reverse-slip
 annulus), the onset of rolling from the Cattaneo state, which converges to the steady solution
 of the same grid, in 2-D from Cattaneo (c/a = (1 - Q/(mu P))^(1/2)) to Carter, and Spence's

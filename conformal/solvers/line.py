@@ -32,7 +32,7 @@ The grid is a row of mx elements of length dx and width dy = 1 mm, so that FN, F
 of line length (N/mm) and MZ per mm (N).  The kernel is a :class:`CurvedInfluence` strip with one
 element across (ms = 1), the operator the normal and tangential solvers take for curved strips.
 
-Checks (tests/test_line_contact.py): 2-D Hertz (half-width and peak pressure, Johnson eq. 4.45),
+Checks (tests/validation/test_line_contact.py): 2-D Hertz (half-width and peak pressure, Johnson eq. 4.45),
 Carter's steady rolling (force, adhesion width and traction, conformal.reference), and for
 dissimilar bodies the middle section of a long Hertzian contact (b = 20 a) of the 3-D exact theory.
 

@@ -15,7 +15,7 @@ Frame: the body fills z > 0 (z points into the body); the loaded rectangle is
 Results are indexed [..., component, load]: ``u[..., i, j]`` is u_i due to p_j, and
 ``sigma[..., k, l, j]`` the stress sigma_kl due to p_j.
 
-Derivation (our own; verified numerically in tests/test_fe_influence.py and against the surface
+Derivation (our own; verified numerically in tests/validation/test_fe_influence.py and against the surface
 closed forms of conformal.influence.halfspace at z -> 0): the point-load fields of Boussinesq and
 Cerruti (Johnson 1985, eqs. 3.19-3.22 in the form z into the body) are written as derivatives of
 the potentials 1/rho, ln(rho + z), rho and Psi = z ln(rho + z) - rho.  Integrating over the

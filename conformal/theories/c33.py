@@ -27,7 +27,7 @@ size over grid offsets (:func:`averaged_coefficients`; the contact-set scatter i
 function of n) and extrapolates with a fitted rate and an error estimate (:func:`richardson`).  Measured
 against Kalker's table: C11, C22, C23 within 1.1 % at every node except b/a = 0.1 (1.3-1.8 %); on
 the finest grid alone within 1.2 %.  The same discrete equations solved by the general tangential
-solver with a huge friction coefficient give the same forces to 7 digits (tests/test_exact.py).
+solver with a huge friction coefficient give the same forces to 7 digits (tests/validation/test_exact.py).
 
 The linear system (non-symmetric) is solved by GMRES with a right preconditioner: the upwind
 difference is inverted by a cumulative sum along x and A_tt by its Fourier symbol

@@ -30,7 +30,7 @@ Sources
   same strip theory with xi = -phi y gives C33 = pi²/(16(1-nu)g).  At the table edge g = 0.1
   the asymptotes differ from the table by at most 4.3 % (C11, C22), 1 % (C23, b/a -> 0) and
   6 % (C23, a/b -> 0, nu = 0.5), and every one of them is closer to the table at g = 0.1 than
-  at g = 0.2 (tests/test_coefficients.py).
+  at g = 0.2 (tests/validation/test_coefficients.py).
 
 Interpolation
 -------------

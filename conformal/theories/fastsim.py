@@ -160,7 +160,7 @@ def fastsim_grid(a: float, b: float, FN: float, mu: float, xi: float, eta: float
     * ``"midpoint"`` (default): the first step of a strip starts at the ellipse's leading edge
       x_l(y); the rigid slip is integrated by the midpoint rule (exact for w~ linear in x).
     * ``"contact"``: CONTACT's grid FASTSIM (found by matching its printed results, see
-      tests/test_fastsim.py): every step is dx long, also the first one (the exterior element
+      tests/validation/test_fastsim.py): every step is dx long, also the first one (the exterior element
       upstream carries p = 0, i.e. the leading edge is put one dx before the first centre), and
       the rigid slip of a step is dx (xi - phi y, eta + phi (x + dx/6)) (CONTACT's W_I with its
       delta q/6 term).  Both are first-order in dx at the edge; "midpoint" is closer to the
@@ -247,7 +247,7 @@ def fastsim_batch(a, b, FN, mu, xi, eta, phi=0.0, *, G=None, nu=None, L=None,
     them in both cases (seed Eq. 36).  Forces on body 1 (N), MZ (N mm) about the ellipse centre.
     Discretisation: Kalker's slices on the unit circle, ``ny`` strips of ``nx`` cells (the
     default 24 x 24 gives forces within about 0.5 % of the converged values in the cases of
-    tests/test_fastsim.py).  Work is O(n_contacts nx ny); memory O(n_contacts ny).
+    tests/validation/test_fastsim.py).  Work is O(n_contacts nx ny); memory O(n_contacts ny).
     """
     _check_bound(bound)
     if L is None:

@@ -56,7 +56,7 @@ def schema_markdown() -> str:
                       "Generated from `conformal/schema.py` when the documentation is built "
                       "(`conformal.schema.markdown`): every field of the JSON summary of `conformal solve` "
                       "(`Result.to_dict()`) and every `Result.extra` key, with its unit and the models that "
-                      "write it. `tests/test_schema.py` fails when a model writes a field that is not listed "
+                      "write it. `tests/unit/test_schema.py` fails when a model writes a field that is not listed "
                       "here. See [Models](../models.md).", "", body])
 
 

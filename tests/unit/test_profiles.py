@@ -1,0 +1,176 @@
+"""Profiles: reading (CSV, CONTACT .prw/.prr), checks with clear errors, and the smoothing spline."""
+import math
+
+import numpy as np
+import pytest
+
+from conformal.errors import InputError
+from conformal.geometry.placement import place_rail
+from conformal.geometry.profiles import BUILTIN, builtin_dir, check_points, load_profile, read_points
+from conformal.geometry.spline import fit_curve
+from _paths import SCENES
+
+
+
+def test_builtin_files_are_packaged_and_load():
+    for name, entry in BUILTIN.items():
+        assert (builtin_dir() / entry.file).is_file(), name
+        p = load_profile(name, entry.kind)
+        assert p.points.shape[0] > 100 and p.points[0, 0] < p.points[-1, 0]
+
+
+def test_raw_contact_s1002_equals_analytic_s1002():
+    # README: the CONTACT Manchester file (y mirrored) equals the analytic S1002 to 1.6e-6 mm at its
+    # points.  Between them (up to 1.7 mm apart) the interpolating spline cannot follow the jumps
+    # of curvature of the flange flank (line -> R13 arc): 3e-4 mm there, 2 orders below the
+    # approach of a loaded contact (~0.02 mm); elsewhere below 1e-5 mm.
+    raw = fit_curve(load_profile("S1002_MBENCH", "wheel").points, smoothing=0.0)
+    ana = load_profile("S1002", "wheel").points
+    inside = (ana[:, 0] > -59.5) & (ana[:, 0] < 59.5)
+    s = raw.project(ana[inside], np.interp(ana[inside, 0], raw.points[:, 0], raw.s_points))
+    d = np.linalg.norm(raw.point(s) - ana[inside], axis=1)
+    assert d.max() < 3e-4
+    assert np.median(d) < 1e-6
+
+
+def test_uic60_rotated_by_cant_equals_contact_canted_rail():
+    # README: uic60_head_r300w21 rotated by 0.024995 rad matches CONTACT's canted Manchester rail to
+    # 3e-5 mm.  Placing both on the track (lowered to z = 0, gauge face 717.5 mm from the centre)
+    # must make them coincide: this checks the sense of the cant rotation and the gauge rule.
+    a = place_rail(fit_curve(load_profile("UIC60", "rail").points, 1.0), cant=0.024995,
+                   placement="wheelset", gauge=1435.0, gauge_height=14.0)
+    b = place_rail(fit_curve(load_profile("UIC60_MBENCH_1IN40", "rail").points, 1.0), cant=0.0,
+                   placement="wheelset", gauge=1435.0, gauge_height=14.0)
+    s, pb = b.sample(0.5)
+    keep = (pb[:, 1] < 30.0)        # the head (the canted file reaches lower on one side)
+    sa = a.project(pb[keep], a.curve.length * 0.5 + (s[keep] - b.curve.length * 0.5))
+    d = np.linalg.norm(a.point(sa) - pb[keep], axis=1)
+    assert d.max() < 2e-3           # 3e-5 (file fit) + smoothing-spline error at the arc junctions
+    assert b.origin[0] == pytest.approx(760.533, abs=0.005)   # CONTACT's results imply 760.533 mm
+
+
+def test_smoothing_spline_curvatures_of_rail_arcs():
+    # UIC 60 head: R300 on |y| < 10.5, R80 to |y| = 25.99, R13 to the 1:20 flank at |y| = 36.
+    c = fit_curve(load_profile("UIC60", "rail").points, smoothing=1.5)
+    for y, radius, tol in ((0.0, 300.0, 0.02), (5.0, 300.0, 0.02), (18.0, 80.0, 0.01), (31.0, 13.0, 0.01)):
+        k = float(c.curvature(c.s_at_y(y)))
+        assert 1.0 / k == pytest.approx(radius, rel=tol), y
+    assert c.smoothing_error < 1e-4 and c.smoothing_rms < c.smoothing_error
+    # arc length parametrisation: |c'(s)| = 1 everywhere
+    s = np.linspace(0.0, c.length, 5000)
+    assert np.allclose(np.hypot(c.y(s, 1), c.z(s, 1)), 1.0, atol=1e-6)
+
+
+def test_smoothing_reduces_noise_and_reports_its_error():
+    # an R100 arc sampled every 0.1 mm with 0.2 um measurement noise: interpolation turns the noise
+    # into curvature errors 30 times 1/R; a 10 mm smoothing wavelength brings them below 5 % of 1/R
+    # and reports an rms distance of the points from the curve of about the noise
+    rng = np.random.default_rng(1)
+    t = np.linspace(-0.3, 0.3, 600)
+    noise = 2e-4
+    noisy = np.c_[100 * np.sin(t), 100 * (1 - np.cos(t))] + rng.normal(scale=noise, size=(600, 2))
+    rough = fit_curve(noisy, smoothing=0.0)
+    smooth = fit_curve(noisy, smoothing=10.0)
+    s = np.linspace(5.0, rough.length - 5.0, 500)
+    assert np.abs(rough.curvature(s) - 0.01).max() > 0.1
+    assert np.abs(smooth.curvature(s) - 0.01).max() < 5e-4
+    assert 0.5 * noise < smooth.smoothing_rms < 2 * noise
+    assert rough.smoothing_error < 1e-5
+
+
+def test_simpack_prw_file(tmp_path):
+    # a tiny CONTACT/SIMPACK wheel file: header block with mirror.y = 1 and mm units, '!' comments
+    ys = np.linspace(-20.0, 20.0, 41)
+    zs = 0.001 * ys ** 2
+    text = "\n".join(["! test wheel, z = y^2/1000", "header.begin", "  version = 1", "  units.len.f = 1000",
+                      "  mirror.y = 1   ! y is stored the other way round", "header.end",
+                      "point.begin"] + [f"  {-y:.7E} {z:.7E}" for y, z in zip(ys, zs)] + ["point.end"])
+    f = tmp_path / "tiny.prw"
+    f.write_text(text)
+    p = read_points(f)
+    assert p.shape == (41, 2) and np.allclose(p[:, 0], ys)
+    c = fit_curve(check_points(p, "wheel", "tiny"), 0.0)
+    assert float(c.curvature(c.length / 2)) == pytest.approx(0.002, rel=1e-5)   # 8 digits in the file
+
+
+def _write(tmp_path, name, rows):
+    f = tmp_path / name
+    f.write_text("# y,z\n" + "\n".join(f"{y},{z}" for y, z in rows))
+    return f
+
+
+def test_nan_is_rejected_with_the_line(tmp_path):
+    f = _write(tmp_path, "nan.csv", [(0, 0), (1, 0.1), (2, float("nan")), (3, 0.3), (4, 0.4), (5, 0.5)])
+    with pytest.raises(InputError, match=r"nan.csv: line 4: NaN"):
+        read_points(f)
+
+
+def test_too_few_points(tmp_path):
+    f = _write(tmp_path, "few.csv", [(0, 0), (1, 0.1), (2, 0.2)])
+    with pytest.raises(InputError, match="too few points"):
+        check_points(read_points(f), "rail", "few.csv")
+
+
+def test_self_intersection(tmp_path):
+    # a bow tie: the curve crosses itself
+    rows = [(0, 0), (2, 0), (4, 1), (5, 3), (4, 4), (3, 3), (3.5, 0.5), (6, 0), (8, 0)]
+    with pytest.raises(InputError, match="intersects itself"):
+        check_points(np.array(rows, float), "rail", "bowtie")
+
+
+def test_points_out_of_order():
+    rows = np.array([(0, 5), (1, 3), (2, 1), (3, 0), (1.5, 0.1), (4, 1), (5, 3), (6, 5)], float)
+    with pytest.raises(InputError, match="out of order"):
+        check_points(rows, "rail", "zigzag")
+
+
+def test_rail_upside_down():
+    """A rail head with z positive upwards looks like a groove rail (z downwards): both are accepted
+    (issue 11: CONTACT's groove rails were refused), with a warning that names [geometry] rail_z;
+    rail_z = "up" reads such a file back into the head."""
+    from conformal.geometry.profiles import rail_orientation_warning
+
+    head = load_profile("UIC60", "rail").points
+    p = head * np.array([1.0, -1.0])   # z positive upwards
+    checked = check_points(p, "rail", "flipped")
+    assert "rail_z" in rail_orientation_warning(checked, "flipped")
+    assert rail_orientation_warning(head, "UIC60") is None
+    groove = np.loadtxt(SCENES / "groove_rail_r10p02.csv", delimiter=",")
+    inner = groove[np.abs(groove[:, 0]) <= 10.0]          # the groove and its shoulders only
+    assert "groove" in rail_orientation_warning(check_points(inner, "rail", "groove"), "groove")
+
+
+def test_profiles_with_z_upwards_are_read_with_the_key(tmp_path):
+    f = tmp_path / "uic60_up.csv"
+    np.savetxt(f, load_profile("UIC60", "rail").points * np.array([1.0, -1.0]), delimiter=",")
+    back = load_profile(str(f), "rail", z_up=True).points
+    assert np.allclose(back, load_profile("UIC60", "rail").points)
+    w = tmp_path / "s1002_up.csv"
+    np.savetxt(w, load_profile("S1002", "wheel").points * np.array([1.0, -1.0]), delimiter=",")
+    with pytest.raises(InputError, match="wheel_z"):
+        load_profile(str(w), "wheel")
+    assert np.allclose(load_profile(str(w), "wheel", z_up=True).points, load_profile("S1002", "wheel").points)
+
+
+def test_wheel_upside_down():
+    p = load_profile("S1002", "wheel").points * np.array([1.0, -1.0])
+    with pytest.raises(InputError, match="upside down"):
+        check_points(p, "wheel", "flipped")
+
+
+def test_unknown_profile_and_missing_block(tmp_path):
+    with pytest.raises(InputError, match="neither a built-in name"):
+        load_profile("S1003", "wheel")
+    f = tmp_path / "empty.prr"
+    f.write_text("header.begin\nheader.end\n")
+    with pytest.raises(InputError, match="point.begin"):
+        read_points(f)
+    with pytest.raises(InputError, match="is a rail profile"):
+        load_profile("UIC60", "wheel")
+
+
+def test_reversed_order_is_normalised():
+    p = load_profile("UIC60", "rail").points
+    q = check_points(p[::-1], "rail", "reversed")
+    assert np.array_equal(p, q)
+    assert math.isclose(fit_curve(q).length, fit_curve(p).length, rel_tol=1e-12)

@@ -1,0 +1,174 @@
+"""Issue 23, faster sweeps: every shortcut of the solved sweep against the path it replaces.
+
+Geometry (same answers to rounding): the cubic pieces against the B-spline, the wheel locus moved
+with the height against the locus sampled at that height, the projections of the near locus
+samples against all samples, Cramer's 3 x 3 solves against numpy.linalg.solve.  Balance: the
+one-patch passes of a warm-started Manchester sweep against the general balance with tight
+tolerances (an independent path) and against the forces of the code before (stored values).
+"""
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conformal.cases import wheelrail as wr
+from conformal.geometry import patches as gp
+from conformal.geometry.search import pair_locus, wheel_locus
+from conformal.geometry.wheelrail import profile_curves
+from conformal.grid import PlanarGrid
+from _paths import CONTACT_CASES, REFERENCE, ROOT
+from _scenes import MBENCH, mbench_case_scene
+
+CASES = json.loads((CONTACT_CASES).read_text())["cases"]["mbench_a22"]["right"]
+BEFORE = json.loads((REFERENCE / "mbench_a22_right_sweep_before.json").read_text())["cases"]
+
+
+def mbench_case(y, element_size=0.2):
+    """The Manchester A-2.2 right-wheel case at lateral shift y with CONTACT's yaw, roll and pitch
+    velocity (studies/manchester_a22.scene_for)."""
+    return mbench_case_scene(next(c["inputs"] for c in CASES if c["inputs"]["Y_WS_mm"] == y),
+                             element_size=element_size)
+
+
+def test_cubic_pieces_equal_the_bspline():
+    """Profile coordinates and their first two derivatives from the cubic pieces equal scipy's
+    B-spline along both Manchester profiles to rounding: on the profile within 1e-12 mm, 1e-11
+    and 1e-9 1/mm (the Taylor coefficients of 0.025 mm pieces, measured 3e-14, 1e-12, 9e-11),
+    extrapolated 1 mm beyond its ends within 1e-9, 1e-9 and 1e-8 (measured 2e-10, 7e-10,
+    1.4e-9); for arrays and single points (floats)."""
+    for curve in profile_curves(mbench_case(0.0).geometry, MBENCH.parent):
+        L = curve.length
+        for s, tol in ((np.r_[np.linspace(0.0, L, 4001), 0.37 * L], (1e-12, 1e-11, 1e-9)),
+                       (np.r_[np.linspace(-1.0, 0.0, 51), np.linspace(L, L + 1.0, 51)], (1e-9, 1e-9, 1e-8))):
+            got = curve.derivatives(s)
+            for k in range(6):
+                np.testing.assert_allclose(got[k], curve._c(s, k // 2)[:, k % 2], rtol=0, atol=tol[k // 2])
+        for sk in (0.0, 0.37 * L, L):
+            one = curve.derivatives(float(sk))
+            assert all(isinstance(v, float) for v in one)
+            np.testing.assert_allclose(one, [curve._c(sk, k // 2)[k % 2] for k in range(6)], rtol=0, atol=1e-9)
+
+
+def test_locus_moved_with_height_equals_locus_sampled_there():
+    """The contact locus sampled once per position and moved with the wheelset height equals the
+    locus sampled at that height (points to 1e-9 mm, gaps likewise, same NaNs)."""
+    sc = mbench_case(3.0)
+    pl = wr.place_scene(sc)
+    for z in (pl.z_touch, pl.z_touch + 0.037, pl.z_touch - 2.0):
+        a = pair_locus(pl.pair, pl.top, z)
+        b = wheel_locus(pl.pair.wheel(z), pl.top)
+        np.testing.assert_array_equal(np.isnan(a.theta), np.isnan(b.theta))
+        np.testing.assert_allclose(a.points, b.points, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(a.gap, b.gap, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("y", [0.0, 5.0, 7.0])
+def test_near_samples_give_the_patches_of_all_samples(y, monkeypatch):
+    """Projecting only the locus samples less than NEAR_GAP above the rail gives the patches of
+    projecting all of them (tread, the jump at 5 mm, flange): reference points, penetrations and
+    extents equal to 1e-12 mm."""
+    sc = mbench_case(y)
+    pl = wr.place_scene(sc)
+    wheel = pl.pair.wheel(pl.z_touch + 0.03)
+    near = gp.find_patches(wheel, pl.pair.rail, pl.top)
+    monkeypatch.setattr(gp, "NEAR_GAP", math.inf)
+    every = gp.find_patches(wheel, pl.pair.rail, pl.top)
+    assert len(near) == len(every) >= 1
+    for p, q in zip(near, every):
+        assert p.s_ref == pytest.approx(q.s_ref, abs=1e-12)
+        assert p.penetration == pytest.approx(q.penetration, abs=1e-12)
+        np.testing.assert_allclose(p.x_range + p.eta_range + p.s_range, q.x_range + q.eta_range + q.s_range,
+                                   rtol=0, atol=1e-12)
+
+
+def test_cramer_solves_equal_numpy_solve():
+    rng = np.random.default_rng(3)
+    c0, c1, c2, b = (rng.normal(size=(50, 3)) for _ in range(4))
+    ref = np.linalg.solve(np.stack([c0, c1, c2], axis=2), b[..., None])[..., 0]
+    np.testing.assert_allclose(gp._solve3(c0, c1, c2, b), ref, rtol=1e-10, atol=1e-12)
+    with pytest.raises(np.linalg.LinAlgError):
+        gp._solve3(c0, c0, c2, b)
+
+
+def test_resample_is_bilinear_and_exact_on_the_same_grid():
+    """A field resampled onto its own grid is itself; onto a finer grid inside the source a linear
+    field is reproduced exactly (bilinear interpolation); beyond the source it is 0."""
+    g = PlanarGrid(8, 6, 0.5, 0.4, -2.0, -1.2)
+    X, Y = g.mesh()
+    f = 3.0 + 0.7 * X - 1.1 * Y
+    np.testing.assert_allclose(wr.resample(g, f, g), f, rtol=0, atol=1e-12)
+    fine = PlanarGrid(10, 8, 0.25, 0.2, -1.5, -0.8)
+    Xf, Yf = fine.mesh()
+    np.testing.assert_allclose(wr.resample(g, f, fine), 3.0 + 0.7 * Xf - 1.1 * Yf, rtol=0, atol=1e-12)
+    far = PlanarGrid(2, 2, 0.5, 0.4, 10.0, 10.0)
+    assert not wr.resample(g, f, far).any()
+
+
+def test_warm_start_extrapolates_along_the_sweep():
+    """WarmStart.at moves the lowering and the ratios along their slopes to the next shift, and
+    leaves them where the step reverses or grows more than 1.5 times (a jump, a new sweep)."""
+    w = wr.WarmStart(lowering=0.02, ratios=((50.0, -0.3),), shift=2.0, step=0.5, lowering_slope=-0.001,
+                     ratio_slopes=(0.01,))
+    a = w.at(2.5)
+    assert a.lowering == pytest.approx(0.0195) and a.ratios[0][1] == pytest.approx(-0.295)
+    assert w.at(1.5) is w and w.at(3.5) is w and wr.WarmStart(lowering=0.02).at(1.0).lowering == 0.02
+
+
+def test_core_command_parser_leaves_out_the_other_modules():
+    """``conformal solve`` builds only the parsers of cli.py: the table, stresses, dynamics and
+    inp modules (numpy, the table build machinery) are not imported to declare their options."""
+    code = ("import sys; from conformal.cli import build_parser; build_parser('solve'); "
+            "print(sorted(m for m in sys.modules if m.startswith(('conformal.tables', 'conformal.stresses', "
+            "'conformal.dynamics', 'conformal.contact_inp', 'numpy', 'dask'))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                         env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}, check=True).stdout
+    assert out.strip() == "[]"
+    from conformal.cli import build_parser
+
+    full = build_parser().format_help()
+    assert "stresses" in full and "table" in full
+
+
+@pytest.mark.slow
+def test_warm_sweep_equals_independent_balance_and_before():
+    """The Manchester A-2.2 right-wheel sequence (0.2 mm elements, 10 kN, CONTACT's yaw, roll and
+    pitch velocity) solved as a sweep (one-patch passes, warm starts, extrapolated lowering) over
+    two stretches (tread 2-3 mm; the flange from 6 mm, its jump at 6.5 mm) against
+
+    * the general balance (normal problems, then contact solves with FS/FN fed back), each case
+      cold, with the force and height tolerances 1e-8 W and 1e-7 mm: FN and FS within 1e-5 W
+      (measured 8e-6 at most), FX within 1e-4 W (the geometry is kept within BALANCE_ZTOL =
+      1e-4 mm of the height, measured 5e-5), the height within 1e-5 mm, and the balance itself
+      within 1e-5 W (the passes take it to ONE_PATCH_TOL = 1e-6 W);
+    * the forces before issue 23's speed-up (stored, balanced to 1e-4 W): within 3e-4 W."""
+    W = 10000.0
+    for stretch in ((2.0, 2.5, 3.0), (6.0, 6.5, 7.0)):
+        warm = None
+        for y in stretch:
+            sc = mbench_case(y)
+            r = wr.solve_wheel_rail(sc, warm=warm)
+            warm = wr.WarmStart.from_result(r, warm)
+            assert r.extra["balance"]["one_patch_passes"] and len(r.patches) == 1
+            assert abs(r.extra["FZ_track"] - W) <= 1e-5 * W
+            pl = wr.place_scene(sc)
+            tight = {"BALANCE_TOL": 1e-8, "BALANCE_ZTOL": 1e-7}
+            old = {k: getattr(wr, k) for k in tight}
+            try:
+                for k, v in tight.items():
+                    setattr(wr, k, v)
+                st, z, res, probs, _, _, _ = wr._general_passes(sc, pl, None, None, [], [], 40)
+            finally:
+                for k, v in old.items():
+                    setattr(wr, k, v)
+            ref = wr.combine_patches(res, probs, "exact", {}, pl.pair)
+            assert abs(r.FN - ref.FN) <= 1e-5 * W, y
+            assert abs(r.FY - ref.FY) <= 1e-5 * W, y
+            assert abs(r.FX - ref.FX) <= 1e-4 * W, y
+            assert abs(r.extra["z_ws"] - z) <= 1e-5, y
+            before = next(c for c in BEFORE if c["y_ws"] == y)
+            for k in ("FN", "FX", "FY"):
+                assert abs(getattr(r, k) - before[k]) <= 3e-4 * W, (y, k)
+            assert abs(r.extra["FY_track"] - before["FY_track"]) <= 3e-4 * W

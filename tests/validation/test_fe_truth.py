@@ -1,0 +1,184 @@
+"""The FE contact ground truth: whole rail and wheel sections clamped far away (issue 20, items 3-4)."""
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+
+from conformal.errors import InputError
+from conformal.fe_contact.problems import settings_from_options
+from conformal.geometry.profiles import load_profile
+from conformal.geometry.sections import (UIC60_AREA, UIC60_CENTROID, UIC60_I, block_section, section_properties,
+                                         uic60_section, wheel_rim_section)
+from _paths import ROOT
+
+
+
+def test_uic60_section_has_the_published_60e1_properties():
+    """EN 13674-1 publishes 76.70 cm², 80.9 mm and 3038.3 cm⁴ for 60E1; the simplified section
+    (no fillets, one foot slope) must reproduce them within 1 %, and its main dimensions exactly."""
+    sec = uic60_section(load_profile("UIC60", "rail").points)
+    A, zc, I = section_properties(sec.points)
+    assert abs(A / UIC60_AREA - 1) < 0.01
+    assert abs((172.0 - zc) / UIC60_CENTROID - 1) < 0.01
+    assert abs(I / UIC60_I - 1) < 0.01
+    P = sec.points
+    assert P[:, 1].max() == pytest.approx(172.0) and P[:, 1].min() == pytest.approx(0.0, abs=1e-6)
+    assert np.ptp(P[:, 0]) == pytest.approx(150.0)
+    web = P[(P[:, 1] > 40) & (P[:, 1] < 150) & (np.abs(P[:, 0]) < 20)]       # the web's four corners
+    assert len(web) == 4 and np.ptp(web[:, 0]) == pytest.approx(16.5)
+    # the clamped edge is the foot's lower face
+    i = sec.clamped[0]
+    assert P[i, 1] == pytest.approx(172.0) and P[(i + 1) % len(P), 1] == pytest.approx(172.0)
+
+
+def test_wheel_rim_section_dimensions():
+    prof = load_profile("S1002", "wheel").points
+    sec = wheel_rim_section(prof, 460.0)
+    P = sec.points
+    assert np.ptp(P[:, 0]) == pytest.approx(135.0)
+    assert sec.hub_z == pytest.approx(125.0 - 460.0)
+    i = sec.clamped[0]
+    assert P[i, 1] == pytest.approx(sec.hub_z) and P[(i + 1) % len(P), 1] == pytest.approx(sec.hub_z)
+    np.testing.assert_allclose(sec.profile, prof)
+    with pytest.raises(InputError):
+        wheel_rim_section(prof, 460.0, hub_radius=420.0)
+
+
+def test_block_section_extends_the_profile_and_clamps_only_the_closure():
+    rail = np.loadtxt(ROOT / "meshes/scenes/deep_rail_r10.csv", delimiter=",", comments="#")
+    sec = block_section(rail, "rail", 100.0)
+    P = sec.points
+    n = sec.n_profile
+    # the gauge face continues 100 mm down, the top 100 mm on; the closing edges are clamped
+    assert P[-1] == pytest.approx([-10.0, 140.0]) and P[n] == pytest.approx([130.0, 0.0])
+    assert set(sec.clamped) == set(range(n, len(P) - 1))
+    for i in sec.clamped:                              # every clamped edge lies >= 100 mm from the profile
+        mid = 0.5 * (P[i] + P[(i + 1) % len(P)])
+        assert np.min(np.linalg.norm(rail - mid, axis=1)) >= 100.0 - 1e-9
+    with pytest.raises(InputError):
+        block_section(rail, "rail", -1.0)
+
+
+def test_section_bodies_are_clamped_far_away_and_never_use_the_halfspace_field():
+    mesh, st = settings_from_options({"fec_body": "section"})
+    assert mesh.body == "section" and st.far_field == "clamped" and mesh.section_size == 20.0
+    assert settings_from_options({"fec_body": "block"})[1].far_field == "clamped"
+    assert settings_from_options({})[1].far_field == "halfspace"          # existing default kept
+    with pytest.raises(InputError, match="fec_far_field"):
+        settings_from_options({"fec_body": "section", "fec_far_field": "halfspace"})
+    with pytest.raises(InputError, match="fec_body"):
+        settings_from_options({"fec_body": "whole"})
+    with pytest.raises(InputError, match="fec_section_size"):
+        settings_from_options({"fec_body": "section", "fec_section_size": 0})
+
+
+@pytest.mark.slow
+def test_ground_truth_quick_study_agrees_with_conformal(tmp_path):
+    """The quick study (flange root at 6.2 mm, 10 kN; a coarse truth: a / 3, quadratic, the 60E1
+    section and the wheel rim + web 10 patch sizes beyond the patch, clamped): at the prescribed
+    wheel load conformal contact with half-space numbers meets the issue's targets against it
+    (measured: FN -0.4 %, pmax -0.2 %, area +3.0 %; the converged a / 6 truth: docs/validation/ground-truth.md)."""
+    sys.path.insert(0, str(ROOT / "studies"))
+    import fe_ground_truth as study
+
+    study.main(["--quick", "--out", str(tmp_path)])
+    rec = study.build(tmp_path)["scenes"][0]
+    t = rec["truth"]
+    assert t["mesh1"]["section"] == "60E1 section" and t["mesh2"]["section"] == "wheel rim and web"
+    assert t["stats"]["far_field"] == "clamped"
+    assert not t["edge"]                                  # the contact lies inside the slave surface
+    hs = rec["models"]["conformal half-space"]["err"]
+    assert abs(hs["FN"]) < 0.01
+    assert abs(hs["pmax"]) < 0.02
+    assert abs(hs["area"]) < 0.05
+    assert (tmp_path / "ground_truth.md").exists() and (tmp_path / "ground_truth.png").exists()
+
+
+def test_rigid_fit_recovers_a_rigid_motion():
+    """The structure study's rigid fit (translation + small rotation about a centre) is exact for
+    a rigid displacement field and leaves a residual where the field is not rigid."""
+    sys.path.insert(0, str(ROOT / "studies"))
+    from fe_truth_structure import rigid_fit
+
+    rng = np.random.default_rng(1)
+    P = rng.uniform(-30, 30, (200, 3))
+    c = np.array([1.0, -2.0, 3.0])
+    t, w = np.array([0.01, -0.02, 0.005]), np.array([2e-4, -1e-4, 3e-4])
+    U = t + np.cross(w, P - c)
+    fit = rigid_fit(P, U, c)
+    np.testing.assert_allclose(fit["t"], t, atol=1e-12)
+    np.testing.assert_allclose(fit["w"], w, atol=1e-12)
+    assert fit["rms_residual"] < 1e-12
+    U2 = U.copy()
+    U2[:, 0] += 1e-3 * P[:, 0] ** 2 / 900.0                     # a non-rigid part
+    assert rigid_fit(P, U2, c)["rms_residual"] > 1e-5
+
+
+@pytest.mark.slow
+def test_contact_displacements_close_the_gap():
+    """ContactModel.displacements: at every node in contact the recovered displacements of the
+    two bodies (body 2's with its rigid approach) close the undeformed gap, n . (u1 - u2) = -g0
+    (the solver's own gap equation, recomputed from one more solve per body; body 2 taken at
+    its nearest vertex, so within a few µm), and body 2's clamped faces moved by the approach."""
+    from scipy.spatial import cKDTree
+
+    from conformal.fe_contact.bodies import sphere_on_block
+    from conformal.fe_contact.solver import ContactModel, FEContactSettings, prepare_contact
+
+    b1, b2 = sphere_on_block(50.0, (2.0, 2.0), n=2)
+    model = prepare_contact(b1, b2, settings=FEContactSettings(order=1, far_field="clamped"))
+    sol = model.solve(approach=0.08)
+    u1, u2 = model.displacements(sol)
+    i = np.where(sol.active)[0]
+    k = cKDTree(b2.points).query(sol.X[i])[1]
+    n = sol.normal[i] / np.linalg.norm(sol.normal[i], axis=1, keepdims=True)
+    closure = np.einsum("ij,ij->i", n, u1[sol.nodes[i]] - u2[k]) + sol.g0[i]
+    assert np.abs(closure).max() < 1e-4 * 0.08 * 10
+    assert np.abs(sol.g0[i]).max() > 0.01                        # the check is not trivially zero
+    far = np.unique(b2.mesh.clamped_tris)
+    np.testing.assert_allclose(u2[far], np.broadcast_to(sol.approach * sol.direction, (far.size, 3)), atol=1e-12)
+    with pytest.raises(InputError):
+        ContactModel(None, {}).displacements(sol)               # a model without the fields
+
+
+@pytest.mark.slow
+def test_conformal_meets_the_section_truth_at_the_same_lateral_load():
+    """Root + flank at 6.25 mm (S1002 / UIC60, 10 kN): the stored reference truth (60E1 section +
+    wheel rim and web, clamped, a / 6, 20 patch sizes; studies/fe_truth_structure.py) and
+    conformal contact with half-space numbers.  At the same wheelset shift they differ by 10 % in
+    FN and 18 % in pmax, because the truth's rail head moves 13 µm outwards and its rim 6 µm
+    inwards (web bending; measured on the truth, away from the contact) and a few µm decide this
+    contact (2 µm: > 2 % in pmax).  At the same vertical AND lateral load (L/V of the normal
+    forces; the shift is then an output, like the approach) the contact model meets the issue's
+    targets: pmax 2 %, contact area 5 %, load split on the flank 2 percentage points (measured:
+    -0.7 %, +4.1 %, +1.2; FN -0.6 %)."""
+    import json
+
+    sys.path.insert(0, str(ROOT / "studies"))
+    import fe_ground_truth as gt
+    import fe_truth_structure as fts
+
+    from conformal.cases.conformal import curved_problem_from_wheel_rail
+
+    rec = json.loads((ROOT / "studies/out/fe_truth_structure/parts/flange_y6.25.json").read_text())
+    t = rec["truth"]
+    assert t["options"] == gt.TRUTH and rec["wheel_load"] == 10000.0
+    ck = t["checks"]
+    assert abs(ck["F_load"] / ck["wheel_load"] - 1) < 1e-6 and ck["rail"]["elsewhere"] == ck["wheel"]["elsewhere"] == 0
+    fit = t["fits"]["R20"]
+    assert fit["rail_head_lateral"] > 0.005 and fit["wheel_rim_lateral"] < -0.002   # outwards / inwards
+    scene = dict(gt.scenes(False))["flange_y6.25"]
+    grid = curved_problem_from_wheel_rail(scene).grid
+    lv, flank = gt.normal_lv(t, grid), gt.share(t, gt.flank_boundary(grid))
+    m = fts.match_lv(scene, lv, lo=-0.03, hi=0.0)
+    assert abs(m["pmax"] / t["pmax"] - 1) < 0.02
+    assert abs(m["area"] / t["area"] - 1) < 0.05
+    assert abs(m["flank_share"] - flank) < 0.02
+    assert abs(m["FN"] / t["FN"] - 1) < 0.01
+    assert -0.025 < m["dy"] < -0.005                  # 5-25 µm less flange than the nominal shift
+    # at the prescribed shift the same model misses, and 2 µm of shift alone move pmax by > 2 %
+    hs, hs2 = fts.conformal_at(scene), fts.conformal_at(scene, -0.002)
+    assert hs["pmax"] / t["pmax"] - 1 < -0.10 and hs["area"] / t["area"] - 1 > 0.3
+    assert abs(hs2["pmax"] / hs["pmax"] - 1) > 0.02
