@@ -407,6 +407,25 @@ def test_fe_flat_rail_gives_the_halfspace_stresses():
     assert np.allclose(bs.sigma_hs, stresses(f, pts, nu=0.28), atol=1e-9)
 
 
+def _flat_wheel_field():
+    """Elliptic tractions (pn, 0.3 pn, 0.1 pn) on a flat strip under a wheel of radius 1e5 mm (a
+    flat wheel: its FE body must give the half-space stresses); returns (field, curved grid, the
+    wheel profile)."""
+    from conformal.solvers.conformal import CurvedTractionField
+
+    R = 1.0e5
+    cg = _tilted_strip(0.0, mx=8, ms=5, dx=0.4, ds=0.4)
+    prof = np.c_[np.linspace(-40, 40, 801), np.zeros(801)]
+    cg = type(cg)(**{**cg.__dict__, "rail_curve": np.c_[np.linspace(-5, 7, 121), np.zeros(121)],
+                     "rail_curve_s": np.linspace(0, 12, 121) - 5.0, "wheel_profile": prof,
+                     "wheel_centre": np.array([0.0, 0.0, -R]), "wheel_radius": R})
+    X, S = cg.mesh()
+    pn = 900.0 * np.clip(1 - (X / 1.2) ** 2 - ((S - cg.s_ref) / 0.9) ** 2, 0, None) ** 0.5
+    f = CurvedTractionField(PlanarGrid(8, 5, 0.4, 0.4, cg.xl, -1.0), pn=pn, px=0.3 * pn, py=0.1 * pn,
+                            status=(pn > 0).astype(int), curved=cg)
+    return f, cg, prof
+
+
 @pytest.mark.slow
 def test_fe_large_flat_wheel_gives_the_halfspace_stresses(tmp_path):
     """The FE wheel (body 2) of a flat profile and radius 1e5 mm under the opposite tractions: the
@@ -420,19 +439,9 @@ def test_fe_large_flat_wheel_gives_the_halfspace_stresses(tmp_path):
     half-space's at the same places."""
     import meshio
 
-    from conformal.solvers.conformal import CurvedTractionField
     from conformal.stresses.bodies import wheel_body_stresses
 
-    R = 1.0e5
-    cg = _tilted_strip(0.0, mx=8, ms=5, dx=0.4, ds=0.4)
-    prof = np.c_[np.linspace(-40, 40, 801), np.zeros(801)]
-    cg = type(cg)(**{**cg.__dict__, "rail_curve": np.c_[np.linspace(-5, 7, 121), np.zeros(121)],
-                     "rail_curve_s": np.linspace(0, 12, 121) - 5.0, "wheel_profile": prof,
-                     "wheel_centre": np.array([0.0, 0.0, -R]), "wheel_radius": R})
-    X, S = cg.mesh()
-    pn = 900.0 * np.clip(1 - (X / 1.2) ** 2 - ((S - cg.s_ref) / 0.9) ** 2, 0, None) ** 0.5
-    f = CurvedTractionField(PlanarGrid(8, 5, 0.4, 0.4, cg.xl, -1.0), pn=pn, px=0.3 * pn, py=0.1 * pn,
-                            status=(pn > 0).astype(int), curved=cg)
+    f, cg, prof = _flat_wheel_field()
     pts = np.array([[x, cg.s_ref + 0.1, -z] for z in (0.2, 0.5, 0.9) for x in (-0.5, 0.0, 0.3)])
     bs = wheel_body_stresses(f, pts, G=82000.0, nu=0.28, wheel_points=prof, vtu=tmp_path / "w.vtu")
     hs = stresses(f, pts, nu=0.28, body=2)
@@ -459,20 +468,10 @@ def test_fe_flat_wheel_rolling_block_dang_van():
     within 1e-4 of their size at every point of all 8 columns (a wrong column offset in the
     convolution or a wrong turn about the axle would misfit by the size of the stresses;
     measured 8e-6) and the Dang Van equivalent stress of every line within 1e-4 of it."""
-    from conformal.solvers.conformal import CurvedTractionField
     from conformal.stresses.bodies import body_stresses
     from conformal.stresses.field import stress_field
 
-    R = 1.0e5
-    cg = _tilted_strip(0.0, mx=8, ms=5, dx=0.4, ds=0.4)
-    prof = np.c_[np.linspace(-40, 40, 801), np.zeros(801)]
-    cg = type(cg)(**{**cg.__dict__, "rail_curve": np.c_[np.linspace(-5, 7, 121), np.zeros(121)],
-                     "rail_curve_s": np.linspace(0, 12, 121) - 5.0, "wheel_profile": prof,
-                     "wheel_centre": np.array([0.0, 0.0, -R]), "wheel_radius": R})
-    X, S = cg.mesh()
-    pn = 900.0 * np.clip(1 - (X / 1.2) ** 2 - ((S - cg.s_ref) / 0.9) ** 2, 0, None) ** 0.5
-    f = CurvedTractionField(PlanarGrid(8, 5, 0.4, 0.4, cg.xl, -1.0), pn=pn, px=0.3 * pn, py=0.1 * pn,
-                            status=(pn > 0).astype(int), curved=cg)
+    f, cg, prof = _flat_wheel_field()
     sf = stress_field(f, np.linspace(0.0, 1.0, 6), nu=0.28, body=2)
     bs = body_stresses(f, sf.points, body=2, G=82000.0, nu=0.28, profile_points=prof, rolling_block=True)
     scale = np.abs(sf.sigma).max()
