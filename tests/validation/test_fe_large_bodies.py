@@ -75,14 +75,19 @@ def test_fe_for_profiles_that_are_not_graphs_over_y(tmp_path, monkeypatch):
     meshes both bodies along the arc length, continued straight beyond the profiles' ends to the
     default body size (16 patch sizes).  At the prescribed approach 0.05 mm the size-converged FE
     bodies carry 1.0 % less than the turned-frame half-spaces (studies/fe_far_field_limit.py:
-    limit 0.9897 +- 0.0003; the default 0.9914 on this n = 16 grid, 0.9900 at n = 30); issue 20
-    asks 0.984-0.997.  The JSON reports each body's size and closure."""
+    limit 0.9897 +- 0.0003 frictionless; the default 0.9914 on this n = 16 grid, 0.9900 at n = 30,
+    against the earlier coupling sense); issue 20 asked 0.984-0.997 against that sense.  The JSON
+    reports each body's size and closure."""
     monkeypatch.setenv("CONFORMAL_CACHE", str(tmp_path))
     sc = load_scene(SCENES / "deep_conformal_pair.toml")
     sc = sc.with_("grid.n", 16)
     fe = solve_scene(sc)
     hs = solve_scene(sc.with_model(influence="halfspace"))
-    assert fe.converged and 0.984 < fe.FN / hs.FN < 0.997, fe.FN / hs.FN
+    # issue 20's band 0.984-0.997 was set against turned frames with the reversed coupling sense;
+    # with the corrected sense the half-space FN of this rolling case is 1.08 % higher (26089 ->
+    # 26372 N) while the FE bodies (which do not depend on it) give 25865 N as before: the band
+    # moves by that factor to 0.973-0.987 (measured 0.9808)
+    assert fe.converged and 0.973 < fe.FN / hs.FN < 0.987, fe.FN / hs.FN
     assert fe.summary()["contact_angle_spread_deg"] > 30.0
     for kind in ("rail", "wheel"):
         body = fe.to_dict()["fe"][kind]["body"]
