@@ -173,7 +173,7 @@ def summary(groove: list[dict], mbench: list[dict]) -> str:
             if r["item"].startswith("patch"):
                 lines.append(f"| {r['variant']} | {r['item']} | {r['FN']:.1f} | {r['err_FN_pct']:+.2f} | "
                              f"{r['err_FX_pct']:+.2f} | {r['err_FS_pct']:+.2f} | {r['err_pmax_pct']:+.2f} | "
-                             f"{r['n_contact']} ({r['ref_n_contact']}) | {r['err_overlap_pct']:+.2f} |")
+                             f"{int(r['n_contact'])} ({int(r['ref_n_contact'])}) | {r['err_overlap_pct']:+.2f} |")
             else:
                 lines.append(f"| {r['variant']} | {r['item']} | {r['FN']:.1f} | {r['err_FN_pct']:+.2f} | | | | | |")
     return "\n".join(lines) + "\n"
