@@ -173,7 +173,7 @@ def summary(groove: list[dict], mbench: list[dict]) -> str:
             if r["item"].startswith("patch"):
                 lines.append(f"| {r['variant']} | {r['item']} | {r['FN']:.1f} | {r['err_FN_pct']:+.2f} | "
                              f"{r['err_FX_pct']:+.2f} | {r['err_FS_pct']:+.2f} | {r['err_pmax_pct']:+.2f} | "
-                             f"{r['n_contact']} ({r['ref_n_contact']}) | {r['err_overlap_pct']:+.2f} |")
+                             f"{int(r['n_contact'])} ({int(r['ref_n_contact'])}) | {r['err_overlap_pct']:+.2f} |")
             else:
                 lines.append(f"| {r['variant']} | {r['item']} | {r['FN']:.1f} | {r['err_FN_pct']:+.2f} | | | | | |")
     return "\n".join(lines) + "\n"
@@ -186,14 +186,30 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="groove 10.25 mm in CONTACT's formulation only")
     ap.add_argument("--cases", default="groove,mbench",
                     help="which decks to run (groove, mbench); the other's CSV in the output folder is kept")
+    ap.add_argument("--variants", default=None,
+                    help="comma-separated variants to rerun (e.g. project,turned_contact_creep,project_coupled); "
+                         "the other variants' rows are kept from the CSVs in the output folder")
     args = ap.parse_args(argv)
     cases = set(args.cases.split(","))
     out = output_dir("contact_conformal", args)
     out.mkdir(parents=True, exist_ok=True)
     grooves = ("1025",) if args.quick else tuple(GROOVE_LI)
     variants = ("contact",) if args.quick else tuple(VARIANTS)
+    rerun = set(args.variants.split(",")) if args.variants else None
+    if rerun is not None:
+        unknown = rerun - set(VARIANTS) - {"project_coupled"}
+        if unknown:
+            ap.error(f"unknown variants {sorted(unknown)}; known: {list(VARIANTS) + ['project_coupled']}")
+        variants = tuple(v for v in variants if v in rerun)
+
+    def kept(name):
+        if rerun is None or not (out / name).is_file():
+            return []
+        return [r for r in read_csv(out / name) if r["variant"] not in rerun]
+
     groove = []
     if "groove" in cases:
+        groove = kept("groove.csv")
         for v in variants:
             for radius in grooves:
                 groove.append(groove_row(radius, v))
@@ -206,10 +222,14 @@ def main(argv=None):
     if not args.quick and "mbench" not in cases and (out / "mbench.csv").is_file():
         mbench = read_csv(out / "mbench.csv")
     elif not args.quick:
+        mbench = kept("mbench.csv")
         for v in variants:
             mbench += mbench_rows(v, VARIANTS[v], "separate")
             print("mbench", mbench[-5:], flush=True)
-        mbench += mbench_rows("project_coupled", VARIANTS["project"], "coupled")
+        if rerun is None or "project_coupled" in rerun:
+            mbench += mbench_rows("project_coupled", VARIANTS["project"], "coupled")
+        order = list(VARIANTS) + ["project_coupled"]
+        mbench.sort(key=lambda r: order.index(r["variant"]))
         write_csv(out / "mbench.csv", mbench)
     text = summary(groove, mbench)
     tmp = out / "summary.md.tmp"

@@ -184,7 +184,7 @@ def test_groove_li_free_rolling_in_contact_formulation(tmp_path):
     normal force (CONTACT's TILDE_FN) within 0.2 %, the free-rolling pitch creepage
     omega R_nom / V - 1 within 1 % (measured +0.15 %; the other grooves in the full study: docs/validation/disagreements.md).
     With the project's creep point instead of CONTACT's rigid slip the same case gives -2.0 %,
-    with the project's default model +8.5 %."""
+    with the project's default model -9.4 %."""
     import csv
 
     from _studies import run_study
