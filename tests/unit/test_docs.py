@@ -39,12 +39,18 @@ def test_relative_links_resolve(page):
     assert not missing, f"{page.name}: broken links {missing}"
 
 
-def test_scene_key_reference_covers_every_section_field():
+def _generated():
+    """The docs' reference generators (docs/_ext/generated.py), imported without leaving docs/_ext on sys.path."""
     sys.path.insert(0, str(DOCS / "_ext"))
     try:
         import generated
     finally:
         sys.path.remove(str(DOCS / "_ext"))
+    return generated
+
+
+def test_scene_key_reference_covers_every_section_field():
+    generated = _generated()
     import dataclasses
     from conformal import scene, specs
 
@@ -65,11 +71,7 @@ def test_scene_key_reference_covers_every_section_field():
 
 
 def test_cli_reference_lists_every_command():
-    sys.path.insert(0, str(DOCS / "_ext"))
-    try:
-        import generated
-    finally:
-        sys.path.remove(str(DOCS / "_ext"))
+    generated = _generated()
     text = generated.cli_markdown()
     for command in ("solve", "sweep", "demo", "precompute", "cache", "table build", "table refine", "table info",
                     "simulate", "stability", "inp", "stresses"):
@@ -78,11 +80,7 @@ def test_cli_reference_lists_every_command():
 
 
 def test_result_field_reference_lists_every_field():
-    sys.path.insert(0, str(DOCS / "_ext"))
-    try:
-        import generated
-    finally:
-        sys.path.remove(str(DOCS / "_ext"))
+    generated = _generated()
     from conformal import schema
 
     text = generated.schema_markdown()
