@@ -1,51 +1,67 @@
 """The models by name: ``[model] theory`` -> the function ``solve(problem) -> Result`` that solves
 one planar contact problem.
 
-What each model is, reads and accepts is declared in :mod:`conformal.registry`; its solve function
-is bound here, one line per model, from the model modules imported explicitly (so that the import
-contract sees every dependency).  A layer below the wheel-rail cases (conformal.cases) and above
-the solvers and theories.
+What each model is, reads and accepts is declared in :mod:`conformal.registry`, together with
+where its solve function is (``Model(..., solve="conformal.theories.hertz:solve")``); this module
+loads those functions (:data:`SOLVE` is derived from the declarations, not written out).  A layer
+below the wheel-rail cases (conformal.cases) and above the solvers and theories: the import
+contract sees each declared module as an import of this one (tests/unit/test_architecture.py adds
+them to the import graph), so a model module above this layer is refused.
 
->>> sorted(SOLVE) == sorted(MODELS.names)
-True
+>>> SOLVE["hertz"].__module__, tuple(SOLVE) == MODELS.names
+('conformal.theories.hertz', True)
 """
 from __future__ import annotations
 
+import importlib
 import time
 from dataclasses import replace
+from functools import lru_cache
 from typing import Callable
 
 from conformal.errors import InputError
-from conformal.fe_contact import problems as fe_contact
 from conformal.problem import ContactProblem
 from conformal.registry import LINE_CONTACT, MODELS, Registry
 from conformal.result import Result
-from conformal.solvers import conformal as conformal_solver
-from conformal.solvers import exact, line
-from conformal.tables import model as table
-from conformal.theories import empirical, fastsim, hertz, linear
+from conformal.solvers import line
 
-#: the solve function of each registered model (conformal.registry.MODELS)
-SOLVE: dict[str, Callable[[ContactProblem], Result]] = {
-    "hertz": hertz.solve,
-    "linear": linear.solve,
-    "empirical": empirical.solve,
-    "johnson_vermeulen": empirical.solve,
-    "fastsim": fastsim.solve,
-    "exact": exact.solve,
-    "conformal": conformal_solver.solve,
-    "table": table.solve,
-    "fe_contact": fe_contact.solve,
-}
+
+@lru_cache(maxsize=None)
+def _load(entry: str) -> Callable[[ContactProblem], Result]:
+    module, _, name = entry.partition(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def load_solve(solve: str | Callable | None, theory: str = "") -> Callable[[ContactProblem], Result]:
+    """The function a :class:`~conformal.registry.Model` names: ``"module:function"`` is imported
+    (once), a function is returned as it is.
+
+    Parameters
+    ----------
+    solve : str or callable
+        ``Model.solve``: ``"conformal.theories.hertz:solve"`` or the function itself.
+    theory : str
+        The model's name, for the message when it declares no solve function.
+
+    Returns
+    -------
+    callable
+        ``solve(problem) -> Result``.
+    """
+    if solve is None:
+        raise InputError(f"[model] theory: model {theory!r} declares no solve function")
+    return _load(solve) if isinstance(solve, str) else solve
+
+
+#: the solve function of each registered model, loaded from its declaration (conformal.registry.MODELS)
+SOLVE: dict[str, Callable[[ContactProblem], Result]] = {m.name: load_solve(m.solve, m.name) for m in MODELS}
 
 
 def solve_function(theory: str, registry: Registry = MODELS) -> Callable[[ContactProblem], Result]:
-    """The solve function of ``theory``: the registered model's own (``Model.solve``) or the
-    package's (:data:`SOLVE`)."""
+    """The solve function ``theory``'s declaration names (``Model.solve``, :func:`load_solve`)."""
     if theory not in registry:
         raise InputError(f"[model] theory: must be one of {', '.join(registry.names)}, got {theory!r}")
-    model = registry[theory]
-    return model.solve if model.solve is not None else SOLVE[theory]
+    return load_solve(registry[theory].solve, theory)
 
 
 def solve_problem(problem: ContactProblem, registry: Registry = MODELS) -> Result:

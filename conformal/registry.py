@@ -5,13 +5,16 @@ Scene validation (:mod:`conformal.scene`: the theory names, the ``[model]`` keys
 checks, the combinations a theory accepts, the memory estimate), the CLI's ``--theory`` help, the
 wheel-rail cases' dispatch (capability queries, not theory names) and the reference documentation
 of the scene keys (:func:`reference_markdown`) are all read from here.  The solve functions are
-bound to the names in :mod:`conformal.models`, which imports the model modules explicitly.
+named by each declaration (``solve="conformal.theories.hertz:solve"``) and loaded by
+:mod:`conformal.models`.
 
 The registry sits below the scene layer (pyproject's import contract): it holds data only, so a
 model's declaration lives here and its ``solve(problem) -> Result`` in its own module above the
-solvers layer.  Adding a model: its module (with ``solve``), one :class:`Model` line in
-:data:`MODELS` and its solve in :mod:`conformal.models`; a model outside the package
-(``Model(..., solve=...)``) is added with one line, :meth:`Registry.with_model`.
+solvers layer, named by a dotted string.  The import contract sees these names as imports of
+:mod:`conformal.models` (tests/unit/test_architecture.py adds them to the import graph).  Adding
+a model to the package: its module (with ``solve``) and one :class:`Model` line in :data:`MODELS`.
+A model outside the package (``Model(..., solve=solve)``, the function itself) is added with one
+line, :meth:`Registry.with_model`.
 
 Options nest by method in scene files: ``[model.fe] order = 2`` is the flat key ``fe_order = 2``
 (both spellings are accepted, :func:`flatten_model_table`).
@@ -186,9 +189,10 @@ class Model:
         Memory per grid element (arrays it allocates).
     bytes_dense_y : float
         Memory of dense blocks along y: ``bytes_dense_y * mx * my**2`` more (the conformal strips).
-    solve : callable, optional
-        ``solve(problem) -> Result`` for a model outside the package; the package's models are
-        bound in :mod:`conformal.models`.
+    solve : str or callable
+        Where ``solve(problem) -> Result`` is: ``"module:function"`` (the package's models, loaded
+        when :mod:`conformal.models` is imported, from a layer below it) or the function itself
+        (a model outside the package).
     """
 
     name: str
@@ -198,13 +202,20 @@ class Model:
     capabilities: frozenset = frozenset()
     bytes_per_element: float = 900.0
     bytes_dense_y: float = 0.0
-    solve: Callable | None = field(default=None, compare=False)
+    solve: str | Callable | None = field(default=None, compare=False)
 
     def __post_init__(self):
         unknown = set(self.capabilities) - set(CAPABILITIES)
         if unknown:
             raise ValueError(f"model {self.name!r}: unknown capabilities {sorted(unknown)}")
+        if isinstance(self.solve, str) and not all(self.solve.partition(":")):
+            raise ValueError(f"model {self.name!r}: solve = {self.solve!r} is not \"module:function\"")
         object.__setattr__(self, "capabilities", frozenset(self.capabilities))
+
+    @property
+    def solve_module(self) -> str | None:
+        """The module named by ``solve = "module:function"`` (None for a function given itself)."""
+        return self.solve.partition(":")[0] if isinstance(self.solve, str) else None
 
     def accepts(self, capability: str) -> bool:
         """Whether the model has ``capability`` (one of :data:`CAPABILITIES`)."""
@@ -429,32 +440,34 @@ FE_CONTACT = Method("fe_contact", "fec_", "meshed bodies of the direct FE contac
 
 _PLANAR = frozenset({TANGENTIAL})
 
-#: the package's models (their solve functions: conformal.models); one line per model
+#: the package's models, one :class:`Model` line each (``solve``: where its function is, conformal.models)
 MODELS = Registry(models=(
     Model("hertz", "Hertz theory of non-conformal contact (Hertz 1882; Johnson 1985, §4.2); normal problem only",
-          bytes_per_element=48),
+          bytes_per_element=48, solve="conformal.theories.hertz:solve"),
     Model("linear", "Kalker's linear theory of rolling contact (seed Eq. 13; Kalker 1967)",
           options=(Option("require_c33", "bool", False, "", "compute C33 also without spin"),),
-          capabilities=_PLANAR, bytes_per_element=48),
+          capabilities=_PLANAR, bytes_per_element=48, solve="conformal.theories.linear:solve"),
     Model("empirical", "Kalker's empirical creep-force law (seed Eqs. 18, 20)",
           options=(Option("creep_coefficients", "str", "kalker", "", "creep coefficients",
-                          choices=("kalker", "elliptic")),), capabilities=_PLANAR, bytes_per_element=48),
+                          choices=("kalker", "elliptic")),), capabilities=_PLANAR, bytes_per_element=48,
+          solve="conformal.theories.empirical:solve"),
     Model("johnson_vermeulen", "Johnson-Vermeulen creep-force law (seed Eq. 19)",
           options=(Option("creep_coefficients", "str", "elliptic", "", "creep coefficients",
-                          choices=("kalker", "elliptic")),), capabilities=_PLANAR, bytes_per_element=48),
+                          choices=("kalker", "elliptic")),), capabilities=_PLANAR, bytes_per_element=48,
+          solve="conformal.theories.empirical:solve"),
     Model("fastsim", "Kalker's simplified theory, algorithm FASTSIM (seed Eqs. 21-36)",
           options=(Option("n", "int", 40, "", "number of strips", minimum=4),
                    Option("flexibilities", "floats", None, "mm³/N", "the flexibilities L1, L2, L3 (default: "
                           "from Kalker's coefficients, seed Eq. 27)", length=3, minimum=0),
                    Option("discretisation", "str", "midpoint", "", "where the strips are sampled",
                           choices=("midpoint", "contact"))),
-          capabilities=_PLANAR, bytes_per_element=240),
+          capabilities=_PLANAR, bytes_per_element=240, solve="conformal.theories.fastsim:solve"),
     Model("exact", "Kalker's exact theory on a planar grid (seed Eqs. 45-49; Kalker 1990)",
           options=(_MAXOUT,
                    Option("influence_file", "path", None, "", "influence numbers read from a file "
                           "(conformal.influence.contact_file)")),
           capabilities=frozenset({TANGENTIAL, HISTORY, RIGID_SLIP, MU_TABLE, INFLUENCE_FILE, LINE_CONTACT, GRID,
-                                  WARM_START}), bytes_per_element=900),
+                                  WARM_START}), bytes_per_element=900, solve="conformal.solvers.exact:solve"),
     Model("conformal", "conformal contact on a curved strip (Li 2002; seed Eqs. 45-49 on the curved surface)",
           options=(_MAXOUT,
                    Option("max_mx", "int", 200, "", "largest number of strip elements along x", minimum=4),
@@ -469,13 +482,13 @@ MODELS = Registry(models=(
           methods=("fe",),
           capabilities=frozenset({TANGENTIAL, LOAD_ANGLE, APPROACH_ALONG, PLANAR_HALFSPACE, GRID, CURVED_STRIP, VTU,
                                   CONFORMAL_GEOMETRY, FE_INFLUENCE}),
-          bytes_per_element=900, bytes_dense_y=2 * 9 * 16),
+          bytes_per_element=900, bytes_dense_y=2 * 9 * 16, solve="conformal.solvers.conformal:solve"),
     Model("table", "creep forces from a creep-force table (conformal.tables)",
           options=(Option("table", "path", None, "", "the creep-force table file (\"default\": the package's)"),),
-          capabilities=_PLANAR, bytes_per_element=48),
+          capabilities=_PLANAR, bytes_per_element=48, solve="conformal.tables.model:solve"),
     Model("fe_contact", "direct FE contact of the meshed bodies (conformal.fe_contact); normal problem only",
           methods=("fe_contact",), capabilities=frozenset({FE_BODIES, VTU, CONFORMAL_GEOMETRY}),
-          bytes_per_element=900),
+          bytes_per_element=900, solve="conformal.fe_contact.problems:solve"),
 ), methods=(FE, FE_CONTACT))
 
 

@@ -2,7 +2,7 @@
 
 * Quadratic (Hertzian) problems (``[geometry] kind = "quadratic" | "hertz"``): a flat block and a
   crowned wheel whose undeformed distance is A x² + B y² (:func:`solve`, the module's model entry
-  point, registered in :mod:`conformal.models`).
+  point, declared in :mod:`conformal.registry`).
 * Wheel-rail scenes: :mod:`conformal.cases.fe_contact` (placement and the curved grid belong to
   the cases layer) meshes the rail and the wheel with :func:`conformal.fe_contact.bodies.wheel_rail_pair`.
 

@@ -3,6 +3,9 @@
 The whole model is this module: its declaration (:data:`MODEL`, one :class:`~conformal.registry.Model`
 call with its option, capabilities and memory) and its ``solve(problem) -> Result``.  It is added
 with one registry line, ``MODELS.with_model(example_model.MODEL)`` (tests/unit/test_registry.py).
+Inside the package the same module (as conformal/theories/circular_hertz.py) is added with one
+``Model(..., solve="conformal.theories.circular_hertz:solve")`` line in ``registry.MODELS``, in a
+copy of the package (tests/unit/test_registry.py).
 
 Equal curvatures A = B = 1/(2R) (a sphere on a plane, relative radius R) under a normal force N
 (Johnson 1985, eqs. 4.22-4.23 with the contact modulus E* = G/(1-nu) of the combined constants)::

@@ -7,12 +7,46 @@ from _paths import ROOT
 
 
 
-def test_import_contracts_are_kept(monkeypatch):
+def declared_imports() -> list[str]:
+    """The modules the package's model declarations name (``Model(..., solve="module:function")``):
+    conformal.models imports them by name (importlib), which no import graph sees by itself."""
+    from conformal.registry import MODELS
+
+    return sorted({m.solve_module for m in MODELS if m.solve_module})
+
+
+def _with_imports_of_models(build_graph, modules):
+    """grimp's build_graph with ``conformal.models -> module`` added for each of ``modules``."""
+    def build(*args, **kwargs):
+        graph = build_graph(*args, **kwargs)
+        for module in modules:
+            graph.add_import(importer="conformal.models", imported=module)
+        return graph
+    return build
+
+
+def _lint(monkeypatch, modules) -> int:
+    """import-linter's check of pyproject's contracts, the declared model modules counted as imports."""
+    grimp = pytest.importorskip("grimp")
     pytest.importorskip("importlinter")
     from importlinter.cli import lint_imports
 
     monkeypatch.chdir(ROOT)
-    assert lint_imports(config_filename=str(ROOT / "pyproject.toml"), no_cache=True) == 0
+    monkeypatch.setattr(grimp, "build_graph", _with_imports_of_models(grimp.build_graph, modules))
+    return lint_imports(config_filename=str(ROOT / "pyproject.toml"), no_cache=True)
+
+
+def test_import_contracts_are_kept(monkeypatch):
+    """The layers of pyproject.toml, with conformal.models importing every module a model declares."""
+    modules = declared_imports()
+    assert "conformal.tables.model" in modules and "conformal.theories.hertz" in modules
+    assert _lint(monkeypatch, modules) == 0
+
+
+def test_the_contract_refuses_a_model_declared_above_conformal_models(monkeypatch, capsys):
+    """A declaration naming a module of a higher layer (here the CLI) breaks the layers contract."""
+    assert _lint(monkeypatch, declared_imports() + ["conformal.cli"]) != 0
+    assert "conformal.models -> conformal.cli" in capsys.readouterr().out
 
 
 def _cycles(graph) -> list[list[str]]:
@@ -60,7 +94,7 @@ def _cycles(graph) -> list[list[str]]:
 def test_no_import_cycles_counting_imports_in_functions():
     grimp = pytest.importorskip("grimp")
     sys.path.insert(0, str(ROOT))
-    graph = grimp.build_graph("conformal", include_external_packages=False)
+    graph = _with_imports_of_models(grimp.build_graph, declared_imports())("conformal", include_external_packages=False)
     assert _cycles(graph) == []
 
 

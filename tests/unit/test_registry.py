@@ -32,6 +32,39 @@ def test_every_registered_model_has_a_solve_function_and_the_scene_its_names():
         assert m.capabilities <= set(CAPABILITIES)
 
 
+def test_each_model_is_declared_once_and_its_solve_function_is_loaded_from_the_declaration():
+    """Where each theory lives: its declaration (registry.py) names its module and function;
+    conformal.models.SOLVE is loaded from those names (no theory name written in models.py), and
+    every theory module with a solve function is declared."""
+    import ast
+    import importlib
+
+    from _paths import ROOT
+
+    from conformal.models import SOLVE
+
+    where = {}
+    for m in MODELS:
+        module, _, name = m.solve.partition(":")
+        assert SOLVE[m.name] is getattr(importlib.import_module(module), name), m.name
+        where[m.name] = m.solve
+    assert where == {
+        "hertz": "conformal.theories.hertz:solve", "linear": "conformal.theories.linear:solve",
+        "empirical": "conformal.theories.empirical:solve", "johnson_vermeulen": "conformal.theories.empirical:solve",
+        "fastsim": "conformal.theories.fastsim:solve", "exact": "conformal.solvers.exact:solve",
+        "conformal": "conformal.solvers.conformal:solve", "table": "conformal.tables.model:solve",
+        "fe_contact": "conformal.fe_contact.problems:solve"}
+    strings = {n.value for n in ast.walk(ast.parse((ROOT / "conformal" / "models.py").read_text()))
+               if isinstance(n, ast.Constant) and isinstance(n.value, str)}
+    assert not strings & set(MODELS.names), "models.py names theories: SOLVE must come from the declarations"
+    theory_modules = {f"conformal.theories.{p.stem}" for p in (ROOT / "conformal" / "theories").glob("*.py")
+                      if any(isinstance(n, ast.FunctionDef) and n.name == "solve"
+                             for n in ast.parse(p.read_text()).body)}
+    assert theory_modules and theory_modules <= {m.solve_module for m in MODELS}
+    with pytest.raises(ValueError, match="not \"module:function\""):
+        Model("x", "no function named", solve="conformal.theories.hertz")
+
+
 def test_declared_defaults_are_the_defaults_the_code_uses():
     """The documented defaults (registry) against the dataclasses and constants the solvers read."""
     from conformal.fe_contact.bodies import ContactMesh
@@ -181,6 +214,67 @@ def test_a_model_is_added_with_its_module_and_one_registry_line():
     with pytest.raises(InputError, match=r'\[\[history\]\]: a load history is solved by theory "exact"'):
         scene_from_dict({**QUADRATIC, "model": {"theory": "circular_hertz"}, "history": [{"normal_force": 1e4}]},
                         models=models)
+
+
+def test_a_model_is_added_inside_the_package_with_its_module_and_one_registry_line(tmp_path):
+    """The two touch points inside the package, in a copy of it: the model's module
+    (conformal/theories/circular_hertz.py, the module of tests/unit/example_model.py) and one
+    ``Model(...)`` line in registry.MODELS.  Nothing else changes, yet the theory is a scene's
+    theory (validated, solved by conformal.solve), in the CLI's --theory help and in the reference."""
+    import difflib
+    import json
+    import os
+    import shutil
+    import subprocess
+    import sys
+
+    from _paths import ROOT
+
+    package = tmp_path / "conformal"
+    shutil.copytree(ROOT / "conformal", package)                       # with __pycache__: no recompiling
+    shutil.copy(ROOT / "tests" / "unit" / "example_model.py", package / "theories" / "circular_hertz.py")
+    registry = package / "registry.py"
+    before = registry.read_text(encoding="utf-8")
+    end = "), methods=(FE, FE_CONTACT))"
+    assert before.count(end) == 1
+    line = ('    Model("circular_hertz", "Hertz\'s closed form for a circular contact", options=(Option('
+            '"max_ellipticity", "float", 1e-9, "", "largest |A - B| / (A + B) accepted", minimum=0.0),), '
+            'bytes_per_element=0.0, solve="conformal.theories.circular_hertz:solve"),\n')
+    after = before.replace(end, line + end)
+    registry.write_text(after, encoding="utf-8")
+    changed = [d for d in difflib.ndiff(before.splitlines(True), after.splitlines(True)) if d[0] in "+-"]
+    assert changed == ["+ " + line]
+
+    script = """
+import json
+import conformal
+from conformal.cli import build_parser
+from conformal.errors import InputError
+from conformal.registry import reference_markdown
+q = {"geometry": {"kind": "quadratic", "A": 1 / 600, "B": 1 / 600}, "load": {"normal_force": 1e4}}
+r = conformal.solve({**q, "model": {"theory": "circular_hertz", "max_ellipticity": 1e-6}})
+hz = conformal.solve({**q, "model": {"theory": "hertz"}})
+try:
+    conformal.solve({**q, "model": {"theory": "circular_hertz", "max_ellipticity": "0"}})
+    refused = ""
+except InputError as e:
+    refused = str(e)
+sub = build_parser()._subparsers._group_actions[0].choices["solve"]
+print(json.dumps({"file": conformal.__file__, "theory": r.theory, "refused": refused,
+                  "new": [r.a, r.pmax, r.approach], "hertz": [hz.a, hz.pmax, hz.approach],
+                  "help": "circular_hertz" in sub.format_help(),
+                  "reference": "| `max_ellipticity` | number | 1e-09 |" in reference_markdown()}))
+"""
+    env = dict(os.environ, PYTHONPATH=str(tmp_path), OMP_NUM_THREADS="1")
+    proc = subprocess.run([sys.executable, "-c", script], env=env, cwd=tmp_path, capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    d = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert d["file"] == str(package / "__init__.py")                   # the copy, not this checkout
+    assert d["theory"] == "circular_hertz" and d["help"] and d["reference"]
+    assert "[model] max_ellipticity: must be a number" in d["refused"]
+    for new, hertz in zip(d["new"], d["hertz"]):                       # Johnson eqs. 4.22-4.23 = elliptic integrals
+        assert math.isclose(new, hertz, rel_tol=1e-9)
 
 
 def test_option_checks():
