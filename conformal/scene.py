@@ -30,8 +30,6 @@ from conformal.specs import Friction, HistoryStep, Kinematics, ModelSpec  # noqa
 
 #: the theory names (conformal.registry.MODELS: each model's declaration)
 THEORIES = MODELS.names
-#: theories that solve the normal problem only (no tangential tractions)
-NORMAL_ONLY_THEORIES = tuple(m.name for m in MODELS if m.normal_only)
 GEOMETRY_KINDS = ("quadratic", "hertz", "table", "wheel_rail")
 #: ``[model] influence``: half-space numbers with the element frames turned by the contact angles (the
 #: default), without that turn ("halfspace_planar": CONTACT's conformal approach, its D = 4 with
@@ -752,12 +750,6 @@ def _check_model_options(sec: "_Section", options: Mapping[str, Any], models: Re
 
 
 SECTIONS = ("name", "material", "friction", "geometry", "load", "kinematics", "grid", "model")
-
-
-#: bytes per grid element a theory needs (arrays it allocates; the exact theory: zero-padded FFTs of
-#: the 3 x 3 influence kernel and its working arrays), from the registry.  The conformal theory adds
-#: dense blocks along s (conformal.registry.Model.bytes_dense_y).
-_BYTES_PER_ELEMENT = {m.name: m.bytes_per_element for m in MODELS}
 
 
 def available_memory() -> float | None:

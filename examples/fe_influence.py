@@ -32,7 +32,7 @@ halfspace = conformal.solve(scene_file, grid__n=20, model__influence="halfspace"
 hertz = hertz_from_curvatures(1 / (2 * 460.0), 1 / (2 * 300.0), Material(82000.0, 0.28, 82000.0, 0.28),
                               approach=0.05)
 
-fig, axes = plt.subplots(1, 2, figsize=(9, 4), layout="constrained")
+fig, axes = plt.subplots(1, 2, figsize=(10, 4), layout="constrained")
 fe.plot(ax=axes[0], quantity="pn")
 axes[0].set_title("FE influence numbers")
 halfspace.plot(ax=axes[1], quantity="pn")

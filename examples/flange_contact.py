@@ -17,7 +17,6 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import pyvista  # noqa: E402
 
 import conformal  # noqa: E402
 
@@ -28,13 +27,14 @@ scene_file = Path(__file__).resolve().parent.parent / "meshes" / "scenes" / "fla
 curved = conformal.solve(scene_file, grid__n=24)
 plane = conformal.solve(scene_file, grid__n=24, model__theory="exact")
 
-plotter = pyvista.Plotter(off_screen=True, window_size=(800, 600))
-curved.plot3d(plotter)
-plotter.screenshot(str(out / "flange_3d.png"))
+plotter = curved.plot3d()                  # a new off-screen pyvista plotter (no display needed)
+plotter.add_text(f"S1002 flange root on UIC 60: FN {curved.FN / 1000:.1f} kN", font_size=10, color="black")
+plotter.screenshot(str(out / "flange_3d.png"), window_size=(800, 600))
 plotter.close()
 
-fig, ax = plt.subplots(figsize=(5, 4), layout="constrained")
+fig, ax = plt.subplots(figsize=(5.5, 3.2), layout="constrained")
 curved.plot(ax=ax, quantity="pn")
+ax.set_ylabel("s - s_ref [mm] (developed)")
 fig.savefig(out / "flange_map.png", dpi=80)
 
 angles = (curved.extra["contact_angle_min"], curved.extra["contact_angle_max"])   # rad

@@ -37,7 +37,7 @@ R = 1.0 / (2.0 * A)
 p0 = (6.0 * FN * E_star**2 / (math.pi**3 * R**2)) ** (1.0 / 3.0)
 a = (3.0 * FN * R / (4.0 * E_star)) ** (1.0 / 3.0)
 
-fig, axes = plt.subplots(1, 2, figsize=(9, 4), layout="constrained")
+fig, axes = plt.subplots(1, 2, figsize=(10, 4), layout="constrained")
 exact.plot(ax=axes[0], quantity="pn")
 exact.plot(ax=axes[1], quantity="pt")
 fig.savefig(out / "hertz_circle.png", dpi=80)

@@ -54,9 +54,9 @@ q_cat = mu * p0 * (np.sqrt(np.clip(1 - xs**2 / a**2, 0, None)) - c / a * np.sqrt
 fig, ax = plt.subplots(figsize=(6, 3.5), layout="constrained")
 ax.plot(xs, q_cat, "k-", label="Cattaneo")
 ax.plot(x, -f.px[:, j], "o", ms=4, label="exact solver, y ≈ 0")
-ax.set_xlabel("x (mm)")
-ax.set_ylabel("-p_x (N/mm²)")
-ax.set_title(f"FX = {steps[-1]} mu FN")
+ax.set_xlabel("x [mm]")
+ax.set_ylabel("-p_x [N/mm²]")
+ax.set_title(f"FX = {steps[-1]} μ FN: traction along y = 0")
 ax.legend()
 fig.savefig(out / "load_history.png", dpi=80)
 

@@ -33,10 +33,11 @@ angle = np.degrees([r["contact_angle_right"] for r in rows])
 
 fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(6, 5), sharex=True, layout="constrained")
 ax1.plot(shifts, dr, "o-")
-ax1.set_ylabel("r_right - r_left (mm)")
+ax1.set_title("S1002 on UIC 60 (1:40): rigid contact geometry")
+ax1.set_ylabel("r_right - r_left [mm]")
 ax2.plot(shifts, angle, "o-")
-ax2.set_ylabel("contact angle, right (deg)")
-ax2.set_xlabel("lateral shift (mm)")
+ax2.set_ylabel("contact angle, right [deg]")
+ax2.set_xlabel("lateral shift [mm]")
 fig.savefig(out / "wheelset_geometry.png", dpi=80)
 
 print(json.dumps({"shift": shifts.tolist(), "delta_r": dr.tolist(), "contact_angle_right_deg": angle.tolist(),

@@ -51,7 +51,6 @@ from conformal.solvers.conformal import DELTA_SPREAD_WARN
 from conformal.solvers.normal import solve_normal
 from conformal.theories.hertz import hertz_from_curvatures
 
-GRID_THEORIES = MODELS.accepting(GRID)   # theories whose normal problem is solved on the grid
 BALANCE_TOL = 1e-4                       # relative tolerance of the vertical force balance
 
 

@@ -184,12 +184,6 @@ class Deck:
             out[c] = int(t)
         return out
 
-    def peek_int(self) -> int | None:
-        if self.at_end:
-            return None
-        tok = self.lines[self.pos].tokens[0]
-        return int(tok) if re.fullmatch(r"[+-]?\d+", tok) else None
-
 
 def _strip_comment_quoted(raw: str) -> str:
     """The line up to its first % outside single quotes."""

@@ -46,7 +46,6 @@ from conformal.errors import ConvergenceError
 SIDES = ("right", "left")
 SIGN = np.array([1.0, 1.0, -1.0, -1.0])           # contacts: right tread, right flange, left tread, left flange
 WHEEL = np.array([0, 0, 1, 1])
-SLOT = np.array([0, 1, 0, 1])
 
 
 def alignment(irr: Irregularity, x: float) -> tuple[float, float]:

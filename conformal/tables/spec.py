@@ -66,7 +66,6 @@ from conformal.errors import InputError
 SATURATION = 3.0
 #: number of outputs per node (fx, fy, mz of Eq. T2)
 N_OUT = 3
-AXES = ("ln_ratio", "nu", "s", "theta", "q")
 #: most nodes of a table (each is an exact solve; the node values alone take 24 bytes each, the plan
 #: of a build one task per ``chunk`` nodes): the shipped table has 486 720
 MAX_NODES = 10_000_000
