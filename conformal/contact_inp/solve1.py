@@ -6,9 +6,10 @@ The deck's inputs map onto scene keys: the profiles (SIMPACK ``.prr``/``.prw`` o
 SMOOTH as ``*_mirror_y``, ``*_z``, ``*_smoothing``: :func:`_profile_keys`), the track (GAUGHT,
 GAUGWD, CANT), the wheelset (FBDIST, FBPOS, NOMRADW), its position (Y_WS, ROLL, YAW; the vertical
 force FZ) and velocity (VS_WS, VY_WS, VROLL, VYAW, VPITCH), the element size DX (= DS), and the
-distance D_SEP above which patches are solved separately (``patch_combine``).  Friction varying
-with the surface inclination (V = 1) takes, as CONTACT, one coefficient per patch at its contact
-angle, accepted where every patch gets the same (checked after the solve, :func:`solve_case`).
+distance D_SEP above which patches are solved separately (``patch_combine``), the wheelset height
+Z_WS where the deck prescribes it (N = 0: ``[load] approach`` from the first touch).  Friction
+varying with the surface inclination (V = 1) takes, as CONTACT, one coefficient per patch at its
+contact angle (``[friction] angle_table``).
 
 Cases with CONTACT's conformal approach (D = 4) map onto theory ``conformal`` with influence
 ``halfspace_planar`` (CONTACT's conformal half-space numbers, C3 = 2; ``halfspace_blanco`` with
@@ -88,7 +89,8 @@ def _profile_keys(case: Module1Case, base_dir: Path) -> dict:
 
 def scene_of(case: Module1Case, base_dir: Path, mu: float | None = None) -> dict:
     """The scene (as a dict for conformal.scene.scene_from_dict) of one module-1 case; ``mu``: the
-    friction coefficient where it varies over the profile (V = 1; default its first row)."""
+    friction coefficient of a conformal case (D = 4) where it varies over the profile (V = 1;
+    default its first row; planar cases take the table itself)."""
     if case.conformal:
         return _conformal_scene(case, base_dir, mu)
     nu1, nu2, g1, g2 = case.material
@@ -102,10 +104,11 @@ def scene_of(case: Module1Case, base_dir: Path, mu: float | None = None) -> dict
     if case.digits["T"] == 3:
         vs, vy, vz, vroll, vyaw, vpitch = case.velocity
         kin = {"speed": vs, "pitch_velocity": vpitch, "yaw_rate": vyaw, "roll_rate": vroll, "lateral_velocity": vy}
-    fr = mu if mu is not None else (case.friction_table[0][1] if case.friction_table else None)
-    friction = ({"mu_static": fr, "mu_kinetic": fr} if fr is not None else
-                {"mu_static": case.friction[0], "mu_kinetic": case.friction[1]})
-    return {
+    if case.friction_table:                # V = 1: one friction per patch at its contact angle
+        friction = {"angle_table": [list(r) for r in case.friction_table]}
+    else:
+        friction = {"mu_static": case.friction[0], "mu_kinetic": case.friction[1]}
+    raw = {
         "name": f"{case.deck} case {case.number}",
         "material": {"G": g1, "nu": nu1, "body2": {"G": g2, "nu": nu2}},
         "friction": friction,
@@ -117,13 +120,11 @@ def scene_of(case: Module1Case, base_dir: Path, mu: float | None = None) -> dict
         "kinematics": kin,
         "model": {"theory": "exact"},
     }
+    return _height_prescribed(case, raw, base_dir)
 
 
 def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None) -> dict:
     """A D = 4 case: theory conformal with CONTACT's formulation (module docstring)."""
-    from conformal.cases.wheelrail import place_scene
-    from conformal.scene import scene_from_dict
-
     nu1, nu2, g1, g2 = case.material
     gaught, _, gaugwd, cant = case.track[:4]
     fbdist, fbpos, nomrad = case.wheelset[:3]
@@ -163,11 +164,23 @@ def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None)
     if case.blanco is not None:            # C = 4: Blanco's angle correction (conformal.influence.blanco)
         raw["model"] = {"theory": "conformal", "influence": "halfspace_blanco",
                         "blanco_method": "full" if case.blanco[0] == 1 else "linear", "blanco_variant": case.blanco[1]}
-    if case.digits["N"] == 0:              # Z_WS prescribed: the approach from the first touch
-        z_first = place_scene(scene_from_dict(raw, base_dir=base_dir)).z_first
-        if z_inp - z_first <= 0.0:
-            raise unsupported(case.deck, case.line, f"module 1, Z_WS = {z_inp:g} mm leaves the wheel off the rail")
-        raw["load"] = {"approach": z_inp - z_first}
+    return _height_prescribed(case, raw, base_dir)
+
+
+def _height_prescribed(case: Module1Case, raw: dict, base_dir: Path) -> dict:
+    """N = 0 (Z_WS prescribed, CONTACT's wheelset height, positive downwards): ``[load] approach``,
+    the lowering below the height where the wheelset first touches (conformal.cases.wheelrail,
+    :class:`~conformal.cases.wheelrail.Placement`), so that the solve puts the wheelset at Z_WS."""
+    from conformal.cases.wheelrail import place_scene
+    from conformal.scene import scene_from_dict
+
+    if case.digits["N"] != 0:
+        return raw
+    z_inp = case.position[2]
+    z_first = place_scene(scene_from_dict(raw, base_dir=base_dir)).z_first
+    if z_inp - z_first <= 0.0:
+        raise unsupported(case.deck, case.line, f"module 1, Z_WS = {z_inp:g} mm leaves the wheel off the rail")
+    raw["load"] = {"approach": z_inp - z_first}
     return raw
 
 
@@ -195,7 +208,7 @@ def solve_case(case: Module1Case, raw: dict, base_dir: Path):
                               f"the project's wheel-rail set-up fails here ({text})") from None
 
     r = run(raw)
-    if not case.friction_table:
+    if not case.friction_table or not case.conformal:     # the planar path: [friction] angle_table
         return r
     for attempt in range(2):
         mus = [constant_friction(case.friction_table, *_angle_band(p)) for p in (r.patches or (r,))]
