@@ -109,6 +109,7 @@ def plan(parsed: ParsedDeck) -> Plan:
 
     base = parsed.path.parent
     chains, bad = [], []
+    heights: dict = {}                    # first-touch heights of N = 0 cases, by geometry
     for chain in _chains(parsed.cases):
         items = []
         broken = None                     # the first unsupported case of this chain
@@ -120,7 +121,7 @@ def plan(parsed: ParsedDeck) -> Plan:
             prob = None
             if reason is None:
                 try:
-                    prob = scene_of(c, base) if getattr(c, "module", 3) == 1 else problem_of(c, base)
+                    prob = scene_of(c, base, memo=heights) if getattr(c, "module", 3) == 1 else problem_of(c, base)
                     if getattr(c, "module", 3) == 1:
                         _check_profiles(prob, base)
                 except Unsupported as exc:

@@ -87,12 +87,13 @@ def _profile_keys(case: Module1Case, base_dir: Path) -> dict:
     return out
 
 
-def scene_of(case: Module1Case, base_dir: Path, mu: float | None = None) -> dict:
+def scene_of(case: Module1Case, base_dir: Path, mu: float | None = None, memo: dict | None = None) -> dict:
     """The scene (as a dict for conformal.scene.scene_from_dict) of one module-1 case; ``mu``: the
     friction coefficient of a conformal case (D = 4) where it varies over the profile (V = 1;
-    default its first row; planar cases take the table itself)."""
+    default its first row; planar cases take the table itself); ``memo``: a dict that keeps the
+    first-touch heights of cases with Z_WS prescribed (N = 0) between calls."""
     if case.conformal:
-        return _conformal_scene(case, base_dir, mu)
+        return _conformal_scene(case, base_dir, mu, memo)
     nu1, nu2, g1, g2 = case.material
     gaught, _, gaugwd, cant = case.track[:4]
     fbdist, fbpos, nomrad = case.wheelset[:3]
@@ -120,10 +121,10 @@ def scene_of(case: Module1Case, base_dir: Path, mu: float | None = None) -> dict
         "kinematics": kin,
         "model": {"theory": "exact"},
     }
-    return _height_prescribed(case, raw, base_dir)
+    return _height_prescribed(case, raw, base_dir, memo)
 
 
-def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None) -> dict:
+def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None, memo: dict | None = None) -> dict:
     """A D = 4 case: theory conformal with CONTACT's formulation (module docstring)."""
     nu1, nu2, g1, g2 = case.material
     gaught, _, gaugwd, cant = case.track[:4]
@@ -164,20 +165,29 @@ def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None)
     if case.blanco is not None:            # C = 4: Blanco's angle correction (conformal.influence.blanco)
         raw["model"] = {"theory": "conformal", "influence": "halfspace_blanco",
                         "blanco_method": "full" if case.blanco[0] == 1 else "linear", "blanco_variant": case.blanco[1]}
-    return _height_prescribed(case, raw, base_dir)
+    return _height_prescribed(case, raw, base_dir, memo)
 
 
-def _height_prescribed(case: Module1Case, raw: dict, base_dir: Path) -> dict:
+def _height_prescribed(case: Module1Case, raw: dict, base_dir: Path, memo: dict | None = None) -> dict:
     """N = 0 (Z_WS prescribed, CONTACT's wheelset height, positive downwards): ``[load] approach``,
     the lowering below the height where the wheelset first touches (conformal.cases.wheelrail,
-    :class:`~conformal.cases.wheelrail.Placement`), so that the solve puts the wheelset at Z_WS."""
+    :class:`~conformal.cases.wheelrail.Placement`), so that the solve puts the wheelset at Z_WS.
+    ``memo``: first-touch heights already found, by geometry (a deck's cases often share it)."""
+    import json
+
     from conformal.cases.wheelrail import place_scene
     from conformal.scene import scene_from_dict
 
     if case.digits["N"] != 0:
         return raw
     z_inp = case.position[2]
-    z_first = place_scene(scene_from_dict(raw, base_dir=base_dir)).z_first
+    key = json.dumps([raw["geometry"], raw["model"], str(base_dir)], sort_keys=True)
+    if memo is None or key not in memo:
+        z = place_scene(scene_from_dict(raw, base_dir=base_dir)).z_first
+        if memo is None:
+            memo = {}
+        memo[key] = z
+    z_first = memo[key]
     if z_inp - z_first <= 0.0:
         raise unsupported(case.deck, case.line, f"module 1, Z_WS = {z_inp:g} mm leaves the wheel off the rail")
     raw["load"] = {"approach": z_inp - z_first}
