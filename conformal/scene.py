@@ -24,7 +24,7 @@ from typing import Any, Mapping
 
 from conformal.errors import InputError
 from conformal.materials import Material
-from conformal.registry import (APPROACH_ALONG, CONFORMAL_GEOMETRY, HISTORY, INFLUENCE_FILE, LOAD_ANGLE, MODELS, MU_TABLE,
+from conformal.registry import (APPROACH_ALONG, CONFORMAL_GEOMETRY, CURVED_STRIP, HISTORY, INFLUENCE_FILE, LOAD_ANGLE, MODELS, MU_TABLE,
                                 PLANAR_HALFSPACE, RIGID_SLIP, Registry, flatten_model_table)
 from conformal.specs import Friction, HistoryStep, Kinematics, ModelSpec  # noqa: F401  (part of the scene API)
 
@@ -856,9 +856,10 @@ def validate(scene: "Scene", models: Registry = MODELS) -> "Scene":
         if given and cap is not None and not model.accepts(cap):
             raise InputError(f"{key}: only theory {models.quoted(cap)} uses it (got theory {theory!r}); "
                              "other theories would ignore it")
-    if fr.angle_table and (not isinstance(geo, WheelRailGeometry) or model.accepts(CONFORMAL_GEOMETRY)):
-        raise InputError("[friction] angle_table: for wheel_rail scenes with a planar theory (one friction per "
-                         "patch at its contact angle); not for planar scenes or conformal strips")
+    if fr.angle_table and (not isinstance(geo, WheelRailGeometry)
+                           or (model.accepts(CONFORMAL_GEOMETRY) and not model.accepts(CURVED_STRIP))):
+        raise InputError("[friction] angle_table: for wheel_rail scenes (one friction per patch at its contact angle, "
+                         "per row on a conformal strip); not for planar scenes or FE contact")
     if scene.history:
         if isinstance(geo, WheelRailGeometry):
             raise InputError("[[history]]: load histories are for planar scenes (kind quadratic, hertz, table)")

@@ -148,8 +148,8 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
         if not d["V"]:
             state.friction_table = ()
         reason = None
-        if d["V"] == 1 and L == 0 and (not conf or all(r[1] == r[2] for r in state.friction_table)):
-            reason = None            # per patch (planar) or where constant over each strip (D = 4; solve1)
+        if d["V"] == 1 and L == 0:
+            reason = None            # per patch (planar) or per row of each strip (D = 4): [friction] angle_table
         elif d["V"]:
             reason = f"module 1, control digit V = {d['V']} (friction varying over the profile)"
         elif L != 0:

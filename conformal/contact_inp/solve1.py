@@ -42,20 +42,6 @@ def _profile_path(case: Module1Case, name: str, base_dir: Path) -> Path:
     raise unsupported(case.deck, case.line, f"the profile {name} is missing beside the deck")
 
 
-def friction_at(table, alpha: float) -> float:
-    """CONTACT's friction varying with the surface inclination (V = 1): FSTAT interpolated linearly
-    between the rows (ALPHA, FSTAT, FKIN), constant beyond the first and last."""
-    a = [r[0] for r in table]
-    return float(np.interp(alpha, a, [r[1] for r in table]))
-
-
-def constant_friction(table, lo: float, hi: float) -> float | None:
-    """The friction coefficient if it is the same over the band of angles [lo, hi], else None."""
-    inside = [r[0] for r in table if lo < r[0] < hi]
-    values = {round(friction_at(table, a), 12) for a in [lo, hi, *inside]}
-    return values.pop() if len(values) == 1 else None
-
-
 #: mm, how far the smoothing may move a deck's profile points (``[geometry] max_smoothing_error``;
 #: a scene's default is 0.1 mm): CONTACT sets no limit, and its lambda = 10 on the measured profiles
 #: of its testbank moves them up to 1.0 mm at their corners, where CONTACT keeps a kink
@@ -87,13 +73,11 @@ def _profile_keys(case: Module1Case, base_dir: Path) -> dict:
     return out
 
 
-def scene_of(case: Module1Case, base_dir: Path, mu: float | None = None, memo: dict | None = None) -> dict:
-    """The scene (as a dict for conformal.scene.scene_from_dict) of one module-1 case; ``mu``: the
-    friction coefficient of a conformal case (D = 4) where it varies over the profile (V = 1;
-    default its first row; planar cases take the table itself); ``memo``: a dict that keeps the
-    first-touch heights of cases with Z_WS prescribed (N = 0) between calls."""
+def scene_of(case: Module1Case, base_dir: Path, memo: dict | None = None) -> dict:
+    """The scene (as a dict for conformal.scene.scene_from_dict) of one module-1 case; ``memo``: a
+    dict that keeps the first-touch heights of cases with Z_WS prescribed (N = 0) between calls."""
     if case.conformal:
-        return _conformal_scene(case, base_dir, mu, memo)
+        return _conformal_scene(case, base_dir, memo)
     nu1, nu2, g1, g2 = case.material
     gaught, _, gaugwd, cant = case.track[:4]
     fbdist, fbpos, nomrad = case.wheelset[:3]
@@ -124,7 +108,7 @@ def scene_of(case: Module1Case, base_dir: Path, mu: float | None = None, memo: d
     return _height_prescribed(case, raw, base_dir, memo)
 
 
-def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None, memo: dict | None = None) -> dict:
+def _conformal_scene(case: Module1Case, base_dir: Path, memo: dict | None = None) -> dict:
     """A D = 4 case: theory conformal with CONTACT's formulation (module docstring)."""
     nu1, nu2, g1, g2 = case.material
     gaught, _, gaugwd, cant = case.track[:4]
@@ -132,9 +116,8 @@ def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None,
     s_ws, y_ws, z_inp, roll, yaw, _pitch = case.position
     dx, ds = case.discretisation[:2]
     files = _profile_keys(case, base_dir)
-    if case.friction_table:
-        fr = mu if mu is not None else case.friction_table[0][1]
-        friction = {"mu_static": fr, "mu_kinetic": fr}
+    if case.friction_table:                # V = 1: per row of each strip at its contact angle
+        friction = {"angle_table": [list(r) for r in case.friction_table]}
     else:
         friction = {"mu_static": case.friction[0], "mu_kinetic": case.friction[1]}
     if gaught > 0:
@@ -147,6 +130,9 @@ def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None,
     if case.digits["F"] == 1:              # FX_WS prescribed, the pitch velocity solved
         if case.digits["N"] != 1:
             raise unsupported(case.deck, case.line, "module 1, F = 1 with N = 0 (force with the height prescribed)")
+        if case.friction_table:
+            raise unsupported(case.deck, case.line, "module 1, F = 1 with friction over the profile (V = 1; FX_WS is "
+                                                    "relative to one mu)")
         kin.update(fx_rel=v6 / (friction["mu_static"] * z_inp), pitch_velocity=-vs / nomrad)
     else:
         kin["pitch_velocity"] = v6
@@ -195,11 +181,9 @@ def _height_prescribed(case: Module1Case, raw: dict, base_dir: Path, memo: dict 
 
 
 def solve_case(case: Module1Case, raw: dict, base_dir: Path):
-    """Solve one case's scene; with friction varying over the profile (V = 1) check that it is
-    constant over every patch's band of contact angles (solved once more with that value where the
-    first guess was another), else refuse naming the digit.  A case the project's wheel-rail
-    set-up cannot place (no contact point within the profiles, normals that miss a profile, a
-    ``[geometry]`` check) is refused naming that, as an unsupported case (one line, exit 2)."""
+    """Solve one case's scene.  A case the project's wheel-rail set-up cannot place (no contact
+    point within the profiles, normals that miss a profile, a ``[geometry]`` check) is refused
+    naming that, as an unsupported case (one line, exit 2)."""
     from conformal.contact_inp.module3 import Unsupported
     from conformal.errors import ConvergenceError, InputError, NoContactError
     from conformal.scene import scene_from_dict
@@ -217,30 +201,7 @@ def solve_case(case: Module1Case, raw: dict, base_dir: Path):
             raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
                               f"the project's wheel-rail set-up fails here ({text})") from None
 
-    r = run(raw)
-    if not case.friction_table or not case.conformal:     # the planar path: [friction] angle_table
-        return r
-    for attempt in range(2):
-        mus = [constant_friction(case.friction_table, *_angle_band(p)) for p in (r.patches or (r,))]
-        if any(m is None for m in mus) or len(set(mus)) > 1:
-            raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
-                              "control digit V = 1 (friction varying over the profile: not constant over the "
-                              "contact patches)")
-        if mus[0] == raw["friction"]["mu_static"]:
-            return r
-        raw = scene_of(case, base_dir, mu=mus[0])
-        r = run(raw)
-    raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, control digit "
-                      "V = 1 (the friction coefficient of the patches does not settle)")
-
-
-def _angle_band(p) -> tuple[float, float]:
-    """The band of contact angles (rad) of a patch: a conformal strip's own band, or on the planar
-    path the patch's contact angle (CONTACT evaluates the friction of V = 1 there, one value per
-    patch)."""
-    if "contact_angle_min" in p.extra:
-        return p.extra["contact_angle_min"], p.extra["contact_angle_max"]
-    return p.extra["contact_angle"], p.extra["contact_angle"]
+    return run(raw)
 
 
 def summary(case: Module1Case, r) -> dict:

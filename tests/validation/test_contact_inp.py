@@ -236,8 +236,8 @@ def test_conformal_decks_map_their_digits():
     """groove_li: D = 4 with C = 2 (cases 1-4) and with Blanco's angle correction C = 4 (cases 5-8:
     IF_METH = 1, VARIANT = 3, kept by C = 1 in cases 6-8); F = 1 becomes FX_WS / (mu FZ) with the
     pitch solved; mbench_conf: N = 0 becomes the approach from the first touch, V = 1 the table of
-    friction over the surface inclination."""
-    from conformal.contact_inp.solve1 import constant_friction, friction_at
+    friction over the surface inclination (``[friction] angle_table``)."""
+    from conformal.specs import Friction
 
     pl = plan(read_deck(DECKS / "groove_li.inp"))
     assert [c.number for chain in pl.chains for c, _ in chain] == [1, 2, 3, 4, 5, 6, 7, 8] and not pl.unsupported
@@ -251,23 +251,44 @@ def test_conformal_decks_map_their_digits():
     pm = plan(read_deck(DECKS / "mbench_conf.inp"))
     (c, s), = pm.chains[0]
     assert s["load"]["approach"] > 0 and "wheel_load" not in s["load"]
-    table = c.friction_table
-    assert friction_at(table, -0.5) == 0.2 and friction_at(table, 0.0) == 0.3
-    assert friction_at(table, -0.2617994) == pytest.approx(0.25)
-    assert constant_friction(table, -1.3, -0.36) == 0.2 and constant_friction(table, -0.4, -0.3) is None
+    table = Friction(0.3, 0.3, angle_table=c.friction_table)
+    assert s["friction"] == {"angle_table": [list(r) for r in c.friction_table]}
+    assert table.at_angle(-0.5).mu_static == 0.2 and table.at_angle(0.0).mu_kinetic == 0.3
+    assert table.at_angle(-0.2617994).mu_static == pytest.approx(0.25)
 
 
 @pytest.mark.slow
-def test_friction_over_the_profile_that_changes_within_a_patch_is_refused(tmp_path):
-    """mbench_conf with the friction ramp moved to -30 .. -10 degrees: the gauge-corner patch
-    (around -24 degrees) spans the ramp, so the case is refused naming V = 1 (after its solve,
-    about 6 s)."""
+def test_friction_per_row_of_a_conformal_strip(tmp_path):
+    """mbench_conf with the friction ramp moved to -30 .. -10 degrees, so that the gauge-corner
+    patch (around -24 degrees) spans it: every row of the conformal strip gets the friction at its
+    own contact angle (``[friction] angle_table``, as CONTACT's V = 1 per grid row).  On the solved
+    strip every element obeys Coulomb's law with its row's mu: |p_t| = mu(delta) p_n where it slips,
+    <= where it adheres, and both coefficients of the ramp occur (about 10 s)."""
+    from conformal.cases.conformal import curved_problem_from_wheel_rail
+    from conformal.result import SLIP
+    from conformal.scene import scene_from_dict
+    from conformal.solvers.conformal import solve_curved
+    from conformal.specs import Friction
+
     text = (DECKS / "mbench_conf.inp").read_text(encoding="latin-1").replace("  -20d    0.200", "  -30d    0.200", 1)
     for name in ("MBench_S1002_v3.prw", "MBench_UIC60_v3.prr"):
         (tmp_path / name).write_bytes((DECKS / name).read_bytes())
     (tmp_path / "ramp.inp").write_text(text, encoding="latin-1")
-    with pytest.raises(Unsupported, match=r"V = 1 \(friction varying over the profile: not constant"):
-        list(solve_deck(read_deck(tmp_path / "ramp.inp")))
+    ((case, raw),), = plan(read_deck(tmp_path / "ramp.inp")).chains
+    table = Friction(0.3, 0.3, angle_table=case.friction_table)
+    assert raw["friction"] == {"angle_table": [list(r) for r in case.friction_table]}
+    problem = curved_problem_from_wheel_rail(scene_from_dict(raw, base_dir=tmp_path))
+    r = solve_curved(problem)
+    f = r.field
+    mu = np.vectorize(lambda a: table.at_angle(float(a)).mu_static)(f.delta)
+    inside = f.pn > 0
+    pt = np.hypot(f.px, f.py)
+    assert np.all(pt[inside] <= mu[inside] * f.pn[inside] * (1 + 1e-6) + 1e-9)
+    slip = f.status == SLIP
+    assert slip.sum() > 10
+    assert pt[slip] == pytest.approx(mu[slip] * f.pn[slip], rel=1e-5)
+    assert mu[inside].min() == pytest.approx(0.2) and 0.2 < mu[inside].max()
+    assert len({round(float(m), 6) for m in mu[inside]}) > 3       # the ramp, row by row
 
 
 def test_conformal_example_reproduces_contacts_digits():
