@@ -1012,7 +1012,8 @@ _KEY_DOCS: dict[str, dict[str, tuple[str, str]]] = {
                  "mu_kinetic": ("", "kinetic coefficient (<= mu_static)"),
                  "mu_table": ("", "file of rows 's mu': mu along y (theory exact)"),
                  "angle_table": ("", "rows [alpha (rad), mu_static, mu_kinetic]: friction at each wheel-rail "
-                                     "patch's contact angle (CONTACT's V = 1; linear between rows)")},
+                                     "patch's contact angle, per row of a conformal strip (CONTACT's V = 1; "
+                                     "linear between rows)")},
     "geometry": {"kind": ("", "quadratic | hertz | table | wheel_rail"),
                  "A": ("1/mm", "quadratic: h = A x² + B y² (B = 0: line contact)"), "B": ("1/mm", "quadratic"),
                  "a": ("mm", "hertz: semi-axis along x"), "b": ("mm", "hertz: semi-axis along y"),

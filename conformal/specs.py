@@ -24,7 +24,8 @@ class Friction:
     mu_table: Any = None
     #: friction over the surface inclination (CONTACT's V = 1): rows (alpha, mu_static, mu_kinetic),
     #: alpha (rad) the contact angle, increasing; linear between the rows, constant beyond; each
-    #: patch of a wheel-rail scene takes the values at its contact angle (conformal.cases.wheelrail)
+    #: patch of a wheel-rail scene takes the values at its contact angle (conformal.cases.wheelrail),
+    #: each row of a conformal strip those at its own angle (conformal.cases.conformal)
     angle_table: tuple = ()
 
     @property

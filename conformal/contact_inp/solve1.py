@@ -19,8 +19,7 @@ its own strip (``[grid] strips = "separate"``); there the deck may prescribe the
 Z_WS (N = 0: ``[load] approach`` from the first touch), the longitudinal force FX_WS with the pitch
 velocity solved (F = 1: ``fx_rel``), one wheel over one rail (GAUGHT <= 0 with the rail and wheel
 origins together: placement "single") and friction varying with the surface inclination (V = 1),
-accepted where it is constant over every patch's band of contact angles (checked after the solve,
-:func:`solve_case`).  The geometry processing is the project's own (smoothing spline,
+every row of a strip at its own contact angle (``[friction] angle_table``).  The geometry processing is the project's own (smoothing spline,
 contact search, patch reference point and angle), so the results agree with CONTACT's to the
 accuracy of that processing (docs/validation/halfspace.md, Manchester benchmark), not to its printed digits.
 """
