@@ -132,7 +132,7 @@ def plan(parsed: ParsedDeck) -> Plan:
                 p0 = items[0][1]
                 if p0.info or prob.info or p0.kinematics.direction != 1 or not same_geometry(p0, prob):
                     reason = ("a sequence (P = 0) whose grid, material or friction changes, or with C = 9, E = 9 "
-                              "or CHI = 180 degrees")
+                              "or CHI = 180 degrees, or friction per grid row V = 3")
             if reason is not None:
                 bad.append((c, reason))
                 broken = c.number
