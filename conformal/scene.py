@@ -859,7 +859,7 @@ def validate(scene: "Scene", models: Registry = MODELS) -> "Scene":
     if fr.angle_table and (not isinstance(geo, WheelRailGeometry)
                            or (model.accepts(CONFORMAL_GEOMETRY) and not model.accepts(CURVED_STRIP))):
         raise InputError("[friction] angle_table: for wheel_rail scenes (one friction per patch at its contact angle, "
-                         "per row on a conformal strip); not for planar scenes or FE contact")
+                         "per row on a conformal strip); not for planar scenes or theory fe_contact")
     if scene.history:
         if isinstance(geo, WheelRailGeometry):
             raise InputError("[[history]]: load histories are for planar scenes (kind quadratic, hertz, table)")
