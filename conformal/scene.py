@@ -24,7 +24,7 @@ from typing import Any, Mapping
 
 from conformal.errors import InputError
 from conformal.materials import Material
-from conformal.registry import (APPROACH_ALONG, HISTORY, INFLUENCE_FILE, LOAD_ANGLE, MODELS, MU_TABLE,
+from conformal.registry import (APPROACH_ALONG, CONFORMAL_GEOMETRY, CURVED_STRIP, HISTORY, INFLUENCE_FILE, LOAD_ANGLE, MODELS, MU_TABLE,
                                 PLANAR_HALFSPACE, RIGID_SLIP, Registry, flatten_model_table)
 from conformal.specs import Friction, HistoryStep, Kinematics, ModelSpec  # noqa: F401  (part of the scene API)
 
@@ -264,6 +264,8 @@ class Scene:
                                                                                 "mu_kinetic": f.mu_kinetic}
         if f.mu_table is not None:
             friction["mu_table"] = str(Path(f.mu_table).resolve())
+        if f.angle_table:
+            friction["angle_table"] = [list(r) for r in f.angle_table]
         geometry = plain(self.geometry)
         geometry = {"kind": geometry.pop("kind"), **geometry}
         if "file" in geometry:
@@ -482,13 +484,40 @@ def _friction(data: Any, base_dir: Path = Path(".")) -> Friction:
     if isinstance(data, dict) and "mu_table" in data:   # friction varying over the profile: (s, mu) rows
         table = _input_file(_Section("friction", {"mu_table": data["mu_table"]}), "mu_table", base_dir)
         data.pop("mu_table")
+    angles: tuple = ()
+    if isinstance(data, dict) and "angle_table" in data:   # friction over the contact angle (wheel_rail)
+        angles = _angle_table(data.pop("angle_table"))
+        if not any(k in data for k in ("mu", "mu_static", "mu_kinetic")):
+            data["mu_static"], data["mu_kinetic"] = angles[0][1], angles[0][2]
     fr = _friction_constant(data)
-    return Friction(fr.mu_static, fr.mu_kinetic, table) if table is not None else fr
+    if table is not None or angles:
+        return Friction(fr.mu_static, fr.mu_kinetic, table, angles)
+    return fr
+
+
+def _angle_table(rows: Any) -> tuple:
+    """``[friction] angle_table``: rows [alpha (rad), mu_static, mu_kinetic], alpha increasing,
+    0 < mu_kinetic <= mu_static."""
+    key = "[friction] angle_table"
+    if not isinstance(rows, (list, tuple)) or not rows:
+        raise InputError(f"{key}: a list of rows [alpha, mu_static, mu_kinetic], got {rows!r}")
+    out = []
+    for row in rows:
+        if (not isinstance(row, (list, tuple)) or len(row) != 3
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in row)):
+            raise InputError(f"{key}: each row is three numbers [alpha (rad), mu_static, mu_kinetic], got {row!r}")
+        a, ms, mk = (float(v) for v in row)
+        if not 0.0 < mk <= ms:
+            raise InputError(f"{key}: each row needs 0 < mu_kinetic <= mu_static, got {row!r}")
+        out.append((a, ms, mk))
+    if any(b[0] <= a[0] for a, b in zip(out, out[1:])):
+        raise InputError(f"{key}: the angles must increase")
+    return tuple(out)
 
 
 def _friction_constant(data: Any) -> Friction:
     sec = _Section("friction", data if data is not None else {"mu": 0.3},
-                   {"mu", "mu_static", "mu_kinetic", "mu_table"})
+                   {"mu", "mu_static", "mu_kinetic", "mu_table", "angle_table"})
     if sec.has("mu"):
         if sec.has("mu_static") or sec.has("mu_kinetic"):
             raise sec.error("mu", "give either mu or mu_static/mu_kinetic, not both")
@@ -819,6 +848,10 @@ def validate(scene: "Scene", models: Registry = MODELS) -> "Scene":
         if given and cap is not None and not model.accepts(cap):
             raise InputError(f"{key}: only theory {models.quoted(cap)} uses it (got theory {theory!r}); "
                              "other theories would ignore it")
+    if fr.angle_table and (not isinstance(geo, WheelRailGeometry)
+                           or (model.accepts(CONFORMAL_GEOMETRY) and not model.accepts(CURVED_STRIP))):
+        raise InputError("[friction] angle_table: for wheel_rail scenes (one friction per patch at its contact angle, "
+                         "per row on a conformal strip); not for planar scenes or theory fe_contact")
     if scene.history:
         if isinstance(geo, WheelRailGeometry):
             raise InputError("[[history]]: load histories are for planar scenes (kind quadratic, hertz, table)")
@@ -969,7 +1002,10 @@ _KEY_DOCS: dict[str, dict[str, tuple[str, str]]] = {
                  "body2": ("", "a table with G (or E) and nu of body 2 (the wheel)")},
     "friction": {"mu": ("", "friction coefficient (static = kinetic)"), "mu_static": ("", "static coefficient"),
                  "mu_kinetic": ("", "kinetic coefficient (<= mu_static)"),
-                 "mu_table": ("", "file of rows 's mu': mu along y (theory exact)")},
+                 "mu_table": ("", "file of rows 's mu': mu along y (theory exact)"),
+                 "angle_table": ("", "rows [alpha (rad), mu_static, mu_kinetic]: friction at each wheel-rail "
+                                     "patch's contact angle, per row of a conformal strip (CONTACT's V = 1; "
+                                     "linear between rows)")},
     "geometry": {"kind": ("", "quadratic | hertz | table | wheel_rail"),
                  "A": ("1/mm", "quadratic: h = A x² + B y² (B = 0: line contact)"), "B": ("1/mm", "quadratic"),
                  "a": ("mm", "hertz: semi-axis along x"), "b": ("mm", "hertz: semi-axis along y"),

@@ -22,10 +22,38 @@ class Friction:
     #: friction varying over the profile: a file of (s, mu) rows (s = y on a planar grid), mu_static
     #: and mu_kinetic scaled by mu(s)/mu_static along s (conformal.problem, theory "exact")
     mu_table: Any = None
+    #: friction over the surface inclination (CONTACT's V = 1): rows (alpha, mu_static, mu_kinetic),
+    #: alpha (rad) the contact angle, increasing; linear between the rows, constant beyond; each
+    #: patch of a wheel-rail scene takes the values at its contact angle (conformal.cases.wheelrail),
+    #: each row of a conformal strip those at its own angle (conformal.cases.conformal)
+    angle_table: tuple = ()
 
     @property
     def mu(self) -> float:
         return self.mu_kinetic
+
+    def at_angle(self, alpha: float) -> "Friction":
+        """The constant friction at contact angle ``alpha`` (rad) from ``angle_table`` (this
+        friction where there is none).
+
+        >>> Friction(0.3, 0.3, angle_table=((-0.5, 0.2, 0.2), (-0.3, 0.3, 0.25))).at_angle(-0.4)
+        Friction(mu_static=0.25, mu_kinetic=0.225, mu_table=None, angle_table=())
+        """
+        if not self.angle_table:
+            return self
+        a, ms, mk = (list(col) for col in zip(*self.angle_table))
+        return Friction(_interp(alpha, a, ms), _interp(alpha, a, mk))
+
+
+def _interp(x: float, xs: list, ys: list) -> float:
+    """Piecewise-linear interpolation, constant beyond the ends (xs increasing)."""
+    if x <= xs[0]:
+        return float(ys[0])
+    for k in range(1, len(xs)):
+        if x <= xs[k]:
+            t = (x - xs[k - 1]) / (xs[k] - xs[k - 1])
+            return float(ys[k - 1] + t * (ys[k] - ys[k - 1]))
+    return float(ys[-1])
 
 
 @dataclass(frozen=True)

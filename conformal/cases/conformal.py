@@ -27,6 +27,7 @@ from conformal.errors import ConvergenceError, InputError
 from conformal.geometry.patches import Patch, curved_grid_for_patch
 from conformal.geometry.wheelrail import profile_curves
 from conformal.result import EXTERIOR, Result
+from conformal.specs import Friction
 from conformal.solvers.conformal import (MAX_ELEMENTS, CurvedProblem, approach_weights, column_creepages,
                                         solve_curved)
 
@@ -238,7 +239,11 @@ class StripBuilder:
             normal = dict(normal_force=load.wheel_load) if load.wheel_load is not None else dict(approach=0.0)
         rail_points, wheel_points = fe_profiles(scene)   # whole profiles (or sections) for the FE bodies
         profiles = dict(rail_points=rail_points, wheel_points=wheel_points)
-        return CurvedProblem(grid=grid, h=h_strip, material=scene.material, friction=scene.friction,
+        friction = scene.friction
+        if friction.angle_table:   # [friction] angle_table: each row s of the strip at its own angle
+            friction, info["mu_scale"] = _friction_per_row(friction, m * np.asarray(grid.delta, float), grid.shape,
+                                                           k)
+        return CurvedProblem(grid=grid, h=h_strip, material=scene.material, friction=friction,
                              kinematics=kin, model=scene.model, xi_s=np.asarray(xi_s, float),
                              eta_s=np.asarray(eta_s, float), phi_s=np.asarray(phi_s, float),
                              load_angle=m * load.load_angle,     # the side frame (left wheel mirrored)
@@ -593,3 +598,24 @@ def _part_summary(r: Result, k: int) -> dict:
             "FZ_track": r.extra["FZ_track"], "area": r.extra["contact_area"], "pmax": r.pmax,
             "contact_angle_min": r.extra["contact_angle_min"], "contact_angle_max": r.extra["contact_angle_max"],
             "dx": g["dx"], "ds": g["ds"], "mx": g["mx"], "ms": g["ms"], "enlargements": r.extra.get("enlargements", 0)}
+
+
+def _friction_per_row(friction, angles: np.ndarray, shape: tuple, kin) -> tuple:
+    """``[friction] angle_table`` on a conformal strip: the friction of every row s at its contact
+    angle (``angles``, the real frame), as CONTACT's V = 1 interpolates it per grid row; returned
+    as the largest coefficients and the (mx, ms) factor on both (the solver's per-element bound,
+    conformal.solvers.conformal).  A table whose mu_kinetic / mu_static changes over the strip, and
+    prescribed forces (relative to one mu) with a friction that changes, are refused."""
+    rows = [friction.at_angle(float(a)) for a in angles]
+    ms = np.array([r.mu_static for r in rows])
+    mk = np.array([r.mu_kinetic for r in rows])
+    ratio = mk / ms
+    if np.ptp(ratio) > 1e-12 * ratio.max():
+        raise InputError("[friction] angle_table: on a conformal strip mu_kinetic / mu_static must be the same at "
+                         "every contact angle it spans")
+    top = int(np.argmax(ms))
+    if np.ptp(ms) > 1e-12 * ms[top] and (kin.fx_rel is not None or kin.fy_rel is not None):
+        raise InputError("[friction] angle_table: prescribed forces (fx_rel, fy_rel) are relative to one mu; the "
+                         "friction changes over this strip")
+    scale = np.broadcast_to(ms / ms[top], shape).copy()
+    return Friction(float(ms[top]), float(mk[top])), scale

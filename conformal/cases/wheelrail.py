@@ -699,7 +699,9 @@ def _problem(scene: Scene, pair: WheelRailPair, st: PairState, pg: PatchGeometry
         info.update(hertz_a=hz.a, hertz_b=hz.b, hertz_pmax=hz.pmax)
     if st.warnings:
         info.update(balance_warnings=list(st.warnings))
-    return ContactProblem(material=scene.material, friction=scene.friction, kinematics=kin, model=scene.model,
+    # [friction] angle_table: the friction at this patch's contact angle (CONTACT's V = 1, one value per patch)
+    friction = scene.friction.at_angle(info["contact_angle"])
+    return ContactProblem(material=scene.material, friction=friction, kinematics=kin, model=scene.model,
                           normal_force=normal_force, approach=None if normal_force is not None else approach,
                           hertz=hz, grid=grid, h=h, label=f"{scene.name}:{pair.side}:{index}", info=info)
 

@@ -109,6 +109,7 @@ def plan(parsed: ParsedDeck) -> Plan:
 
     base = parsed.path.parent
     chains, bad = [], []
+    heights: dict = {}                    # first-touch heights of N = 0 cases, by geometry
     for chain in _chains(parsed.cases):
         items = []
         broken = None                     # the first unsupported case of this chain
@@ -120,7 +121,7 @@ def plan(parsed: ParsedDeck) -> Plan:
             prob = None
             if reason is None:
                 try:
-                    prob = scene_of(c, base) if getattr(c, "module", 3) == 1 else problem_of(c, base)
+                    prob = scene_of(c, base, memo=heights) if getattr(c, "module", 3) == 1 else problem_of(c, base)
                     if getattr(c, "module", 3) == 1:
                         _check_profiles(prob, base)
                 except Unsupported as exc:
@@ -131,7 +132,7 @@ def plan(parsed: ParsedDeck) -> Plan:
                 p0 = items[0][1]
                 if p0.info or prob.info or p0.kinematics.direction != 1 or not same_geometry(p0, prob):
                     reason = ("a sequence (P = 0) whose grid, material or friction changes, or with C = 9, E = 9 "
-                              "or CHI = 180 degrees")
+                              "or CHI = 180 degrees, or friction per grid row V = 3")
             if reason is not None:
                 bad.append((c, reason))
                 broken = c.number

@@ -122,8 +122,6 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
     conf = d["D"] == 4 or (d["D"] in (0, 1) and state.conformal)     # CONTACT's conformal approach (D = 4)
     for letter, ok, what in (("C1", (0, 1), "rollers"), ("P", (2,), "transient sequences"), ("B", (0,), "traction bound"),
                              ("T", (0, 3), "shift or transient rolling"),
-                             ("N", (0, 1) if conf else (1,), "vertical position prescribed" + ("" if conf else
-                                                                   ", only with the conformal approach D = 4")),
                              ("F", (0, 1) if conf else (0,), "forces prescribed or rail deflection"),
                              ("D", (0, 1, 2, 4), "a discretisation other than planar (D = 2) or conformal (D = 4)"),
                              ("M2", (0,), "damping"),
@@ -150,8 +148,8 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
         if not d["V"]:
             state.friction_table = ()
         reason = None
-        if d["V"] == 1 and L == 0 and all(r[1] == r[2] for r in state.friction_table):
-            reason = None            # accepted where constant over each patch (solve1)
+        if d["V"] == 1 and L == 0:
+            reason = None            # per patch (planar) or per row of each strip (D = 4): [friction] angle_table
         elif d["V"]:
             reason = f"module 1, control digit V = {d['V']} (friction varying over the profile)"
         elif L != 0:

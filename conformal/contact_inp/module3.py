@@ -62,7 +62,6 @@ _MEANING = {
     ("M2", 1): "damping", ("M2", 2): "damping",
     ("E", 2): "extra rigid-slip term -(x-xo) phi", ("E", 3): "extra rigid-slip term (y-yo) phi",
     ("V", 1): "friction varying across the rail", ("V", 2): "friction varying along the track",
-    ("V", 3): "friction varying per grid row",
     ("P", 1): "new time step for the normal part only",
 }
 
@@ -83,6 +82,7 @@ class Module3State:
     reasons: dict = field(default_factory=dict)   # unsupported data kept for later cases, by kind
     hertz_load: tuple | None = None        # (FN, PEN) of the case that set a Hertzian grid (D = 2)
     mater_params: tuple = ()               # FLX K0_MF ALFAMF BETAMF (M = 2) or K0_MF ALFAMF BETAMF (M = 3)
+    friction_rows: tuple = ()              # V = 3: (FSTAT, FKIN) per grid row (y index)
 
 
 @dataclass(frozen=True, eq=False)
@@ -116,6 +116,7 @@ class Module3Case:
     unsupported: tuple = ()                # why the project cannot solve this case (empty: it can)
     hertz_load: tuple | None = None        # (FN, PEN) that fixed a Hertzian grid and geometry (kept with D = 0)
     mater_params: tuple = ()               # the simplified theory's parameters (M = 2, 3)
+    friction_rows: tuple = ()              # V = 3: (FSTAT, FKIN) per grid row (y index), () otherwise
 
 
 def _soft(digits: dict, allowed: dict) -> list[str]:
@@ -153,8 +154,10 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
     kin = deck.reals(4, "PEN/FN CKSI/FXREL CETA/FYREL CPHI", optional=2)
     spin = (kin[4], kin[5]) if len(kin) >= 6 else (0.0, 0.0)
     if digits["V"] == 3:
-        if L != 1 or "friction" not in inh:
-            inh["friction"] = "control digit V = 3 (friction varying per grid row)"
+        if L in (2, 3, 4, 6):
+            inh["friction"] = f"control digit L = {L} ({_MEANING[('L', L)]})"
+        elif L == 1 and not state.friction_rows and "friction" not in inh:
+            raise InputError(f"{deck.name}, line {line}: V = 3 with L = 1 keeps friction per grid row; there is none")
     elif L == 0:
         state.friction = tuple(deck.reals(2, "FSTAT FKIN"))
         inh.pop("friction", None)
@@ -243,10 +246,16 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
     if state.grid_spec[0] == "grid" and state.geometry is None and "geometry" not in inh:
         raise InputError(f"{deck.name}, line {line}: a non-Hertzian grid needs an undeformed distance (Z = 2)")
     if digits["V"] == 3 and L != 1:
-        for _ in range(my):
-            deck.reals({0: 2, 6: 4}.get(L, 5), "friction parameters of one grid row")
+        rows = tuple(tuple(deck.reals({0: 2, 6: 4}.get(L, 5), "friction parameters of one grid row"))
+                     for _ in range(my))
         if L in (2, 3, 4, 6):
             deck.reals(2, "MEMDST MEM_S0")
+        else:                                  # L = 0: (FSTAT, FKIN) per grid row
+            state.friction_rows = rows
+            state.friction = rows[0]
+            inh.pop("friction", None)
+    elif digits["V"] != 3:
+        state.friction_rows = ()
     if digits["E"] == 9:
         state.exrhs = np.array(deck.reals(2 * mx * my, "EXRHS(I, 2:3), I = 1 .. NPOT")).reshape(mx * my, 2)
     elif digits["E"] == 0:
@@ -272,7 +281,7 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
         material=state.material, inflcf=state.inflcf, cfname=state.cfname, grid_spec=state.grid_spec,
         geometry=state.geometry, exrhs=state.exrhs, eps=eps, maxout=maxout, ids=ids, skipped=skipped,
         unsupported=tuple(own) + tuple(inh.values()), hertz_load=state.hertz_load,
-        mater_params=state.mater_params)
+        mater_params=state.mater_params, friction_rows=state.friction_rows)
 
 
 def _skip_subsurface(deck: Deck, S: int) -> None:

@@ -6,9 +6,10 @@ The deck's inputs map onto scene keys: the profiles (SIMPACK ``.prr``/``.prw`` o
 SMOOTH as ``*_mirror_y``, ``*_z``, ``*_smoothing``: :func:`_profile_keys`), the track (GAUGHT,
 GAUGWD, CANT), the wheelset (FBDIST, FBPOS, NOMRADW), its position (Y_WS, ROLL, YAW; the vertical
 force FZ) and velocity (VS_WS, VY_WS, VROLL, VYAW, VPITCH), the element size DX (= DS), and the
-distance D_SEP above which patches are solved separately (``patch_combine``).  Friction varying
-with the surface inclination (V = 1) takes, as CONTACT, one coefficient per patch at its contact
-angle, accepted where every patch gets the same (checked after the solve, :func:`solve_case`).
+distance D_SEP above which patches are solved separately (``patch_combine``), the wheelset height
+Z_WS where the deck prescribes it (N = 0: ``[load] approach`` from the first touch).  Friction
+varying with the surface inclination (V = 1) takes, as CONTACT, one coefficient per patch at its
+contact angle (``[friction] angle_table``).
 
 Cases with CONTACT's conformal approach (D = 4) map onto theory ``conformal`` with influence
 ``halfspace_planar`` (CONTACT's conformal half-space numbers, C3 = 2; ``halfspace_blanco`` with
@@ -18,8 +19,7 @@ its own strip (``[grid] strips = "separate"``); there the deck may prescribe the
 Z_WS (N = 0: ``[load] approach`` from the first touch), the longitudinal force FX_WS with the pitch
 velocity solved (F = 1: ``fx_rel``), one wheel over one rail (GAUGHT <= 0 with the rail and wheel
 origins together: placement "single") and friction varying with the surface inclination (V = 1),
-accepted where it is constant over every patch's band of contact angles (checked after the solve,
-:func:`solve_case`).  The geometry processing is the project's own (smoothing spline,
+every row of a strip at its own contact angle (``[friction] angle_table``).  The geometry processing is the project's own (smoothing spline,
 contact search, patch reference point and angle), so the results agree with CONTACT's to the
 accuracy of that processing (docs/validation/halfspace.md, Manchester benchmark), not to its printed digits.
 """
@@ -39,20 +39,6 @@ def _profile_path(case: Module1Case, name: str, base_dir: Path) -> Path:
         if path.is_file():
             return path.resolve()
     raise unsupported(case.deck, case.line, f"the profile {name} is missing beside the deck")
-
-
-def friction_at(table, alpha: float) -> float:
-    """CONTACT's friction varying with the surface inclination (V = 1): FSTAT interpolated linearly
-    between the rows (ALPHA, FSTAT, FKIN), constant beyond the first and last."""
-    a = [r[0] for r in table]
-    return float(np.interp(alpha, a, [r[1] for r in table]))
-
-
-def constant_friction(table, lo: float, hi: float) -> float | None:
-    """The friction coefficient if it is the same over the band of angles [lo, hi], else None."""
-    inside = [r[0] for r in table if lo < r[0] < hi]
-    values = {round(friction_at(table, a), 12) for a in [lo, hi, *inside]}
-    return values.pop() if len(values) == 1 else None
 
 
 #: mm, how far the smoothing may move a deck's profile points (``[geometry] max_smoothing_error``;
@@ -86,11 +72,11 @@ def _profile_keys(case: Module1Case, base_dir: Path) -> dict:
     return out
 
 
-def scene_of(case: Module1Case, base_dir: Path, mu: float | None = None) -> dict:
-    """The scene (as a dict for conformal.scene.scene_from_dict) of one module-1 case; ``mu``: the
-    friction coefficient where it varies over the profile (V = 1; default its first row)."""
+def scene_of(case: Module1Case, base_dir: Path, memo: dict | None = None) -> dict:
+    """The scene (as a dict for conformal.scene.scene_from_dict) of one module-1 case; ``memo``: a
+    dict that keeps the first-touch heights of cases with Z_WS prescribed (N = 0) between calls."""
     if case.conformal:
-        return _conformal_scene(case, base_dir, mu)
+        return _conformal_scene(case, base_dir, memo)
     nu1, nu2, g1, g2 = case.material
     gaught, _, gaugwd, cant = case.track[:4]
     fbdist, fbpos, nomrad = case.wheelset[:3]
@@ -102,10 +88,11 @@ def scene_of(case: Module1Case, base_dir: Path, mu: float | None = None) -> dict
     if case.digits["T"] == 3:
         vs, vy, vz, vroll, vyaw, vpitch = case.velocity
         kin = {"speed": vs, "pitch_velocity": vpitch, "yaw_rate": vyaw, "roll_rate": vroll, "lateral_velocity": vy}
-    fr = mu if mu is not None else (case.friction_table[0][1] if case.friction_table else None)
-    friction = ({"mu_static": fr, "mu_kinetic": fr} if fr is not None else
-                {"mu_static": case.friction[0], "mu_kinetic": case.friction[1]})
-    return {
+    if case.friction_table:                # V = 1: one friction per patch at its contact angle
+        friction = {"angle_table": [list(r) for r in case.friction_table]}
+    else:
+        friction = {"mu_static": case.friction[0], "mu_kinetic": case.friction[1]}
+    raw = {
         "name": f"{case.deck} case {case.number}",
         "material": {"G": g1, "nu": nu1, "body2": {"G": g2, "nu": nu2}},
         "friction": friction,
@@ -117,22 +104,19 @@ def scene_of(case: Module1Case, base_dir: Path, mu: float | None = None) -> dict
         "kinematics": kin,
         "model": {"theory": "exact"},
     }
+    return _height_prescribed(case, raw, base_dir, memo)
 
 
-def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None) -> dict:
+def _conformal_scene(case: Module1Case, base_dir: Path, memo: dict | None = None) -> dict:
     """A D = 4 case: theory conformal with CONTACT's formulation (module docstring)."""
-    from conformal.cases.wheelrail import place_scene
-    from conformal.scene import scene_from_dict
-
     nu1, nu2, g1, g2 = case.material
     gaught, _, gaugwd, cant = case.track[:4]
     fbdist, fbpos, nomrad = case.wheelset[:3]
     s_ws, y_ws, z_inp, roll, yaw, _pitch = case.position
     dx, ds = case.discretisation[:2]
     files = _profile_keys(case, base_dir)
-    if case.friction_table:
-        fr = mu if mu is not None else case.friction_table[0][1]
-        friction = {"mu_static": fr, "mu_kinetic": fr}
+    if case.friction_table:                # V = 1: per row of each strip at its contact angle
+        friction = {"angle_table": [list(r) for r in case.friction_table]}
     else:
         friction = {"mu_static": case.friction[0], "mu_kinetic": case.friction[1]}
     if gaught > 0:
@@ -145,6 +129,9 @@ def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None)
     if case.digits["F"] == 1:              # FX_WS prescribed, the pitch velocity solved
         if case.digits["N"] != 1:
             raise unsupported(case.deck, case.line, "module 1, F = 1 with N = 0 (force with the height prescribed)")
+        if case.friction_table:
+            raise unsupported(case.deck, case.line, "module 1, F = 1 with friction over the profile (V = 1; FX_WS is "
+                                                    "relative to one mu)")
         kin.update(fx_rel=v6 / (friction["mu_static"] * z_inp), pitch_velocity=-vs / nomrad)
     else:
         kin["pitch_velocity"] = v6
@@ -163,20 +150,39 @@ def _conformal_scene(case: Module1Case, base_dir: Path, mu: float | None = None)
     if case.blanco is not None:            # C = 4: Blanco's angle correction (conformal.influence.blanco)
         raw["model"] = {"theory": "conformal", "influence": "halfspace_blanco",
                         "blanco_method": "full" if case.blanco[0] == 1 else "linear", "blanco_variant": case.blanco[1]}
-    if case.digits["N"] == 0:              # Z_WS prescribed: the approach from the first touch
-        z_first = place_scene(scene_from_dict(raw, base_dir=base_dir)).z_first
-        if z_inp - z_first <= 0.0:
-            raise unsupported(case.deck, case.line, f"module 1, Z_WS = {z_inp:g} mm leaves the wheel off the rail")
-        raw["load"] = {"approach": z_inp - z_first}
+    return _height_prescribed(case, raw, base_dir, memo)
+
+
+def _height_prescribed(case: Module1Case, raw: dict, base_dir: Path, memo: dict | None = None) -> dict:
+    """N = 0 (Z_WS prescribed, CONTACT's wheelset height, positive downwards): ``[load] approach``,
+    the lowering below the height where the wheelset first touches (conformal.cases.wheelrail,
+    :class:`~conformal.cases.wheelrail.Placement`), so that the solve puts the wheelset at Z_WS.
+    ``memo``: first-touch heights already found, by geometry (a deck's cases often share it)."""
+    import json
+
+    from conformal.cases.wheelrail import place_scene
+    from conformal.scene import scene_from_dict
+
+    if case.digits["N"] != 0:
+        return raw
+    z_inp = case.position[2]
+    key = json.dumps([raw["geometry"], raw["model"], str(base_dir)], sort_keys=True)
+    if memo is None or key not in memo:
+        z = place_scene(scene_from_dict(raw, base_dir=base_dir)).z_first
+        if memo is None:
+            memo = {}
+        memo[key] = z
+    z_first = memo[key]
+    if z_inp - z_first <= 0.0:
+        raise unsupported(case.deck, case.line, f"module 1, Z_WS = {z_inp:g} mm leaves the wheel off the rail")
+    raw["load"] = {"approach": z_inp - z_first}
     return raw
 
 
 def solve_case(case: Module1Case, raw: dict, base_dir: Path):
-    """Solve one case's scene; with friction varying over the profile (V = 1) check that it is
-    constant over every patch's band of contact angles (solved once more with that value where the
-    first guess was another), else refuse naming the digit.  A case the project's wheel-rail
-    set-up cannot place (no contact point within the profiles, normals that miss a profile, a
-    ``[geometry]`` check) is refused naming that, as an unsupported case (one line, exit 2)."""
+    """Solve one case's scene.  A case the project's wheel-rail set-up cannot place (no contact
+    point within the profiles, normals that miss a profile, a ``[geometry]`` check) is refused
+    naming that, as an unsupported case (one line, exit 2)."""
     from conformal.contact_inp.module3 import Unsupported
     from conformal.errors import ConvergenceError, InputError, NoContactError
     from conformal.scene import scene_from_dict
@@ -194,30 +200,7 @@ def solve_case(case: Module1Case, raw: dict, base_dir: Path):
             raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
                               f"the project's wheel-rail set-up fails here ({text})") from None
 
-    r = run(raw)
-    if not case.friction_table:
-        return r
-    for attempt in range(2):
-        mus = [constant_friction(case.friction_table, *_angle_band(p)) for p in (r.patches or (r,))]
-        if any(m is None for m in mus) or len(set(mus)) > 1:
-            raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
-                              "control digit V = 1 (friction varying over the profile: not constant over the "
-                              "contact patches)")
-        if mus[0] == raw["friction"]["mu_static"]:
-            return r
-        raw = scene_of(case, base_dir, mu=mus[0])
-        r = run(raw)
-    raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, control digit "
-                      "V = 1 (the friction coefficient of the patches does not settle)")
-
-
-def _angle_band(p) -> tuple[float, float]:
-    """The band of contact angles (rad) of a patch: a conformal strip's own band, or on the planar
-    path the patch's contact angle (CONTACT evaluates the friction of V = 1 there, one value per
-    patch)."""
-    if "contact_angle_min" in p.extra:
-        return p.extra["contact_angle_min"], p.extra["contact_angle_max"]
-    return p.extra["contact_angle"], p.extra["contact_angle"]
+    return run(raw)
 
 
 def summary(case: Module1Case, r) -> dict:

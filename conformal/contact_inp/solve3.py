@@ -84,6 +84,8 @@ def problem_of(case: Module3Case, base_dir: Path) -> ContactProblem:
         if not path.is_file():
             raise unsupported(case.deck, case.line, f"the influence file (C = 9) {path.name} is missing")
         info["influence_file"] = path
+    if case.friction_rows:
+        info["mu_scale"] = _row_friction(case, grid)
     M, B = case.digits["M"], case.digits["B"]
     if M in (2, 3) or B in (2, 3):
         return _fastsim_problem(case, mat, kin, hz, grid, h, info)
@@ -95,6 +97,23 @@ def problem_of(case: Module3Case, base_dir: Path) -> ContactProblem:
     return ContactProblem(material=mat, friction=Friction(fstat, fkin), kinematics=kin, model=model,
                           normal_force=case.fn, approach=case.pen, hertz=hz, grid=grid, h=h,
                           label=f"case {case.number}", info=info)
+
+
+def _row_friction(case: Module3Case, grid) -> np.ndarray:
+    """V = 3 (user guide, "friction varying per grid row"): the factor mu_j / mu_0 on both friction
+    coefficients of every element of grid row j (the problem's friction is that of row 0), for
+    the exact solver's per-element bound (conformal.solvers.exact, ``mu_scale``).  Rows whose
+    FKIN / FSTAT differ from row 0's, and prescribed forces (relative to one mu), are refused."""
+    rows = np.asarray(case.friction_rows, float)
+    if rows.shape[0] != grid.my or np.any(rows <= 0.0):
+        raise unsupported(case.deck, case.line, f"V = 3 with {rows.shape[0]} friction rows for {grid.my} grid rows "
+                                                "or a friction coefficient <= 0")
+    ratio = rows[:, 1] / rows[:, 0]
+    if np.any(np.abs(ratio - ratio[0]) > 1e-12):
+        raise unsupported(case.deck, case.line, "V = 3 with FKIN / FSTAT varying between the grid rows")
+    if case.fxrel is not None or case.fyrel is not None:
+        raise unsupported(case.deck, case.line, "V = 3 with prescribed tangential forces (F = 1, 2)")
+    return np.broadcast_to(rows[:, 0] / rows[0, 0], grid.shape).copy()
 
 
 def _fastsim_problem(case: Module3Case, mat: Material, kin: Kinematics, hz, grid, h, info) -> ContactProblem:

@@ -353,7 +353,12 @@ def solve_stages(problem: CurvedProblem, op) -> Stages:
         return solve_normal(op, grid, h, weights=w, extra_un=extra_un, material=problem.material, tol=tol,
                             maxit=maxit, p_start=p_start, **load)
 
+    # friction per element (``info["mu_scale"]``, [friction] angle_table): the bound mu p_n scaled
+    scale = problem.info.get("mu_scale")
+
     def tangential_stage(pn, extra_u, p_start):
+        if scale is not None:
+            pn = pn * scale
         return solve_tangential(op, grid, pn, xi=0.0, eta=0.0, phi=0.0, mu_static=f.mu_static,
                                 mu_kinetic=f.mu_kinetic, rolling=k.rolling, fx_rel=k.fx_rel, fy_rel=k.fy_rel,
                                 extra_u=extra_u, tol=tol, maxit=maxit, p_start=p_start, rigid_slip=slip)
@@ -425,7 +430,7 @@ def _result(problem: CurvedProblem, op, op_info: dict, stages: Stages) -> Result
     }
     extra.update(solution_extra(problem, stages, tr, dS))
     extra.update(op_info)
-    extra.update({k: v for k, v in problem.info.items() if k not in extra and k != "rigid_slip_extra"})
+    extra.update({k: v for k, v in problem.info.items() if k not in extra and k not in ("rigid_slip_extra", "mu_scale")})
     warnings = list(problem.info.get("warnings", []))
     edge = _edge_warning(contact)
     if edge:

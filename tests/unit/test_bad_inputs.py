@@ -196,6 +196,15 @@ def _cases():
         ("history on wheel_rail", WHEEL_RAIL, {"history": [{"normal_force": 1.0}], "model.theory": "exact"},
          "[[history]]"),
         ("mu_table on wheel_rail", WHEEL_RAIL, {"friction.mu_table": "x.csv"}, "[friction] mu_table"),
+        ("angle_table on a planar scene", PLANAR, {"friction.angle_table": [[0.0, 0.3, 0.3]]},
+         "[friction] angle_table"),
+        ("angle_table with FE contact", WHEEL_RAIL,
+         {"friction.angle_table": [[0.0, 0.3, 0.3]], "model.theory": "fe_contact"}, "[friction] angle_table"),
+        ("angle_table angles decreasing", WHEEL_RAIL, {"friction.angle_table": [[0.0, 0.3, 0.3], [-0.1, 0.2, 0.2]]},
+         "[friction] angle_table"),
+        ("angle_table kinetic above static", WHEEL_RAIL, {"friction.angle_table": [[0.0, 0.3, 0.4]]},
+         "[friction] angle_table"),
+        ("angle_table row of two", WHEEL_RAIL, {"friction.angle_table": [[0.0, 0.3]]}, "[friction] angle_table"),
     ]
     return out
 

@@ -108,8 +108,10 @@ def test_wheelrail_decks_map_onto_scenes():
             if case.digits["N"] == 1:                      # the vertical force; N = 0: the height Z_WS
                 assert sc.load.wheel_load == case.position[2]
             else:
-                assert sc.load.approach > 0 and case.conformal
+                assert sc.load.approach > 0
             assert sc.geometry.lateral_shift == case.position[1]
+            if case.friction_table and not case.conformal:  # V = 1, planar: one friction per patch
+                assert sc.friction.angle_table == case.friction_table
 
 
 @pytest.mark.slow
@@ -171,12 +173,71 @@ def test_conformal_deck_against_contact(name, case):
         assert [y for _, y in ours] == pytest.approx([y for _, y in theirs], abs=0.05)
 
 
+@pytest.mark.slow
+def test_height_and_friction_per_patch_against_contact():
+    """Planar module-1 cases with the wheelset height prescribed (N = 0: ``[load] approach`` from
+    the first touch) and friction over the surface inclination (V = 1: ``[friction] angle_table``,
+    one coefficient per patch at its contact angle, as CONTACT): ``iestim_site_b`` cases 2 and 4
+    (worn wheel on a measured rail, mu 0.2 below -30 degrees, 0.35 above -20; case 4 with a tread
+    and a flange patch) within the Manchester tolerances of CONTACT (the metric of
+    :func:`test_wheelrail_deck_against_contact`); ``mbench_a22_varfric`` case 3 (two patches, mu
+    0.2 below -20 degrees, 0.3 above -10): the tread patch slides fully, its force is mu FN with
+    the table's value at its own contact angle, not the flange patch's (about 15 s)."""
+    from conformal.contact_inp.refout import compare_wheelrail, read_ref_out_wheelrail
+    from conformal.specs import Friction
+
+    name = "iestim_site_b.inp"
+    ref = read_ref_out_wheelrail((DECKS / name).with_suffix(".ref_out").read_text(encoding="utf-8"))
+    rows = list(solve_deck(read_deck(DECKS / name), cases=[2, 4]))
+    assert [len(d["patches"]) for d in rows] == [1, 2]
+    for d in rows:
+        dev = compare_wheelrail(d, ref[d["case"]], mu=0.2)
+        assert max(dev.values()) <= 1.0, (d["case"], {k: v for k, v in dev.items() if v > 1})
+        assert d["z_ws"] == pytest.approx(1.13 + 0.01 * (d["case"] - 1), abs=1e-9)   # Z_WS of the deck
+    parsed = read_deck(DECKS / "mbench_a22_varfric.inp", ignore_subsurface=True)
+    (d,) = list(solve_deck(parsed, cases=[3]))
+    table = Friction(0.3, 0.3, angle_table=parsed.cases[2].friction_table)
+    mus = [table.at_angle(p["contact_angle"]).mu_static for p in d["patches"]]
+    ratios = [np.hypot(p["FX"], p["FS"]) / p["FN"] for p in d["patches"]]
+    assert sorted(mus)[0] < 0.25 and sorted(mus)[1] == 0.3
+    tread = int(np.argmax(mus))
+    assert ratios[tread] == pytest.approx(0.3, rel=1e-3)
+    assert all(r <= m * (1 + 1e-6) for r, m in zip(ratios, mus))
+
+
+def test_friction_per_grid_row_in_full_slip(tmp_path):
+    """Module 3 with V = 3 (FSTAT, FKIN per grid row, read after the geometry): in full slip
+    (CKSI = 0.1) every element carries mu of its row times its pressure, so FX = -sum mu_j p_ij
+    dx dy and the rows with less friction carry less (the per-element bound of the exact solver,
+    conformal.solvers.exact); FKIN / FSTAT varying between the rows is refused by name."""
+    mus = [0.1 + 0.02 * j for j in range(10)]
+    text = ("% V = 3\n 3  MODULE\n  203100\n 3022020\n 0001341\n   100 100 30 1 1e-8\n"
+            "   1000.  0.1  0.0  0.0\n   0.0  0.5  30000.\n   0.28 0.28 82000 82000\n    1\n"
+            "   10 10 -2.5 -2.5 0.5 0.5\n    1 1\n   0.002 0 0.002 0 0 0\n"
+            + "".join(f"   {m:.2f} {m:.2f}\n" for m in mus) + " 0\n")
+    (tmp_path / "rows.inp").write_text(text)
+    from conformal.contact_inp.solve3 import summary
+    from conformal.models import solve_problem
+
+    ((case, p),), = plan(read_deck(tmp_path / "rows.inp")).chains
+    assert p.mu_scale[:, 0] == pytest.approx(1.0) and p.mu_scale[3, 9] == pytest.approx(mus[9] / mus[0])
+    r = solve_problem(p)
+    d = summary(case, r)
+    assert d["n_slip"] == d["n_contact"] > 0
+    mu = np.broadcast_to(np.array(mus), r.field.pn.shape)
+    assert d["FX"] == pytest.approx(-float((mu * r.field.pn).sum()) * 0.25, rel=1e-6)
+    assert d["FN"] == pytest.approx(1000.0) and -d["FX"] / d["FN"] < max(mus)
+    (tmp_path / "ratio.inp").write_text(text.replace(f"   {mus[4]:.2f} {mus[4]:.2f}\n", f"   {mus[4]:.2f} 0.1\n"))
+    with pytest.raises(Unsupported, match="FKIN / FSTAT varying between the grid rows"):
+        list(solve_deck(read_deck(tmp_path / "ratio.inp")))
+
+
 def test_conformal_decks_map_their_digits():
     """groove_li: D = 4 with C = 2 (cases 1-4) and with Blanco's angle correction C = 4 (cases 5-8:
     IF_METH = 1, VARIANT = 3, kept by C = 1 in cases 6-8); F = 1 becomes FX_WS / (mu FZ) with the
     pitch solved; mbench_conf: N = 0 becomes the approach from the first touch, V = 1 the table of
-    friction over the surface inclination."""
-    from conformal.contact_inp.solve1 import constant_friction, friction_at
+    friction over the surface inclination (``[friction] angle_table``)."""
+    from conformal.specs import Friction
 
     pl = plan(read_deck(DECKS / "groove_li.inp"))
     assert [c.number for chain in pl.chains for c, _ in chain] == [1, 2, 3, 4, 5, 6, 7, 8] and not pl.unsupported
@@ -190,23 +251,44 @@ def test_conformal_decks_map_their_digits():
     pm = plan(read_deck(DECKS / "mbench_conf.inp"))
     (c, s), = pm.chains[0]
     assert s["load"]["approach"] > 0 and "wheel_load" not in s["load"]
-    table = c.friction_table
-    assert friction_at(table, -0.5) == 0.2 and friction_at(table, 0.0) == 0.3
-    assert friction_at(table, -0.2617994) == pytest.approx(0.25)
-    assert constant_friction(table, -1.3, -0.36) == 0.2 and constant_friction(table, -0.4, -0.3) is None
+    table = Friction(0.3, 0.3, angle_table=c.friction_table)
+    assert s["friction"] == {"angle_table": [list(r) for r in c.friction_table]}
+    assert table.at_angle(-0.5).mu_static == 0.2 and table.at_angle(0.0).mu_kinetic == 0.3
+    assert table.at_angle(-0.2617994).mu_static == pytest.approx(0.25)
 
 
 @pytest.mark.slow
-def test_friction_over_the_profile_that_changes_within_a_patch_is_refused(tmp_path):
-    """mbench_conf with the friction ramp moved to -30 .. -10 degrees: the gauge-corner patch
-    (around -24 degrees) spans the ramp, so the case is refused naming V = 1 (after its solve,
-    about 6 s)."""
+def test_friction_per_row_of_a_conformal_strip(tmp_path):
+    """mbench_conf with the friction ramp moved to -30 .. -10 degrees, so that the gauge-corner
+    patch (around -24 degrees) spans it: every row of the conformal strip gets the friction at its
+    own contact angle (``[friction] angle_table``, as CONTACT's V = 1 per grid row).  On the solved
+    strip every element obeys Coulomb's law with its row's mu: |p_t| = mu(delta) p_n where it slips,
+    <= where it adheres, and both coefficients of the ramp occur (about 10 s)."""
+    from conformal.cases.conformal import curved_problem_from_wheel_rail
+    from conformal.result import SLIP
+    from conformal.scene import scene_from_dict
+    from conformal.solvers.conformal import solve_curved
+    from conformal.specs import Friction
+
     text = (DECKS / "mbench_conf.inp").read_text(encoding="latin-1").replace("  -20d    0.200", "  -30d    0.200", 1)
     for name in ("MBench_S1002_v3.prw", "MBench_UIC60_v3.prr"):
         (tmp_path / name).write_bytes((DECKS / name).read_bytes())
     (tmp_path / "ramp.inp").write_text(text, encoding="latin-1")
-    with pytest.raises(Unsupported, match=r"V = 1 \(friction varying over the profile: not constant"):
-        list(solve_deck(read_deck(tmp_path / "ramp.inp")))
+    ((case, raw),), = plan(read_deck(tmp_path / "ramp.inp")).chains
+    table = Friction(0.3, 0.3, angle_table=case.friction_table)
+    assert raw["friction"] == {"angle_table": [list(r) for r in case.friction_table]}
+    problem = curved_problem_from_wheel_rail(scene_from_dict(raw, base_dir=tmp_path))
+    r = solve_curved(problem)
+    f = r.field
+    mu = np.vectorize(lambda a: table.at_angle(float(a)).mu_static)(f.delta)
+    inside = f.pn > 0
+    pt = np.hypot(f.px, f.py)
+    assert np.all(pt[inside] <= mu[inside] * f.pn[inside] * (1 + 1e-6) + 1e-9)
+    slip = f.status == SLIP
+    assert slip.sum() > 10
+    assert pt[slip] == pytest.approx(mu[slip] * f.pn[slip], rel=1e-5)
+    assert mu[inside].min() == pytest.approx(0.2) and 0.2 < mu[inside].max()
+    assert len({round(float(m), 6) for m in mu[inside]}) > 3       # the ramp, row by row
 
 
 def test_conformal_example_reproduces_contacts_digits():
@@ -278,12 +360,12 @@ def test_cli_writes_json_lines_and_refuses_unsupported_digits(tmp_path, capsys):
     assert main(["inp", str(tmp_path / "veldep.inp")]) == 2
     cap = capsys.readouterr()
     assert cap.out == "" and cap.err.count("\n") == 1 and "L = 4 (velocity-dependent friction)" in cap.err
-    # a module-1 (wheel-rail) deck with the wheelset height prescribed (N = 0)
+    # a module-1 (wheel-rail) deck with a transient shift (T = 1)
     text = (DECKS / "mbench_a22_right.inp").read_text(encoding="latin-1")
-    (tmp_path / "m1.inp").write_text(text.replace(" 1203100 ", " 1203000 ", 1))
+    (tmp_path / "m1.inp").write_text(text.replace(" 1203100 ", " 1201100 ", 1))
     assert main(["inp", str(tmp_path / "m1.inp")]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "case 1): not supported: module 1, control digit N = 0" in err
+    assert err.count("\n") == 1 and "case 1): not supported: module 1, control digit T = 1" in err
     assert main(["inp", str(tmp_path / "two.inp"), "--cases", "3"]) == 2
     assert "--cases" in capsys.readouterr().err
 

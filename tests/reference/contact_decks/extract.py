@@ -4,7 +4,8 @@
 
 (names after the checkout: redo only those decks; the others keep their manifest entries).
 Cases with friction varying over the profile (module 1, V = 1) are solved, since whether the
-friction is constant over every patch is known only then (about 6 minutes, testbank case 35).
+friction is constant over every conformal strip (D = 4), and whether the wheel-rail set-up can
+place the case, is known only then (about 6 minutes, testbank case 35).
 
 For every public deck (examples/*.inp, testbank/**/*.inp) it counts the cases (the ``Case``
 blocks of its .ref_out) and the cases ``conformal inp`` can solve, with the reasons for the
