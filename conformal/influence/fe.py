@@ -661,7 +661,7 @@ def rail_body_from_grid(grid, rail_points: np.ndarray | None = None, name: str =
     return BodyModel("rail", prof), StripPatch(grid.mx, grid.dx, tuple(float(v) for v in edges))
 
 
-def _wheel_axes(grid) -> np.ndarray:
+def wheel_axes(grid) -> np.ndarray:
     """Columns: forward, axle, down of the wheel, in the rail-profile frame (x, y, z)."""
     a = np.asarray(grid.wheel_axle, dtype=float)
     d = np.asarray(grid.wheel_down, dtype=float)
@@ -679,7 +679,7 @@ def wheel_body_from_grid(grid, wheel_points: np.ndarray | None = None, name: str
 
     pts = grid.wheel_profile if wheel_points is None else np.asarray(wheel_points, dtype=float)
     prof = Profile2D.from_points(pts, name)
-    M = _wheel_axes(grid)
+    M = wheel_axes(grid)
     P = np.column_stack([np.zeros(grid.ms + 1), _edge_points(grid)])           # rail frame
     q = (P - np.asarray(grid.wheel_centre, dtype=float)) @ M                      # wheel axes
     yz = np.column_stack([q[:, 1], q[:, 2] - grid.wheel_radius])                # (y_w, z_w)
