@@ -19,7 +19,7 @@ bodies (:mod:`conformal.stresses.bodies`), on scikit-fem's own bases.
 >>> import numpy as np
 >>> pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
 >>> m, space = vector_space(pts, np.array([[0, 1, 2, 3]]), 1)
->>> space.n_scalar, space.basis.N
+>>> space.n_scalar, int(space.basis.N)
 (4, 12)
 >>> q = facet_quadrature(space, m, facet_indices(m, np.array([[0, 1, 2]])), intorder=2)
 >>> round(float(q.weights.sum()), 12)     # the area of the facet z = 0
@@ -228,13 +228,13 @@ def facet_quadrature(space: VectorSpace, mesh, facets: np.ndarray, intorder: int
     facets = np.asarray(facets)
     fb = FacetBasis(mesh, elem, intorder=intorder, quadrature=quadrature, facets=facets)
     F, q = len(facets), fb.X.shape[1]
-    X = np.transpose(fb.global_coordinates().value, (1, 2, 0)).reshape(F * q, 3)
+    X = np.transpose(np.asarray(fb.global_coordinates()), (1, 2, 0)).reshape(F * q, 3)
     ref = fb.X                                           # (2, q) reference points of the facet
     bary = np.tile(np.column_stack([1.0 - ref.sum(axis=0), ref[0], ref[1]]), (F, 1))
-    normals = np.transpose(fb.normals.value, (1, 2, 0)).reshape(F * q, 3)
+    normals = np.transpose(np.asarray(fb.normals), (1, 2, 0)).reshape(F * q, 3)
     w = fb.dx.ravel()
     # rows: the scalar dofs of the facet's tetrahedron (those off the facet vanish on it: dropped)
-    phi = np.stack([fb.basis[k][0].value for k in range(fb.Nbfun)])       # (nb, F, q)
+    phi = np.stack([np.asarray(fb.basis[k][0]) for k in range(fb.Nbfun)])       # (nb, F, q)
     rows = np.broadcast_to(fb.element_dofs[:, :, None], phi.shape)
     cols = np.broadcast_to(np.arange(F * q).reshape(1, F, q), phi.shape)
     keep = np.abs(phi) > 1e-12
@@ -296,7 +296,7 @@ def probes(basis, X: np.ndarray, cells: np.ndarray | None = None, gradient: bool
     vals = []
     for k in range(basis.Nbfun):
         f = basis.elem.gbasis(basis.mapping, ref, k, tind=cells)[0]
-        vals.append((f.grad if gradient else f.value).reshape(-1))      # (..., n, 1) -> comp-major
+        vals.append(np.asarray(f.grad if gradient else f).reshape(-1))      # (..., n, 1) -> comp-major
     vals = np.array(vals)                                               # (Nbfun, ncomp n)
     ncomp = vals.shape[1] // n
     rows = np.tile(np.arange(ncomp * n), basis.Nbfun)
