@@ -662,7 +662,18 @@ def rail_body_from_grid(grid, rail_points: np.ndarray | None = None, name: str =
 
 
 def wheel_axes(grid) -> np.ndarray:
-    """Columns: forward, axle, down of the wheel, in the rail-profile frame (x, y, z)."""
+    """The wheel's axes in the rail-profile frame (x, y, z).
+
+    Parameters
+    ----------
+    grid : CurvedGrid
+        Its ``wheel_axle`` and ``wheel_down`` directions.
+
+    Returns
+    -------
+    ndarray (3, 3)
+        Columns: forward, axle, down (unit vectors).
+    """
     a = np.asarray(grid.wheel_axle, dtype=float)
     d = np.asarray(grid.wheel_down, dtype=float)
     f = np.cross(a, d)

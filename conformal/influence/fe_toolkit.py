@@ -57,9 +57,16 @@ def trace_shape(lam: np.ndarray, order: int) -> np.ndarray:
 class VectorSpace:
     """The P1/P2 vector space of a tetrahedral body and the numbering of its scalar nodes.
 
-    basis : the ``skfem.Basis`` (``ElementVector`` of ``ElementTetP1`` / ``ElementTetP2``).
-    dofmap : (3, n_scalar) dof of component c at scalar node g (vertices, then edges for P2).
-    edge_key, edge_id : sorted keys lo * nverts + hi of the mesh edges and their edge numbers (P2).
+    Attributes
+    ----------
+    basis : skfem.CellBasis
+        ``ElementVector`` of ``ElementTetP1`` / ``ElementTetP2``.
+    dofmap : ndarray (3, n_scalar)
+        The dof of component c at scalar node g (vertices, then edges for P2).
+    n_scalar, nverts, order : int
+        Scalar nodes, vertices, element order.
+    edge_key, edge_id : ndarray
+        Sorted keys lo * nverts + hi of the mesh edges and their edge numbers (P2).
     """
 
     basis: object
@@ -102,9 +109,23 @@ class VectorSpace:
 
 
 def vector_space(points: np.ndarray, tets: np.ndarray, order: int) -> tuple[object, VectorSpace]:
-    """The skfem mesh (``MeshTet``) and the P1/P2 vector space of a tetrahedral body (points
-    (n, 3), tets (t, 4)); quadrature of the volume: degree 2 for P2, 1 for P1 (exact for the
-    stiffness of straight-sided elements)."""
+    """The skfem mesh and the P1/P2 vector space of a tetrahedral body.
+
+    Parameters
+    ----------
+    points : ndarray (n, 3)
+        Vertices (mm).
+    tets : ndarray (t, 4)
+        Tetrahedra (vertex indices).
+    order : int
+        1 or 2; the volume quadrature has degree 2 for P2, 1 for P1 (exact for the stiffness of
+        straight-sided elements).
+
+    Returns
+    -------
+    mesh : skfem.MeshTet
+    space : VectorSpace
+    """
     from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, MeshTet
 
     m = MeshTet(np.asarray(points, float).T.copy(), np.asarray(tets).T.copy())
@@ -139,9 +160,19 @@ def trace_matrix(space: VectorSpace, tris: np.ndarray, lam: np.ndarray) -> sp.cs
 
 # ----------------------------------------------------------------------------- elasticity
 def stiffness(space: VectorSpace, G: float, nu: float) -> sp.csr_matrix:
-    """The linear-elasticity stiffness matrix of an isotropic body of shear modulus G (N/mm²) and
-    Poisson's ratio nu (scikit-fem's ``linear_elasticity`` form, Lamé's lambda from
-    :func:`conformal.materials.lame_lambda`)."""
+    """The linear-elasticity stiffness matrix of an isotropic body (scikit-fem's
+    ``linear_elasticity`` form, Lamé's lambda from :func:`conformal.materials.lame_lambda`).
+
+    Parameters
+    ----------
+    space : VectorSpace
+    G, nu : float
+        Shear modulus (N/mm²) and Poisson's ratio.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix (N, N)
+    """
     from skfem import asm
     from skfem.models.elasticity import linear_elasticity
 
@@ -188,15 +219,22 @@ def facet_indices(mesh, tris: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class FacetQuadrature:
-    """Quadrature on surface facets (``skfem.FacetBasis`` of the scalar element), facet by facet.
+    """Quadrature on surface facets (``skfem.FacetBasis`` of the scalar element), facet by facet;
+    the points of facet f are f q ... f q + q - 1 (q points per facet).
 
-    basis : the FacetBasis (scalar P1/P2 element, ``facets=`` the given facets).
-    tris : (F, 3) vertices of each facet (skfem's order; ``bary`` refers to it).
-    points, bary, normals, weights : (F q, 3), (F q, 3), (F q, 3), (F q,): the quadrature points,
-        their barycentric coordinates in their facet, the outward unit normals and the weights
-        w_q |T| (facet-major: the points of facet f are f q ... f q + q - 1).
-    load : (n_scalar, F q) CSC: F_a = sum_q w_q phi_a(x_q) t(x_q), the load vector of values t
-        at the points (columns sliced by facet for a subset).
+    Attributes
+    ----------
+    basis : skfem.FacetBasis
+        Scalar P1/P2 element, ``facets=`` the given facets.
+    tris : ndarray (F, 3)
+        Vertices of each facet (skfem's order; ``bary`` refers to it).
+    points, bary, normals : ndarray (F q, 3)
+        The quadrature points, their barycentric coordinates in their facet, the outward unit normals.
+    weights : ndarray (F q,)
+        The weights w_q |T| (mm²).
+    load : scipy.sparse.csc_matrix (n_scalar, F q)
+        F_a = sum_q w_q phi_a(x_q) t(x_q): the load vector of values t at the points (columns
+        sliced by facet for a subset).
     """
 
     basis: object
@@ -243,10 +281,26 @@ def facet_quadrature(space: VectorSpace, mesh, facets: np.ndarray, intorder: int
 
 
 def traction_load(space: VectorSpace, mesh, facets: np.ndarray, traction, intorder: int = 4) -> np.ndarray:
-    """Load vector (N,) of a traction on the facets ``facets``: F = int_S t . v dA, a
-    ``LinearForm`` on a vector ``FacetBasis``.  ``traction``: a callable t(x, n) of the global
-    coordinates and the outward normals (each (3, ...)), returning (3, ...), e.g.
-    ``lambda x, n: -p * n`` for a pressure p."""
+    """Load vector of a traction on surface facets: F = int_S t . v dA, a ``LinearForm`` on a
+    vector ``FacetBasis``.
+
+    Parameters
+    ----------
+    space : VectorSpace
+    mesh : skfem.MeshTet
+    facets : ndarray
+        Indices into ``mesh.facets`` (:func:`facet_indices`).
+    traction : callable
+        t(x, n) of the global coordinates and the outward normals (each (3, ...)), returning
+        (3, ...) (N/mm²), e.g. ``lambda x, n: -p * n`` for a pressure p.
+    intorder : int
+        Degree of the facet quadrature.
+
+    Returns
+    -------
+    ndarray (N,)
+        Nodal forces (N).
+    """
     from skfem import ElementTetP1, ElementTetP2, ElementVector, FacetBasis, LinearForm, asm
     from skfem.helpers import dot
 
@@ -284,10 +338,26 @@ def locate_cells(mesh, X: np.ndarray, k: int = 16) -> np.ndarray:
 
 
 def probes(basis, X: np.ndarray, cells: np.ndarray | None = None, gradient: bool = False) -> sp.csr_matrix:
-    """Sparse matrix evaluating a field of ``basis`` (a scalar or vector ``skfem.Basis``) at the
-    points X (n, 3): scikit-fem's ``Basis.probes`` (rows c n + i: component c at point i), with
-    the cells from :func:`locate_cells` unless given.  ``gradient``: the derivatives instead,
-    rows (3 c + j) n + i: d u_c / d x_j at point i (one component: rows j n + i)."""
+    """Sparse matrix evaluating a field at points: scikit-fem's ``Basis.probes``, with the cells
+    from :func:`locate_cells` unless given, and optionally the gradient.
+
+    Parameters
+    ----------
+    basis : skfem.CellBasis
+        A scalar or vector basis.
+    X : ndarray (n, 3)
+        The points.
+    cells : ndarray (n,), optional
+        Their cells.
+    gradient : bool
+        The derivatives instead of the values.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+        Values: rows c n + i (component c at point i); gradients: rows (3 c + j) n + i
+        (d u_c / d x_j at point i; a scalar field: rows j n + i).
+    """
     X = np.asarray(X, float).reshape(-1, 3)
     n = len(X)
     if cells is None:
