@@ -231,7 +231,7 @@ class FacetQuadrature:
     points, bary, normals : ndarray (F q, 3)
         The quadrature points, their barycentric coordinates in their facet, the outward unit normals.
     weights : ndarray (F q,)
-        The weights w_q |T| (mm²).
+        The weights w_q A_f (A_f: the area of the facet, mm²).
     load : scipy.sparse.csc_matrix (n_scalar, F q)
         F_a = sum_q w_q phi_a(x_q) t(x_q): the load vector of values t at the points (columns
         sliced by facet for a subset).
