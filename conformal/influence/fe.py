@@ -93,8 +93,8 @@ import scipy.sparse as sp
 from conformal.errors import InputError
 from conformal.influence.factor import Factor as _Factor
 from conformal.influence.factor import FESolveError
-from conformal.influence.fe_toolkit import (CENTROID, VectorSpace, clamped_dofs, direct_solver, facet_indices,
-                                            facet_quadrature, stiffness, trace_matrix, vector_space)
+from conformal.influence.fe_toolkit import (CENTROID, VectorSpace, clamped_dofs, direct_solver, stiffness,
+                                            surface_quadrature, trace_matrix, vector_space)
 from conformal.influence.fe_halfspace3d import _gauss_rectangle_stress, rectangle_displacement, rectangle_stress
 from conformal.meshing.bodies import BodyModel, StripPatch
 from conformal.meshing.gmsh_body import BodyMesh, MeshSpec, mesh_body, surface_frame, surface_point
@@ -196,9 +196,8 @@ def _space(bm: BodyMesh, order: int) -> tuple[object, VectorSpace]:
 
 
 def _free_surface(bm: BodyMesh, m, space: VectorSpace) -> _Surface:
-    facets = facet_indices(m, bm.free_tris)
-    q6 = facet_quadrature(space, m, facets, intorder=4)
-    q1 = facet_quadrature(space, m, facets, quadrature=CENTROID)
+    q6 = surface_quadrature(space, m, bm.free_tris, intorder=4)
+    q1 = surface_quadrature(space, m, bm.free_tris, quadrature=CENTROID)
     tris = q6.tris                                       # the facets' vertices (skfem's order)
     X = bm.points[tris]                                  # (F, 3, 3)
     tri_uv = bm.uv[tris]

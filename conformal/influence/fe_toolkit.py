@@ -202,9 +202,9 @@ def clamped_dofs(space: VectorSpace, tris: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 # ----------------------------------------------------------------------------- facets
-def facet_indices(mesh, tris: np.ndarray) -> np.ndarray:
+def facet_indices(mesh, tris: np.ndarray, strict: bool = True) -> np.ndarray:
     """Indices into ``mesh.facets`` (a ``MeshTet``) of surface triangles ``tris`` (F, 3), in their
-    order; FESolveError where a triangle is no facet of the tetrahedra."""
+    order; where a triangle is no facet of the tetrahedra: FESolveError, or -1 if not ``strict``."""
     nv = np.int64(mesh.nvertices)
     fac = np.sort(mesh.facets, axis=0).astype(np.int64)
     key = (fac[0] * nv + fac[1]) * nv + fac[2]
@@ -212,9 +212,10 @@ def facet_indices(mesh, tris: np.ndarray) -> np.ndarray:
     t = np.sort(np.asarray(tris), axis=1).astype(np.int64)
     want = (t[:, 0] * nv + t[:, 1]) * nv + t[:, 2]
     pos = np.minimum(np.searchsorted(key[srt], want), key.size - 1)
-    if not np.all(key[srt][pos] == want):
+    found = key[srt][pos] == want
+    if strict and not found.all():
         raise FESolveError("surface triangle not found among the facets of the tetrahedral mesh")
-    return srt[pos]
+    return np.where(found, srt[pos], -1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -278,6 +279,66 @@ def facet_quadrature(space: VectorSpace, mesh, facets: np.ndarray, intorder: int
     keep = np.abs(phi) > 1e-12
     load = sp.csc_matrix(((phi * fb.dx[None])[keep], (rows[keep], cols[keep])), shape=(space.n_scalar, F * q))
     return FacetQuadrature(fb, mesh.facets[:, facets].T.copy(), X, bary, normals, w, load)
+
+
+def surface_quadrature(space: VectorSpace, mesh, tris: np.ndarray, intorder: int | None = None,
+                       quadrature: tuple | None = None) -> FacetQuadrature:
+    """:func:`facet_quadrature` on the surface triangles ``tris`` (F, 3) of a mesh, in their order.
+
+    gmsh's volume mesh may take the other diagonal of a quad of its surface mesh (seen at the
+    centre of a crowned wheel's patch): such a surface triangle is no facet of the tetrahedra.
+    It keeps its own vertices (``tris``), its points and weights come from the same reference
+    rule mapped onto it, its load rows from :func:`trace_shape` at them (P1: its vertices; P2:
+    FESolveError, its edges have no dofs), its normal points away from the tetrahedra at its
+    first vertex.  ``basis`` then holds only the triangles that are facets.
+    """
+    from skfem.quadrature import get_quadrature
+    from skfem.refdom import RefTri
+
+    tris = np.asarray(tris)
+    ref, W = quadrature if quadrature is not None else get_quadrature(RefTri, intorder)
+    f = facet_indices(mesh, tris, strict=False)
+    ok = f >= 0
+    fq = facet_quadrature(space, mesh, f[ok], quadrature=(ref, W))
+    if ok.all():
+        return fq
+    q = W.size
+    bad = np.flatnonzero(~ok)
+    tb = tris[bad]
+    X = mesh.p.T[tb]                                              # (B, 3, 3)
+    lam = np.column_stack([1.0 - ref.sum(axis=0), ref[0], ref[1]])   # (q, 3)
+    nrm = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+    area = 0.5 * np.linalg.norm(nrm, axis=1)
+    nrm /= (2 * area)[:, None]
+    for i, t in enumerate(tb):                                    # outward: away from the tetrahedra at vertex 0
+        star = mesh.p[:, mesh.t[:, (mesh.t == t[0]).any(axis=0)]].mean(axis=(1, 2))
+        if nrm[i] @ (X[i].mean(axis=0) - star) < 0:
+            nrm[i] *= -1
+    w_bad = (2.0 * area[:, None] * W[None, :]).ravel()
+    nodes = space.scalar_nodes(tb)
+    phi = trace_shape(lam, space.order)                           # (q, a)
+    rows = np.repeat(nodes[:, None, :], q, axis=1).ravel()
+    cols = np.repeat(np.arange(len(bad) * q), nodes.shape[1])
+    vals = (phi[None, :, :] * w_bad.reshape(-1, q)[:, :, None]).ravel()
+    load_bad = sp.csc_matrix((vals, (rows, cols)), shape=(space.n_scalar, len(bad) * q))
+    pos_ok = (np.flatnonzero(ok)[:, None] * q + np.arange(q)).ravel()
+    pos_bad = (bad[:, None] * q + np.arange(q)).ravel()
+    order = np.argsort(np.concatenate([pos_ok, pos_bad]))         # merged column -> position
+    n = len(tris) * q
+
+    def merge(a_ok, a_bad):
+        out = np.empty((n,) + a_ok.shape[1:])
+        out[pos_ok], out[pos_bad] = a_ok, a_bad
+        return out
+
+    out_tris = tris.copy()
+    out_tris[ok] = fq.tris
+    return FacetQuadrature(fq.basis, out_tris,
+                           merge(fq.points, np.einsum("qk,bkd->bqd", lam, X).reshape(-1, 3)),
+                           merge(fq.bary, np.tile(lam, (len(bad), 1))),
+                           merge(fq.normals, np.repeat(nrm, q, axis=0)),
+                           merge(fq.weights, w_bad),
+                           sp.hstack([fq.load, load_bad]).tocsc()[:, order])
 
 
 def traction_load(space: VectorSpace, mesh, facets: np.ndarray, traction, intorder: int = 4) -> np.ndarray:

@@ -142,3 +142,43 @@ def test_clamped_dofs_of_a_face(order):
     X = space.basis.doflocs[:, space.dofmap[0]].T
     assert set(nodes) == set(np.flatnonzero(np.isclose(X[:, 0], 0.0)))
     assert D.size == 3 * nodes.size and np.array_equal(D, np.unique(space.dofmap[:, nodes]))
+
+
+def test_surface_triangles_that_are_no_facets_keep_their_rule():
+    """A surface mesh whose quads take the other diagonal than the tetrahedra (gmsh did this at the
+    centre of a crowned wheel's patch): surface_quadrature maps the same rule onto those
+    triangles, with outward normals; a constant pressure still integrates to pressure x area and
+    the points agree with the facets' rule where the triangles are facets.  P2 refuses them (their
+    edges have no dofs)."""
+    from conformal.influence.factor import FESolveError
+    from conformal.influence.fe_toolkit import surface_quadrature
+
+    pts, tets, faces = _block()
+    m, space = vector_space(pts, tets, 1)
+    tris = faces["z1"]
+    # each facet of the face z = Lz and its partner across the quad's diagonal: the other diagonal
+    X = pts[tris]
+    quads = {}
+    for t, c in zip(tris, X.mean(axis=1)):
+        quads.setdefault(tuple(np.floor(c[:2] / (L[:2] / np.array([3, 2]))).astype(int)), []).append(t)
+    flipped = []
+    for pair in quads.values():
+        v = np.unique(np.concatenate(pair))
+        d = [a for a in pair[0] if a in pair[1]]                    # the shared diagonal
+        o = [a for a in v if a not in d]                            # the other diagonal
+        flipped += [[o[0], o[1], d[0]], [o[0], o[1], d[1]]]
+    flipped = np.array(flipped)
+    assert (facet_indices(m, flipped, strict=False) < 0).all()
+    mixed = np.vstack([tris[:3], flipped])
+    q = surface_quadrature(space, m, mixed, intorder=4)
+    X3 = pts[tris[:3]]
+    area = L[0] * L[1] + 0.5 * np.linalg.norm(np.cross(X3[:, 1] - X3[:, 0], X3[:, 2] - X3[:, 0]), axis=1).sum()
+    assert q.weights.sum() == pytest.approx(area, rel=1e-13)
+    np.testing.assert_allclose(q.normals, np.tile([0.0, 0.0, 1.0], (len(q.weights), 1)), atol=1e-13)
+    assert np.abs(q.load @ np.ones(len(q.weights))).sum() == pytest.approx(area, rel=1e-13)
+    np.testing.assert_allclose(q.points[:, 2], L[2], atol=1e-13)
+    ref = facet_quadrature(space, m, facet_indices(m, tris[:3]), intorder=4)
+    np.testing.assert_allclose(q.points[:ref.points.shape[0]], ref.points, atol=1e-14)
+    _, space2 = vector_space(pts, tets, 2)
+    with pytest.raises(FESolveError, match="edge not found"):
+        surface_quadrature(space2, m, flipped, intorder=4)
