@@ -224,7 +224,7 @@ def wheel_rail_pair(grid, rail_points: np.ndarray, wheel_points: np.ndarray, mat
     the grid's arc length (e.g. an estimated contact area enlarged by ``mesh.patch``), clipped to
     the grid; default: the whole grid.
     """
-    from conformal.influence.fe import _wheel_axes, rail_body_from_grid, wheel_body_from_grid
+    from conformal.influence.fe import wheel_axes, rail_body_from_grid, wheel_body_from_grid
 
     rail, rpatch = rail_body_from_grid(grid, rail_points)
     wheel, wpatch, _ = wheel_body_from_grid(grid, wheel_points)
@@ -248,7 +248,7 @@ def wheel_rail_pair(grid, rail_points: np.ndarray, wheel_points: np.ndarray, mat
     w_lo, w_hi = np.interp([s_lo, s_hi], s_grid, wpatch.edges)
     p1 = strip_patch(x_half, float(r_lo), float(r_hi), h)
     p2 = strip_patch(x_half, float(w_lo), float(w_hi), h)
-    M = _wheel_axes(grid)
+    M = wheel_axes(grid)
     origin = np.asarray(grid.wheel_centre, dtype=float) + float(grid.wheel_radius) * M[:, 2]
     if mesh.body in ("section", "block"):
         return section_pair(rail, p1, wheel, p2, material, mesh, rotation2=M, origin2=origin)

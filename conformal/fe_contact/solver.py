@@ -58,9 +58,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from conformal.errors import ConformalError, ConvergenceError, InputError, NoContactError
-from conformal.influence.factor import Factor, pardiso_available
-from conformal.influence.fe import trace_shape, vector_space
-from conformal.materials import lame_lambda
+from conformal.influence.factor import Factor
+from conformal.influence.fe_toolkit import (clamped_dofs, direct_solver, scalar_positions, stiffness, trace_matrix,
+                                            vector_space)
 from conformal.meshing.gmsh_body import BodyMesh, surface_frame, surface_point
 
 FAR_FIELDS = ("halfspace", "clamped")
@@ -273,7 +273,7 @@ class _FEBody:
     free: np.ndarray
     D_scalar: np.ndarray      # scalar nodes on the cut faces
     X_scalar: np.ndarray      # (n_scalar, 3) positions of the scalar nodes
-    space: object             # the vector space (conformal.influence.fe.vector_space)
+    space: object             # the vector space (conformal.influence.fe_toolkit.vector_space)
     K_fD: sp.csr_matrix
     factor: Factor
     ndofs: int
@@ -281,24 +281,8 @@ class _FEBody:
     G: float
     nu: float
 
-    def trace_nodes(self, tris: np.ndarray) -> np.ndarray:
-        """Scalar nodes of surface triangles: (F, 3) for P1, (F, 6) for P2 (vertices, then the
-        edges (0, 1), (1, 2), (0, 2))."""
-        if self.order == 1:
-            return tris
-        sp_, nv = self.space, len(self.points)
-        out = [tris]
-        for a, b in ((0, 1), (1, 2), (0, 2)):
-            lo, hi = np.minimum(tris[:, a], tris[:, b]), np.maximum(tris[:, a], tris[:, b])
-            pos = np.searchsorted(sp_.edge_key, lo.astype(np.int64) * nv + hi)
-            out.append((nv + sp_.edge_id[np.minimum(pos, sp_.edge_key.size - 1)])[:, None])
-        return np.concatenate(out, axis=1)
-
 
 def _fe_body(body: ContactBody, solver: str, max_dofs: int, order: int) -> _FEBody:
-    from skfem import asm
-    from skfem.models.elasticity import linear_elasticity
-
     pts = body.points
     m, space = vector_space(pts, body.mesh.tets, order)
     basis, dofmap = space.basis, space.dofmap
@@ -306,16 +290,14 @@ def _fe_body(body: ContactBody, solver: str, max_dofs: int, order: int) -> _FEBo
     if ndofs > max_dofs:
         raise FEContactError(f"the {body.mesh.body.kind} body has {ndofs} unknowns, more than max_dofs = "
                              f"{max_dofs}; coarsen the mesh ([model] fec_n, fec_growth)")
-    lam = lame_lambda(body.G, body.nu)
-    K = asm(linear_elasticity(lam, body.G), basis).tocsr()
-    X_scalar = np.concatenate([pts, 0.5 * (pts[m.edges[0]] + pts[m.edges[1]])]) if order == 2 else pts
+    K = stiffness(space, body.G, body.nu)
+    X_scalar = scalar_positions(space)
     fb = _FEBody(pts, dofmap, np.zeros(0, int), np.zeros(0, int), np.zeros(0, int), X_scalar, space,
                  None, None, ndofs, order, body.G, body.nu)
     clamped = body.mesh.clamped_tris
     if len(clamped) == 0:
         raise FEContactError(f"the {body.mesh.body.kind} body has no cut faces to hold it")
-    D_scalar = np.unique(fb.trace_nodes(np.sort(clamped, axis=1)))
-    D = np.sort(dofmap[:, D_scalar].ravel())
+    D_scalar, D = clamped_dofs(space, clamped)
     free = np.setdiff1d(np.arange(ndofs), D)
     Kf = K[free]
     try:
@@ -485,11 +467,7 @@ def prepare_contact(body1: ContactBody, body2: ContactBody, *, direction=(0.0, 0
         raise InputError("direction: need a finite non-zero 3-vector")
     d = d / np.linalg.norm(d)
     t0 = time.perf_counter()
-    solver = settings.solver
-    if solver == "auto":
-        solver = "pardiso" if pardiso_available() else "splu"
-    elif solver == "pardiso" and not pardiso_available():
-        raise InputError("[model] fec_solver: pypardiso is not installed, use \"splu\" or \"auto\"")
+    solver = direct_solver(settings.solver, "[model] fec_solver")
 
     # slave side: free-surface triangles of body 1 off the cut faces; quadrature points on them
     m1, m2 = body1.mesh, body2.mesh
@@ -567,13 +545,10 @@ def prepare_contact(body1: ContactBody, body2: ContactBody, *, direction=(0.0, 0
     wn = wphi / area[rowq]                                                # (Q, 3)
 
     def coupling(fb: _FEBody, tri_nodes: np.ndarray, lam_pts: np.ndarray, sign: float) -> sp.csr_matrix:
-        N = trace_shape(lam_pts, fb.order)                                # (Q, nb)
-        nb = N.shape[1]
-        val = sign * wn[:, :, None, None] * N[:, None, :, None] * nq[:, None, None, :]
-        rows = np.broadcast_to(rowq[:, :, None, None], (Q, 3, nb, 3))
-        cols = np.broadcast_to(np.transpose(fb.dofmap[:, fb.trace_nodes(tri_nodes)], (1, 2, 0))[:, None, :, :],
-                               (Q, 3, nb, 3))
-        return sp.csr_matrix((val.ravel(), (rows.ravel(), cols.ravel())), shape=(n_c, fb.ndofs))
+        # the trace at the points (Q, n_scalar), its normal component per dof, tested with wn
+        T = trace_matrix(fb.space, tri_nodes, lam_pts)
+        R = sp.csr_matrix((sign * wn.ravel(), (rowq.ravel(), np.repeat(np.arange(Q), 3))), shape=(n_c, Q))
+        return sp.hstack([R @ sp.diags(nq[:, c]) @ T for c in range(3)]).tocsr()[:, np.argsort(fb.dofmap.ravel())]
 
     B1 = coupling(f1, tris[tq], phi, 1.0)
     B2 = coupling(f2, tris2[mtri], bary, -1.0)

@@ -93,8 +93,8 @@ import scipy.sparse as sp
 from conformal.errors import InputError
 from conformal.influence.factor import Factor as _Factor
 from conformal.influence.factor import FESolveError
-from conformal.influence.factor import amg_available as _amg_available
-from conformal.influence.factor import pardiso_available as _pardiso_available
+from conformal.influence.fe_toolkit import (CENTROID, VectorSpace, clamped_dofs, direct_solver, stiffness,
+                                            surface_quadrature, trace_matrix, vector_space)
 from conformal.influence.fe_halfspace3d import _gauss_rectangle_stress, rectangle_displacement, rectangle_stress
 from conformal.meshing.bodies import BodyModel, StripPatch
 from conformal.meshing.gmsh_body import BodyMesh, MeshSpec, mesh_body, surface_frame, surface_point
@@ -167,102 +167,16 @@ class BodyInfluence:
     stats: dict = field(default_factory=dict)
 
 
-# ----------------------------------------------------------------------------- FE space
-_DUNAVANT4 = (  # degree-4 rule on the triangle: barycentric points and weights (sum 1)
-    np.array([[0.445948490915965, 0.445948490915965, 0.108103018168070],
-              [0.445948490915965, 0.108103018168070, 0.445948490915965],
-              [0.108103018168070, 0.445948490915965, 0.445948490915965],
-              [0.091576213509771, 0.091576213509771, 0.816847572980459],
-              [0.091576213509771, 0.816847572980459, 0.091576213509771],
-              [0.816847572980459, 0.091576213509771, 0.091576213509771]]),
-    np.array([0.223381589678011] * 3 + [0.109951743655322] * 3))
-
-
-def trace_shape(lam: np.ndarray, order: int) -> np.ndarray:
-    """Lagrange shape functions of a triangle (trace of P1/P2 tets) at barycentric points (..., 3).
-    P2 order: vertices 0, 1, 2, then edges (0,1), (1,2), (0,2)."""
-    if order == 1:
-        return lam
-    l0, l1, l2 = lam[..., 0], lam[..., 1], lam[..., 2]
-    return np.stack([l0 * (2 * l0 - 1), l1 * (2 * l1 - 1), l2 * (2 * l2 - 1),
-                     4 * l0 * l1, 4 * l1 * l2, 4 * l0 * l2], axis=-1)
-
-
-@dataclass(frozen=True, eq=False)
-class _Space:
-    basis: object
-    dofmap: np.ndarray       # (3, n_scalar): dof of component c at scalar node g
-    n_scalar: int
-    edge_key: np.ndarray     # sorted keys of the mesh edges (P2)
-    edge_id: np.ndarray
-    nverts: int
-    order: int
-
-    def scalar_nodes(self, tris: np.ndarray, strict: bool = True) -> np.ndarray:
-        """Scalar nodes of surface triangles (F, 3 or 6).  ``strict = False``: an edge that no
-        tetrahedron has (gmsh's volume mesh took the other diagonal of a quad of the surface mesh,
-        seen on a clamped face of a wheel body) gets -1 instead of raising."""
-        if self.order == 1:
-            return tris
-        n = self.nverts
-        out = [tris]
-        for a, b in ((0, 1), (1, 2), (0, 2)):
-            lo, hi = np.minimum(tris[:, a], tris[:, b]), np.maximum(tris[:, a], tris[:, b])
-            key = lo.astype(np.int64) * n + hi
-            pos = np.searchsorted(self.edge_key, key)
-            found = (pos < self.edge_key.size) & (self.edge_key[np.minimum(pos, self.edge_key.size - 1)] == key)
-            if strict and not found.all():
-                raise FESolveError("surface triangle edge not found in the tetrahedral mesh")
-            pos = np.minimum(pos, self.edge_key.size - 1)
-            out.append(np.where(found, self.nverts + self.edge_id[pos], -1)[:, None])
-        return np.concatenate(out, axis=1)
-
-
-def _space(bm: BodyMesh, order: int) -> tuple[object, _Space]:
-    return vector_space(bm.points, bm.tets, order)
-
-
-def vector_space(points: np.ndarray, tets: np.ndarray, order: int) -> tuple[object, _Space]:
-    """The skfem mesh and the P1/P2 vector space of a tetrahedral body (points (n, 3), tets
-    (t, 4)), with the scalar-node numbering of its surface traces (also used by conformal.fe_contact)."""
-    from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, MeshTet
-
-    m = MeshTet(points.T.copy(), tets.T.copy())
-    elem = ElementTetP2() if order == 2 else ElementTetP1()
-    basis = Basis(m, ElementVector(elem), intorder=2 if order == 2 else 1)
-    nv = m.nvertices
-    if order == 2:
-        dofmap = np.concatenate([basis.nodal_dofs, basis.edge_dofs], axis=1)
-        key = m.edges[0].astype(np.int64) * nv + m.edges[1]
-        srt = np.argsort(key)
-        edge_key, edge_id = key[srt], srt
-    else:
-        dofmap = basis.nodal_dofs
-        edge_key = edge_id = np.zeros(0, dtype=np.int64)
-    return m, _Space(basis, dofmap, dofmap.shape[1], edge_key, edge_id, nv, order)
-
-
-def _clamped_dofs(m, space: _Space, bm: BodyMesh) -> np.ndarray:
-    """All dofs on the clamped faces (vertex and, for P2, edge dofs of the clamped triangles)."""
-    clamped = bm.clamped_tris
-    if len(clamped) == 0:
-        raise FESolveError("the body has no clamped face")
-    # P2: an edge of a clamped triangle that the volume mesh does not have carries no dof (the
-    # volume's own diagonal of that quad then keeps its mid-side dof free: on an artificial
-    # boundary far from the patch)
-    nodes = space.scalar_nodes(np.sort(clamped, axis=1), strict=False)
-    nodes = np.unique(nodes[nodes >= 0])
-    return np.unique(space.dofmap[:, nodes].ravel())
-
-
 # ----------------------------------------------------------------------------- surface maps
 @dataclass(frozen=True, eq=False)
 class _Surface:
     """Quadrature on the free surface and interpolation of the FE trace in (x, s).
 
-    Two rules: 6 points per facet (``points``, ``P6``) near a loaded element, the centroid
-    (``centroids``, ``P1``) elsewhere.  P6 and P1 map values at the points to the load vector:
-    F_a = sum_q w_q phi_a(q) t(q), as (n_scalar, points) CSC matrices (column slices per facet).
+    Two rules (:func:`~conformal.influence.fe_toolkit.facet_quadrature`, skfem's FacetBasis on the
+    free-surface facets): 6 points per facet (``points``, ``P6``; Dunavant's degree-4 rule) near a
+    loaded element, the centroid (``centroids``, ``P1``) elsewhere.  P6 and P1 map values at the
+    points to the load vector: F_a = sum_q w_q phi_a(q) t(q), as (n_scalar, points) CSC matrices
+    (column slices per facet).
     """
 
     points: np.ndarray       # (F*6, 3)
@@ -277,42 +191,21 @@ class _Surface:
     tri_uv: np.ndarray       # (F, 3, 2)
 
 
-def _rule_matrix(space: "_Space", nodes: np.ndarray, lam: np.ndarray, w: np.ndarray, area: np.ndarray):
-    """(n_scalar, F*q) matrix of w_q |T| phi_a(q) for a quadrature rule (lam (q, 3), w (q,))."""
-    q = lam.shape[0]
-    F = nodes.shape[0]
-    phi = trace_shape(lam, space.order)                 # (q, a)
-    rows = np.repeat(nodes[:, None, :], q, axis=1).ravel()
-    cols = np.repeat(np.arange(F * q), nodes.shape[1])
-    vals = (phi[None, :, :] * (area[:, None] * w[None, :])[:, :, None]).ravel()
-    return sp.csc_matrix((vals, (rows, cols)), shape=(space.n_scalar, F * q))
+def _space(bm: BodyMesh, order: int) -> tuple[object, VectorSpace]:
+    return vector_space(bm.points, bm.tets, order)
 
 
-def _free_surface(bm: BodyMesh, space: _Space) -> _Surface:
-    tris = bm.free_tris
+def _free_surface(bm: BodyMesh, m, space: VectorSpace) -> _Surface:
+    q6 = surface_quadrature(space, m, bm.free_tris, intorder=4)
+    q1 = surface_quadrature(space, m, bm.free_tris, quadrature=CENTROID)
+    tris = q6.tris                                       # the facets' vertices (skfem's order)
     X = bm.points[tris]                                  # (F, 3, 3)
-    nrm = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
-    area = 0.5 * np.linalg.norm(nrm, axis=1)
-    nrm /= (2 * area)[:, None]
     tri_uv = bm.uv[tris]
-    # orient outwards: the common normal n points into body 1 (rail/block: out = -n; wheel: out = +n)
-    cen_uv = tri_uv.mean(axis=1)
-    n_common = surface_frame(bm.body, bm.extent, cen_uv[:, 0], cen_uv[:, 1])[:, 2]
-    sign = -1.0 if bm.body.below else 1.0
-    flip = np.einsum("ij,ij->i", nrm, sign * n_common) < 0
-    nrm[flip] *= -1
-    lam, w = _DUNAVANT4
-    q = lam.shape[0]
-    nodes = space.scalar_nodes(tris)
+    q = q6.per_facet
     diameter = np.max(np.linalg.norm(X - np.roll(X, 1, axis=1), axis=2), axis=1)
-    return _Surface(points=np.einsum("qk,fkd->fqd", lam, X).reshape(-1, 3),
-                    uv=np.einsum("qk,fkd->fqd", lam, tri_uv).reshape(-1, 2),
-                    normal6=np.repeat(nrm, q, axis=0),
-                    P6=_rule_matrix(space, nodes, lam, w, area),
-                    centroids=X.mean(axis=1), normal=nrm, diameter=diameter,
-                    P1=_rule_matrix(space, nodes, np.full((1, 3), 1.0 / 3.0), np.ones(1), area),
-                    tris=tris, tri_uv=tri_uv)
-
+    return _Surface(points=q6.points, uv=np.einsum("fqk,fkd->fqd", q6.bary.reshape(-1, q, 3), tri_uv).reshape(-1, 2),
+                    normal6=q6.normals, P6=q6.load, centroids=X.mean(axis=1), normal=q1.normals,
+                    diameter=diameter, P1=q1.load, tris=tris, tri_uv=tri_uv)
 
 def _locate(tri_uv: np.ndarray, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Triangle containing each point (x, s) and its barycentric coordinates, in the (x, s)
@@ -369,7 +262,7 @@ def _locate(tri_uv: np.ndarray, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return f_out, lam_out
 
 
-def _trace_interpolation(surf: _Surface, space: _Space, uv: np.ndarray) -> sp.csr_matrix:
+def _trace_interpolation(surf: _Surface, space: VectorSpace, uv: np.ndarray) -> sp.csr_matrix:
     """(M, n_scalar) matrix evaluating the FE trace at surface points given by (x, s)."""
     f, lam = _locate(surf.tri_uv, uv)
     if np.any(f < 0):
@@ -378,10 +271,7 @@ def _trace_interpolation(surf: _Surface, space: _Space, uv: np.ndarray) -> sp.cs
                            "meshed surface")
     lam = np.clip(lam, 0.0, None)
     lam /= lam.sum(axis=1, keepdims=True)
-    phi = trace_shape(lam, space.order)
-    nodes = space.scalar_nodes(surf.tris[f])
-    rows = np.repeat(np.arange(len(uv)), nodes.shape[1])
-    return sp.csr_matrix((phi.ravel(), (rows, nodes.ravel())), shape=(len(uv), space.n_scalar))
+    return trace_matrix(space, surf.tris[f], lam)
 
 
 # ----------------------------------------------------------------------------- half-space part
@@ -420,7 +310,7 @@ def _hs_displacement(loads: _Loads, X: np.ndarray, dx: float, G: float, nu: floa
     return (R.T @ u) @ loads.B              # R^T u B per point (matmul: 5x faster than einsum)
 
 
-def _residual_load(loads: _Loads, surf: _Surface, space: _Space, patch: StripPatch, G: float, nu: float,
+def _residual_load(loads: _Loads, surf: _Surface, space: VectorSpace, patch: StripPatch, G: float, nu: float,
                    J: int, near: float = 3.0) -> np.ndarray:
     """Load vectors (3, n_scalar, 3 common loads) of the residual traction p chi_J - sigma(u_hs) n.
 
@@ -524,7 +414,7 @@ def _rigid_modes(points: np.ndarray, comp: np.ndarray) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- main
-def _exact_averages(surf: _Surface, space: _Space, patch: StripPatch, x0: float) -> sp.csr_matrix:
+def _exact_averages(surf: _Surface, space: VectorSpace, patch: StripPatch, x0: float) -> sp.csr_matrix:
     """(n_obs, n_scalar): the exact mean of the FE trace over each observed element, from the
     facets inside it (conforming mesh).  It is the transpose of the element load operator divided
     by the element area, so the direct method's matrix is exactly symmetric (reciprocity)."""
@@ -570,9 +460,6 @@ def body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
     with it; needs ``conform = "all"``): by the invariance along x the kernel must not change,
     which is what the tests check.
     """
-    from skfem import asm
-    from skfem.models.elasticity import linear_elasticity
-
     if not (G > 0 and math.isfinite(G)):
         raise InputError(f"material: G must be > 0, got {G}")
     if not -1.0 < nu < 0.5:
@@ -597,15 +484,14 @@ def body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
     if ndofs > settings.max_dofs:
         raise FESolveError(f"the FE model has {ndofs} unknowns, more than max_dofs = {settings.max_dofs}; "
                            "coarsen the mesh ([model] fe_h_patch, fe_growth) or raise the limit")
-    lam = 2.0 * G * nu / (1.0 - 2.0 * nu)
     try:
-        K = asm(linear_elasticity(lam, G), space.basis).tocsr()
+        K = stiffness(space, G, nu)
     except MemoryError:
         raise FESolveError(f"out of memory assembling the stiffness matrix ({ndofs} unknowns)") from None
     t_asm = time.perf_counter()
-    D = _clamped_dofs(m, space, bm)
+    _, D = clamped_dofs(space, bm.clamped_tris)
     free = np.setdiff1d(np.arange(ndofs), D)
-    surf = _free_surface(bm, space)
+    surf = _free_surface(bm, m, space)
     x0 = load_column * patch.dx
     loads = _loads(bm, x0)
     ms, nl = patch.ms, 3 * patch.ms
@@ -636,20 +522,11 @@ def body_influence(body: BodyModel, patch: StripPatch, G: float, nu: float,
             Fc[:, :, 3 * J:3 * J + 3] = _residual_load(loads, surf, space, patch, G, nu, J)
         if progress:
             progress(J + 1, ms)
-    F = np.zeros((ndofs, nl))
-    for c in range(3):
-        F[space.dofmap[c]] = Fc[c]
+    F = space.from_components(Fc)
     t_rhs = time.perf_counter()
 
     # solve K_ff U_f = F_f - K_fD U_D
-    solver = settings.solver
-    if solver == "auto":
-        solver = "pardiso" if _pardiso_available() else "splu"
-    if solver == "pardiso" and not _pardiso_available():
-        raise InputError("[model] fe_solver: pypardiso is not installed (pip install pypardiso), "
-                         "use \"splu\" or \"amg\"")
-    if solver == "amg" and not _amg_available():
-        raise InputError("[model] fe_solver: pyamg is not installed (pip install pyamg), use \"splu\"")
+    solver = direct_solver(settings.solver)
     _check_memory(ndofs, solver)
     Kff = K[free][:, free].tocsr()
     rhs = F[free] - K[free][:, D] @ UD
@@ -783,8 +660,19 @@ def rail_body_from_grid(grid, rail_points: np.ndarray | None = None, name: str =
     return BodyModel("rail", prof), StripPatch(grid.mx, grid.dx, tuple(float(v) for v in edges))
 
 
-def _wheel_axes(grid) -> np.ndarray:
-    """Columns: forward, axle, down of the wheel, in the rail-profile frame (x, y, z)."""
+def wheel_axes(grid) -> np.ndarray:
+    """The wheel's axes in the rail-profile frame (x, y, z).
+
+    Parameters
+    ----------
+    grid : CurvedGrid
+        Its ``wheel_axle`` and ``wheel_down`` directions.
+
+    Returns
+    -------
+    ndarray (3, 3)
+        Columns: forward, axle, down (unit vectors).
+    """
     a = np.asarray(grid.wheel_axle, dtype=float)
     d = np.asarray(grid.wheel_down, dtype=float)
     f = np.cross(a, d)
@@ -801,7 +689,7 @@ def wheel_body_from_grid(grid, wheel_points: np.ndarray | None = None, name: str
 
     pts = grid.wheel_profile if wheel_points is None else np.asarray(wheel_points, dtype=float)
     prof = Profile2D.from_points(pts, name)
-    M = _wheel_axes(grid)
+    M = wheel_axes(grid)
     P = np.column_stack([np.zeros(grid.ms + 1), _edge_points(grid)])           # rail frame
     q = (P - np.asarray(grid.wheel_centre, dtype=float)) @ M                      # wheel axes
     yz = np.column_stack([q[:, 1], q[:, 2] - grid.wheel_radius])                # (y_w, z_w)

@@ -30,9 +30,8 @@ import numpy as np
 
 from conformal.errors import InputError
 from conformal.influence.factor import Factor
-from conformal.influence.fe import (FESettings, _clamped_dofs, _free_surface, _loads, _residual_load, _space,
-                                    rail_body_from_grid)
-from conformal.materials import lame_lambda
+from conformal.influence.fe import FESettings, _free_surface, _loads, _residual_load, rail_body_from_grid
+from conformal.influence.fe_toolkit import clamped_dofs, direct_solver, hooke, probes, stiffness, vector_space
 from conformal.meshing.gmsh_body import mesh_body
 from conformal.stresses.halfspace import stresses as halfspace_stresses
 
@@ -50,34 +49,6 @@ class BodyStresses:
     def sigma(self) -> np.ndarray:
         """The FE body's stress sigma_hs + sigma_c."""
         return self.sigma_hs + self.sigma_c
-
-
-def _p1_gradients(m, U: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """Displacement gradients (len(tets), 3, 3) [i, j] = d u_i / d x_j of a P1 field U (3, nverts)."""
-    X = m.p[:, m.t[:, tets]]                                   # (3, 4, n)
-    E = np.transpose(X[:, 1:, :] - X[:, :1, :], (2, 1, 0))     # (n, 3 edges, 3 coords)
-    Ui = U[:, m.t[:, tets]]                                    # (3, 4, n)
-    dU = np.transpose(Ui[:, 1:, :] - Ui[:, :1, :], (2, 1, 0))  # (n, 3 edges, 3 comps)
-    # E @ grad^T = dU  ->  grad^T = E^-1 dU
-    return np.swapaxes(np.linalg.solve(E, dU), 1, 2)
-
-
-def _locate_tets(m, P: np.ndarray, k: int = 16) -> np.ndarray:
-    """The tetrahedron containing each point, or (a surface point just outside the faceted mesh)
-    the candidate it is closest to containing (largest smallest barycentric coordinate)."""
-    from scipy.spatial import cKDTree
-
-    X = m.p[:, m.t]                                            # (3, 4, T)
-    cent = X.mean(axis=1).T
-    k = min(k, cent.shape[0])
-    _, cand = cKDTree(cent).query(P, k=k)                      # (n, k)
-    cand = np.atleast_2d(cand)
-    X0 = X[:, 0, cand]                                         # (3, n, k)
-    E = np.transpose(X[:, 1:, cand] - X0[:, None], (2, 3, 0, 1))  # (n, k, 3 coords, 3 edges)
-    lam = np.linalg.solve(E, (P.T[:, :, None] - X0).transpose(1, 2, 0)[..., None])[..., 0]   # (n, k, 3)
-    bary = np.concatenate([1.0 - lam.sum(axis=-1, keepdims=True), lam], axis=-1)
-    best = np.argmax(bary.min(axis=-1), axis=1)
-    return cand[np.arange(len(P)), best]
 
 
 def rail_body_stresses(field, points, *, G: float, nu: float, settings: FESettings = FESettings(),
@@ -147,9 +118,9 @@ class _Placement:
 def _placement(grid, body: int, shift: float, bm) -> _Placement:
     if body == 1:
         return _Placement(np.eye(3), np.array([shift, 0.0, 0.0]), np.zeros(3), np.eye(3), np.zeros(3))
-    from conformal.influence.fe import _wheel_axes
+    from conformal.influence.fe import wheel_axes
 
-    M = _wheel_axes(grid)
+    M = wheel_axes(grid)
     R = float(grid.wheel_radius)
     d = shift / float(bm.extent.x_ref_radius)                 # the strip's column x = shift is the mesh's x = 0
     Q = np.array([[math.cos(d), 0.0, -math.sin(d)], [0.0, 1.0, 0.0], [math.sin(d), 0.0, math.cos(d)]])
@@ -245,7 +216,7 @@ def _wheel_rolling_block(m, place, bm, grid, sources, correction, P: np.ndarray,
     sig_c = np.empty((mx, npts, 3, 3))
     for ix in range(mx):
         Rm = _rot_y((ix - ic) * grid.dx / r_ref)
-        sig_c[ix] = Rm.T @ correction(_locate_tets(m, X0 @ Rm.T + axle)) @ Rm
+        sig_c[ix] = Rm.T @ correction(X0 @ Rm.T + axle) @ Rm
     loads0 = _loads(bm, 0.0)
     cols = np.array([int(round(x0 / grid.dx)) + ic for x0, _, _ in sources])
     off = np.arange(-(int(cols.max()) if cols.size else 0), mx - (int(cols.min()) if cols.size else 0))
@@ -280,9 +251,6 @@ def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FE
     mesh's middle column, each line in its co-rotating frame (:func:`_wheel_rolling_block`).
     ``sigma_hs`` (rail only): the half-space part at the points if already known (the
     StressField's sigma of body 1: the same superposed field), else computed here."""
-    from skfem import asm
-    from skfem.models.elasticity import linear_elasticity
-
     from conformal.influence.fe import wheel_body_from_grid
 
     grid = getattr(field, "curved", None)
@@ -306,12 +274,11 @@ def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FE
         model, patch, rot = wheel_body_from_grid(grid, profile_points)
     spec = replace(settings.mesh, conform="all", order=1)
     bm = _mesh_isolated(model, patch, spec)
-    m, space = _space(bm, 1)
-    lam = lame_lambda(G, nu)
-    K = asm(linear_elasticity(lam, G), space.basis).tocsr()
-    D = _clamped_dofs(m, space, bm)
+    m, space = vector_space(bm.points, bm.tets, 1)
+    K = stiffness(space, G, nu)
+    _, D = clamped_dofs(space, bm.clamped_tris)
     free = np.setdiff1d(np.arange(space.basis.N), D)
-    surf = _free_surface(bm, space)
+    surf = _free_surface(bm, m, space)
     t_mesh = time.perf_counter()
     ic = grid.mx // 2
     shift = grid.xl + (ic + 0.5) * grid.dx                    # strip x of the mesh's column x = 0
@@ -330,25 +297,19 @@ def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FE
             r = _residual_load(loads, surf, space, patch, G, nu, int(J))        # (3, n_scalar, 3 loads)
             Fc += r @ c
             sources.append((x0, int(J), c))
-    F = np.zeros(space.basis.N)
-    for c in range(3):
-        F[space.dofmap[c]] = Fc[c]
+    F = space.from_components(Fc)
     t_rhs = time.perf_counter()
-    solver = settings.solver if settings.solver in ("splu", "pardiso", "amg") else "splu"
-    if solver == "pardiso":
-        from conformal.influence.factor import pardiso_available
-
-        solver = "pardiso" if pardiso_available() else "splu"
+    solver = direct_solver(settings.solver)
     U = np.zeros(space.basis.N)
     if F.any():
         U[free] = Factor(K[free][:, free].tocsr(), solver, settings.amg_tol).solve(F[free])
     t_solve = time.perf_counter()
-    Uc = np.stack([U[space.dofmap[c]] for c in range(3)])[:, :m.nvertices]
 
-    def correction(tets):
-        grad = _p1_gradients(m, Uc, tets)
-        eps = 0.5 * (grad + np.swapaxes(grad, 1, 2))
-        return 2.0 * G * eps + lam * np.trace(eps, axis1=1, axis2=2)[:, None, None] * np.eye(3)
+    def correction(X, cells=None):
+        """The correction's stress (n, 3, 3) at mesh points X (n, 3) (P1: constant per tetrahedron;
+        ``cells``: their tetrahedra, else located)."""
+        grad = (probes(space.basis, X, cells, gradient=True) @ U).reshape(3, 3, -1).transpose(2, 0, 1)
+        return hooke(0.5 * (grad + np.swapaxes(grad, 1, 2)), G, nu)
 
     # the FE correction's stress at the points (P1: constant per tetrahedron)
     if rolling_block and body == 2:
@@ -356,7 +317,7 @@ def body_stresses(field, points, *, body: int, G: float, nu: float, settings: FE
         sig_hs, sig_c = sig_hs.reshape(-1, 3, 3), sig_c.reshape(-1, 3, 3)
     else:
         Pm = place.to_mesh(P)
-        sig_c = place.tensor_from_mesh(correction(_locate_tets(m, Pm)))
+        sig_c = place.tensor_from_mesh(correction(Pm))
         if body == 1:
             sig_hs = (halfspace_stresses(field, P, nu=nu, body=1) if sigma_hs is None
                       else np.asarray(sigma_hs, float).reshape(-1, 3, 3))
@@ -392,8 +353,8 @@ def write_body_vtu(path, m, place, correction, bm, grid, sources, field, body, G
     if radius is None:
         radius = max(4.0, 3.0 * float(np.ptp(P, axis=0).max()))
     keep = np.flatnonzero(np.linalg.norm(cent - mid, axis=1) <= radius)
-    cm = place.to_mesh(cent[keep])
-    sc = place.tensor_from_mesh(correction(keep))
+    cm = m.p[:, m.t[:, keep]].mean(axis=1).T                   # the centroids in mesh coordinates
+    sc = place.tensor_from_mesh(correction(cm, keep))
     if body == 1:
         sh = halfspace_stresses(field, cent[keep], nu=nu, body=1)
     else:

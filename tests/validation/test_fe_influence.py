@@ -261,12 +261,15 @@ def test_solver_choice_and_missing_pardiso(monkeypatch):
     body = BodyModel("block", flat_profile(-20, 20))
     patch = StripPatch.uniform(2, 1.0, 2, 1.0, 20.0)
     bm = mesh_body(body, patch, MeshSpec())
-    solvers = ["splu"] + (["amg"] if fe._amg_available() else []) + (["pardiso"] if fe._pardiso_available() else [])
+    from conformal.influence import fe_toolkit
+    from conformal.influence.factor import amg_available, pardiso_available
+
+    solvers = ["splu"] + (["amg"] if amg_available() else []) + (["pardiso"] if pardiso_available() else [])
     ks = {s: body_influence(body, patch, G, NU, FESettings(solver=s, far_field="clamped"), mesh=bm).kernel
           for s in solvers}
     for s in solvers:   # AMG-CG to a relative residual of 1e-10; direct solvers to round-off
         assert np.abs(ks["splu"] - ks[s]).max() < 1e-7 * ks["splu"][1, 0, 0, 2, 2], s
-    monkeypatch.setattr(fe, "_pardiso_available", lambda: False)
+    monkeypatch.setattr(fe_toolkit, "pardiso_available", lambda: False)
     with pytest.raises(InputError, match="pypardiso is not installed"):
         body_influence(body, patch, G, NU, FESettings(solver="pardiso", far_field="clamped"), mesh=bm)
     r = body_influence(body, patch, G, NU, FESettings(solver="auto", far_field="clamped"), mesh=bm)
@@ -326,7 +329,9 @@ def test_trace_interpolation_survives_degenerate_surface_triangles():
     nodes = np.array([[0.0, 1.0], [0.5, 1.0], [1.0, 1.0], [0.0, 0.0], [1.0, 0.0], [0.5, 2.0]])
     tris = np.array([[3, 4, 2], [3, 2, 1], [3, 1, 0], [0, 2, 1], [0, 2, 5]])
     surf = SimpleNamespace(tris=tris, tri_uv=nodes[tris])
-    space = fe._Space(None, None, len(nodes), np.zeros(0, np.int64), np.zeros(0, np.int64), len(nodes), 1)
+    from conformal.influence.fe_toolkit import VectorSpace
+
+    space = VectorSpace(None, None, len(nodes), np.zeros(0, np.int64), np.zeros(0, np.int64), len(nodes), 1)
     rng = np.random.default_rng(3)
     top = rng.random((30, 2))
     top = top[top.sum(axis=1) < 1.0]                     # in the upper triangle (A, C, F)

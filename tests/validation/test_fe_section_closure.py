@@ -135,7 +135,7 @@ def test_p2_clamped_triangle_with_an_edge_the_volume_lacks():
     took the other diagonal of a surface quad; the deep pair's wheel at size 4) gets no dof on
     that edge instead of failing the solve; the free surface still refuses it."""
     from conformal.influence.factor import FESolveError
-    from conformal.influence.fe import vector_space
+    from conformal.influence.fe_toolkit import vector_space
 
     pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.3, 0.3, -1]], dtype=float)
     tets = np.array([[0, 1, 2, 3], [0, 2, 1, 4]])
