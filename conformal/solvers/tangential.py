@@ -541,7 +541,7 @@ class _Newton:
         w = np.where(sigma > STIFF_RATIO * diag, 0.0, (diag / (diag + sigma)) ** SLIP_WEIGHT_POWER)
         local = (1.0 - w) / (sigma + diag)
         cc = None
-        if COARSE_FACTOR and COARSE_FROM and self.nc >= COARSE_FROM and nA:
+        if L.steady and COARSE_FACTOR and COARSE_FROM and self.nc >= COARSE_FROM and nA:
             cc = _CoarseCorrection(L, ia, COARSE_FACTOR)
             cc = cc if cc.ok else None
 
