@@ -42,7 +42,11 @@ weighted blend of that inverse and the diagonal, weight w = (diag / (diag + |s|/
 diagonal alone where |s|/g exceeds STIFF_RATIO diag (:meth:`_Newton.preconditioner`).  The
 preconditioner costs one unpadded FFT pair, about a quarter of a padded product.  The start on a
 coarser grid and the extension by one column come from the operator (``coarsened``,
-``extended``, :mod:`conformal.influence.operator`).
+``extended``, :mod:`conformal.influence.operator`).  Steady rolling from COARSE_FROM contact
+elements on adds a coarse-grid correction of the adhesion rows (:class:`_CoarseCorrection`): on
+a grid of 8 x 8 merged elements the cells mostly in adhesion get L's coarse version, solved by 3
+GMRES iterations, which replaces the smooth part of P's answer; the outer GMRES is flexible (it
+keeps the preconditioned vectors), so an inner iteration may serve as preconditioner.
 
 Start.  Large problems (>= NESTED_FROM contact elements, planar half-space) start from the same
 problem on a grid of 2 x 2 merged elements (block means of pressure and rigid slip), solved to
@@ -86,6 +90,17 @@ best of 3; studies/steady_rolling_speed.py, CONTACT's GDsteady times in brackets
   for the slip rows (17 / 22), a downstream sweep of the upwind coupling between slip elements
   (no change), cubic prolongation of the nested start (one Newton step more), other forcing
   terms and a tighter nested start (no change).
+* Coarse-grid correction of the adhesion rows (issue 23 item 4, :class:`_CoarseCorrection`):
+  GMRES iterations of the last Newton system to 1e-3 (the solver's own solution, the normal
+  problem solved) 13 / 17 / 21 -> 11 / 11 / 12 at 100^2 / 200^2 / 400^2; fine-grid products of
+  the whole solve 43 / 41 / 58 -> 33 / 37 / 47 (+ 8-9 coarse, nested start and correction), FX
+  unchanged to 1e-7.  CPU time: the correction (3 inner iterations on the 8x coarser grid, a
+  restriction and a prolongation) costs 5-15 % of a fine iteration, so the time gained is smaller
+  than the products gained (studies/steady_rolling_speed.py, variant "one-level").  Tried: 4 x 4
+  cells (11 / 11 / 12 with 4 inner iterations, dearer; 10 / 11 / 14 with 2), 8 x 8 cells with 2
+  inner iterations (11 / 12 / 15), cells taken from a quarter or 90 % adhesion (4 x 4, 2 inner
+  iterations: 11 / 11 / 13 and 12 / 14 / 16), the correction in shifts too (more products: P
+  alone is good there).
 * Element-wise Gauss-Seidel (CONTACT's SteadyGS) costs O(N^2) per sweep and O(mx) sweeps
   (6.8 s / 211 s in CONTACT); not pursued.
 
