@@ -42,8 +42,8 @@ weighted blend of that inverse and the diagonal, weight w = (diag / (diag + |s|/
 diagonal alone where |s|/g exceeds STIFF_RATIO diag (:meth:`_Newton.preconditioner`).  The
 preconditioner costs one unpadded FFT pair, about a quarter of a padded product.  The start on a
 coarser grid and the extension by one column come from the operator (``coarsened``,
-``extended``, :mod:`conformal.influence.operator`).  Steady rolling from COARSE_FROM contact
-elements on adds a coarse-grid correction of the adhesion rows (:class:`_CoarseCorrection`): on
+``extended``, :mod:`conformal.influence.operator`).  Steady rolling from COARSE_FROM (50 000)
+contact elements on adds a coarse-grid correction of the adhesion rows (:class:`_CoarseCorrection`): on
 a grid of 8 x 8 merged elements the cells mostly in adhesion get L's coarse version, solved by 3
 GMRES iterations, which replaces the smooth part of P's answer; the outer GMRES is flexible (it
 keeps the preconditioned vectors), so an inner iteration may serve as preconditioner.
@@ -95,8 +95,11 @@ best of 3; studies/steady_rolling_speed.py, CONTACT's GDsteady times in brackets
   problem solved) 13 / 17 / 21 -> 11 / 11 / 12 at 100^2 / 200^2 / 400^2; fine-grid products of
   the whole solve 43 / 41 / 58 -> 33 / 37 / 47 (+ 8-9 coarse, nested start and correction), FX
   unchanged to 1e-7.  CPU time: the correction (3 inner iterations on the 8x coarser grid, a
-  restriction and a prolongation) costs 5-15 % of a fine iteration, so the time gained is smaller
-  than the products gained (studies/steady_rolling_speed.py, variant "one-level").  Tried: 4 x 4
+  restriction and a prolongation) costs 10-20 % of a fine iteration, so the time gained is smaller
+  than the products gained: median CPU of 7 interleaved runs (loaded 2-core machine) 0.130 /
+  0.425 / 2.68 s without, 0.148 / 0.471 / 2.44 s with it at 100^2 / 200^2 / 400^2 (growth from
+  200^2 to 400^2 N^1.33 -> N^1.19 had it been used everywhere); hence COARSE_FROM
+  (studies/steady_rolling_speed.py, variant "one-level").  Tried: 4 x 4
   cells (11 / 11 / 12 with 4 inner iterations, dearer; 10 / 11 / 14 with 2), 8 x 8 cells with 2
   inner iterations (11 / 12 / 15), cells taken from a quarter or 90 % adhesion (4 x 4, 2 inner
   iterations: 11 / 11 / 13 and 12 / 14 / 16), the correction in shifts too (more products: P
@@ -327,11 +330,13 @@ class _SlipOperator:
 
 
 #: coarse-grid correction of the adhesion rows (:class:`_CoarseCorrection`): cells of COARSE_FACTOR x
-#: COARSE_FACTOR elements, from COARSE_FROM contact elements on (0: never); a cell takes part where at
+#: COARSE_FACTOR elements, from COARSE_FROM contact elements on (0: never; below about 50 000 the
+#: correction costs more CPU time than the iterations it saves: 100² and 200² of case circ were 12 %
+#: and 10 % slower with it, 400² 10 % faster, interleaved runs); a cell takes part where at
 #: least COARSE_STICK of its elements are adhesion rows; COARSE_ITS GMRES iterations (to COARSE_TOL) on
 #: the coarse grid per application
 COARSE_FACTOR = 8
-COARSE_FROM = 4000
+COARSE_FROM = 50000
 COARSE_STICK = 0.5
 COARSE_ITS = 3
 COARSE_TOL = 0.1
