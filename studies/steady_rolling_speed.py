@@ -62,6 +62,7 @@ MAT = Material.steel()
 FN, CURV, MU, XI, TOL = 1.0e5, 0.001, 0.3, 0.001, 1e-6
 VARIANTS = {"plain": dict(NESTED_FROM=10**12, SINGLE_PRECISION=False),
             "+coarse": dict(NESTED_FROM=1500, SINGLE_PRECISION=False),
+            "one-level": dict(COARSE_FROM=0),
             "final": dict(NESTED_FROM=1500, SINGLE_PRECISION=True)}
 
 
@@ -91,6 +92,7 @@ def run(n: int, repeats: int, variant: str = "final"):
         for k, v in saved.items():
             setattr(tang, k, v)
     MEDIANS[n, variant] = float(np.median(walls))
+    CPU_MEDIANS[n, variant] = float(np.median(cpus))
     return grid, pn, sol, min(walls), min(cpus)
 
 
@@ -107,6 +109,8 @@ def field_error(grid, sol, fine_grid, fine_sol) -> float:
 #: median wall times (s) of the repeats, by (n, variant): the machine is shared, so the growth of
 #: the median is reported beside that of the minimum
 MEDIANS: dict = {}
+#: the same for the CPU time (process_time), less sensitive to other jobs on the machine
+CPU_MEDIANS: dict = {}
 
 SHIFT = 0.008  # mm: the shift case (about half of the full-sliding shift of this contact)
 
@@ -178,7 +182,7 @@ def main(argv=None) -> int:
                    n_adhesion=int(np.count_nonzero(sol.status == ADHESION)), newton_iterations=sol.iterations,
                    products=sol.products, coarse_products=round(sol.coarse_products, 1), residual=sol.residual,
                    converged=sol.converged, wall_s=wall, cpu_s=cpu, fft_pair_s=unit, fft_pairs=wall / unit,
-                   wall_median_s=MEDIANS[n, "final"], contact_gdsteady_s=c_steady, contact_tangential_s=c_tang, ratio_to_contact=ratio, FX=FX,
+                   wall_median_s=MEDIANS[n, "final"], cpu_median_s=CPU_MEDIANS[n, "final"], contact_gdsteady_s=c_steady, contact_tangential_s=c_tang, ratio_to_contact=ratio, FX=FX,
                    FX_contact=c_fx, FX_error_vs_finest=err_fx, px_error_vs_finest=err_p)
         rows.append(row)
         print(f"{n:>4} {nc:>7} {100 * nslip / nc:>6.1f} {sol.iterations:>4} {sol.products:>5} {sol.coarse_products:>6.1f} "
@@ -215,9 +219,11 @@ def main(argv=None) -> int:
         fits.setdefault("steady_pairs", {})[f"{lo}-{hi}"] = dict(
             wall_min=growth([lo, hi], [a["wall_s"], b["wall_s"]]),
             wall_median=growth([lo, hi], [a["wall_median_s"], b["wall_median_s"]]),
+            cpu_median=growth([lo, hi], [a["cpu_median_s"], b["cpu_median_s"]]),
             products=growth([lo, hi], [a["products"] + a["coarse_products"], b["products"] + b["coarse_products"]]))
         g = fits["steady_pairs"][f"{lo}-{hi}"]
         print(f"growth steady {lo}^2 -> {hi}^2: wall (min) ~ N^{g['wall_min']:.2f}, wall (median) ~ N^{g['wall_median']:.2f}, "
+              f"CPU (median) ~ N^{g['cpu_median']:.2f}, "
               f"products ~ N^{g['products']:.2f}")
     if args.variant_sizes:
         print("\nvariants (what was tried), same case:")
@@ -229,6 +235,7 @@ def main(argv=None) -> int:
                 rows.append(dict(n=n, case="steady", variant=v, newton_iterations=sol.iterations, products=sol.products,
                                  coarse_products=round(sol.coarse_products, 1), residual=sol.residual,
                                  converged=sol.converged, wall_s=wall, cpu_s=cpu, FX=FX,
+                                 wall_median_s=MEDIANS[n, v], cpu_median_s=CPU_MEDIANS[n, v],
                                  contact_gdsteady_s=CONTACT.get(n, (None, None))[1]))
                 print(f"{n:>4} {v:>8} {sol.iterations:>4} {sol.products:>5} {wall:>7.3f} {cpu:>7.3f} {FX:>9.1f}")
     out = args.out
@@ -252,10 +259,24 @@ def main(argv=None) -> int:
         if case == "steady_pairs":
             for pair, g in f.items():
                 md.append(f"\nGrowth (steady, {pair.replace('-', '² -> ')}²): wall ~ N^{g['wall_min']:.2f} (minimum of the "
-                          f"repeats), N^{g['wall_median']:.2f} (median), products ~ N^{g['products']:.2f}.")
+                          f"repeats), N^{g['wall_median']:.2f} (median), CPU ~ N^{g['cpu_median']:.2f} (median), "
+                          f"products ~ N^{g['products']:.2f}.")
             continue
         md.append(f"\nGrowth ({case}, n = {big[0]}..{big[-1]}): wall ~ N^{f['wall']:.2f}, products ~ N^{f['products']:.2f}, "
                   f"one FFT pair of the padded grid ~ N^{f['fft_pair']:.2f}.")
+    var = [r for r in rows if r["variant"] != "final" or ("fft_pairs" not in r and r["case"] == "steady")]
+    if var:
+        md += ["", "Variants (steady, the same process; medians of the repeats; final = the default solver, "
+               "one-level = without the coarse-grid correction):", "",
+               "| n x n | variant | Newton its | products (+ coarse) | wall median [s] | CPU median [s] | FX [N] |",
+               "|---|---|---|---|---|---|---|"]
+        md += [f"| {r['n']} | {r['variant']} | {r['newton_iterations']} | {r['products']} (+{r['coarse_products']:.0f}) | "
+               f"{r['wall_median_s']:.3f} | {r['cpu_median_s']:.3f} | {r['FX']:.1f} |" for r in var]
+        for v in VARIANTS:
+            vs = sorted(r["n"] for r in var if r["variant"] == v)
+            cpu = {r["n"]: r["cpu_median_s"] for r in var if r["variant"] == v}
+            for lo, hi in zip(vs, vs[1:]):
+                md.append(f"\nGrowth of the variant {v} ({lo}² -> {hi}²): CPU ~ N^{growth([lo, hi], [cpu[lo], cpu[hi]]):.2f}.")
     (out / "steady_rolling_speed.md").write_text("\n".join(md) + "\n")
     write_sidecar(out, __file__, args, extra={"growth": fits, "load_average": os.getloadavg()})
     print(f"\nwrote {out}")

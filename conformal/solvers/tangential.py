@@ -42,7 +42,11 @@ weighted blend of that inverse and the diagonal, weight w = (diag / (diag + |s|/
 diagonal alone where |s|/g exceeds STIFF_RATIO diag (:meth:`_Newton.preconditioner`).  The
 preconditioner costs one unpadded FFT pair, about a quarter of a padded product.  The start on a
 coarser grid and the extension by one column come from the operator (``coarsened``,
-``extended``, :mod:`conformal.influence.operator`).
+``extended``, :mod:`conformal.influence.operator`).  Steady rolling from COARSE_FROM (50 000)
+contact elements on adds a coarse-grid correction of the adhesion rows (:class:`_CoarseCorrection`): on
+a grid of 8 x 8 merged elements the cells mostly in adhesion get L's coarse version, solved by 3
+GMRES iterations, which replaces the smooth part of P's answer; the outer GMRES is flexible (it
+keeps the preconditioned vectors), so an inner iteration may serve as preconditioner.
 
 Start.  Large problems (>= NESTED_FROM contact elements, planar half-space) start from the same
 problem on a grid of 2 x 2 merged elements (block means of pressure and rigid slip), solved to
@@ -86,6 +90,20 @@ best of 3; studies/steady_rolling_speed.py, CONTACT's GDsteady times in brackets
   for the slip rows (17 / 22), a downstream sweep of the upwind coupling between slip elements
   (no change), cubic prolongation of the nested start (one Newton step more), other forcing
   terms and a tighter nested start (no change).
+* Coarse-grid correction of the adhesion rows (issue 23 item 4, :class:`_CoarseCorrection`):
+  GMRES iterations of the last Newton system to 1e-3 (the solver's own solution, the normal
+  problem solved) 13 / 17 / 21 -> 11 / 11 / 12 at 100^2 / 200^2 / 400^2; fine-grid products of
+  the whole solve 43 / 41 / 58 -> 33 / 37 / 47 (+ 8-9 coarse, nested start and correction), FX
+  unchanged to 1e-7.  CPU time: the correction (3 inner iterations on the 8x coarser grid, a
+  restriction and a prolongation) costs 10-20 % of a fine iteration, so the time gained is smaller
+  than the products gained: median CPU of 7 interleaved runs (loaded 2-core machine) 0.130 /
+  0.425 / 2.68 s without, 0.148 / 0.471 / 2.44 s with it at 100^2 / 200^2 / 400^2 (growth from
+  200^2 to 400^2 N^1.33 -> N^1.19 had it been used everywhere); hence COARSE_FROM
+  (studies/steady_rolling_speed.py, variant "one-level").  Tried: 4 x 4
+  cells (11 / 11 / 12 with 4 inner iterations, dearer; 10 / 11 / 14 with 2), 8 x 8 cells with 2
+  inner iterations (11 / 12 / 15), cells taken from a quarter or 90 % adhesion (4 x 4, 2 inner
+  iterations: 11 / 11 / 13 and 12 / 14 / 16), the correction in shifts too (more products: P
+  alone is good there).
 * Element-wise Gauss-Seidel (CONTACT's SteadyGS) costs O(N^2) per sweep and O(mx) sweeps
   (6.8 s / 211 s in CONTACT); not pursued.
 
@@ -181,16 +199,22 @@ class _SlipOperator:
     elements and at their upstream neighbours (x + dx), without forming the difference on the
     whole grid."""
 
-    def __init__(self, op, grid, contact: np.ndarray, steady: bool):
+    def __init__(self, op, grid, contact: np.ndarray, steady: bool, shared: dict | None = None):
         self.op, self.steady = op, steady
         self.mx, self.my = grid.mx, contact.shape[1]
         self.dx = float(grid.dx)
         self.idx = np.flatnonzero(contact.ravel())
         self.products = 0
-        self.coarse_products = 0.0  # products on coarser grids (nested start), in this grid's units
+        self.coarse_products = 0.0  # products on coarser grids (nested start, coarse-grid correction),
+        #                             in this grid's units
+        # what depends on the operator alone (longer operator, single-precision product, the
+        # preconditioner's symbols), shared by the operators of other contact sets on this grid
+        self._shared = shared = {} if shared is None else shared
         self._ext = None
         if steady and contact[-1].any():  # u' of the leading column lies outside the grid; operators
-            self._ext = op.extended(1)    # without a longer version fall back to u' = u there
+            if "ext" not in shared:       # without a longer version fall back to u' = u there
+                shared["ext"] = op.extended(1)
+            self._ext = shared["ext"]
         pop = self._ext if self._ext is not None else op
         rows = pop.mx if self._ext is not None else self.mx
         self._rows = rows
@@ -199,17 +223,30 @@ class _SlipOperator:
             has_up = self.idx // self.my + 1 < rows  # without an extended grid the leading column
             self._up = np.where(has_up, self.idx + self.my, self.idx)  # gets L p = 0 (u' = u)
             self._wgt = has_up / self.dx
-        self._fast = pop.tangential_product32() if SINGLE_PRECISION else None
+        key = ("fast", self._ext is not None)
+        if key not in shared:
+            shared[key] = pop.tangential_product32() if SINGLE_PRECISION else None
+        self._fast = shared[key]
         # flat offsets of the contact elements (and their upstream neighbours) in a (2, rows*my) buffer
         self._off = np.concatenate([self.idx, rows * self.my + self.idx])
         if steady:
             self._off_up = np.concatenate([self._up, rows * self.my + self._up])
             self._wgt2 = np.concatenate([self._wgt, self._wgt])
         self._poff = np.concatenate([self.idx, self.mx * self.my + self.idx])
+        # the same positions as boolean masks of the grid buffers: scatter and gather by a mask
+        # are 3-6x faster than put/take on flat offsets (the offsets are sorted, so the order agrees)
+        self._m = np.zeros((2, rows, self.my), bool)
+        self._m.reshape(-1)[self._off] = True
+        self._pm = self._m[:, :self.mx]
+        # upstream neighbours by the mask shifted one row, where every element has one
+        self._m_up = self._m[:, :-1] if steady and rows > 1 and bool(has_up.all()) else None
         self._buf32 = np.zeros((2, rows * self.my), dtype=np.float32)
         self._buf64 = np.zeros((2, rows * self.my))
         self._pbuf = np.zeros((2, self.mx * self.my), dtype=np.float32)
-        self._build_preconditioner()
+        if "inv" not in shared:
+            self._build_preconditioner()
+            shared["inv"], shared["diag"] = self._inv, self.diag
+        self._inv, self.diag = shared["inv"], shared["diag"]
 
     # --- products
     def grid_u(self, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -221,19 +258,28 @@ class _SlipOperator:
         precision FFTs (Krylov products, where 1e-7 relative is ample), when available."""
         self.products += 1
         shape = (2, self._rows, self.my)
-        # put/take on flat offsets: 5-8x faster than fancy indexing of the 2-D arrays
         if fast and self._fast is not None:
-            buf = self._buf32
-            buf.reshape(-1).put(self._off, pc)
-            u = self._fast(buf.reshape(shape)).reshape(-1)
+            buf = self._buf32.reshape(shape)
+            buf[self._m] = pc.reshape(-1)
+            u = self._fast(buf)
         else:
-            buf = self._buf64
-            buf.reshape(-1).put(self._off, pc)
+            buf = self._buf64.reshape(shape)
+            buf[self._m] = pc.reshape(-1)
             pop = self._ext if self._ext is not None else self.op
-            u = np.stack(pop.apply_tangential(*buf.reshape(shape))).reshape(-1)
+            u = np.stack(pop.apply_tangential(*buf))
         if not self.steady:
-            return u.take(self._off).astype(float).reshape(2, -1)
+            return u[self._m].astype(float).reshape(2, -1)
+        if self._m_up is not None:
+            return ((u[self._m] - u[:, 1:][self._m_up]) * self._wgt2).reshape(2, -1)
+        u = u.reshape(-1)
         return ((u.take(self._off) - u.take(self._off_up)) * self._wgt2).reshape(2, -1)
+
+    def coarse_level(self, fx: int, fy: int):
+        """(operator or None, shared dict) of the grid of fx x fy merged elements, built once."""
+        key = ("coarse", fx, fy)
+        if key not in self._shared:
+            self._shared[key] = (self.op.coarsened(fx, fy), {})
+        return self._shared[key]
 
     # --- preconditioner
     def _build_preconditioner(self) -> None:
@@ -267,9 +313,8 @@ class _SlipOperator:
 
     def precondition(self, rc: np.ndarray) -> np.ndarray:
         """Approximately L^-1 r for r on the contact elements (2, nc); returns (2, nc)."""
-        buf = self._pbuf
-        buf.reshape(-1).put(self._poff, rc)
-        full = buf.reshape(2, self.mx, self.my)
+        full = self._pbuf.reshape(2, self.mx, self.my)
+        full[self._pm] = rc.reshape(-1)
         if self.steady:  # D^-1: sum from the leading edge downstream
             full = np.cumsum(full[:, ::-1], axis=1)[:, ::-1]
             full *= np.float32(self.dx)
@@ -280,8 +325,90 @@ class _SlipOperator:
         q[0] += i01 * h[1]
         q[1] = i10 * h[0]
         q[1] += i11 * h[1]
-        q = sfft.irfft2(q, s=(self.mx, self.my), overwrite_x=True).reshape(-1)
-        return q.take(self._poff).astype(float).reshape(2, -1)
+        q = sfft.irfft2(q, s=(self.mx, self.my), overwrite_x=True)
+        return q[self._pm].astype(float).reshape(2, -1)
+
+
+#: coarse-grid correction of the adhesion rows (:class:`_CoarseCorrection`): cells of COARSE_FACTOR x
+#: COARSE_FACTOR elements, from COARSE_FROM contact elements on (0: never; below about 50 000 the
+#: correction costs more CPU time than the iterations it saves: 100² and 200² of case circ were 12 %
+#: and 10 % slower with it, 400² 10 % faster, interleaved runs); a cell takes part where at
+#: least COARSE_STICK of its elements are adhesion rows; COARSE_ITS GMRES iterations (to COARSE_TOL) on
+#: the coarse grid per application
+COARSE_FACTOR = 8
+COARSE_FROM = 50000
+COARSE_STICK = 0.5
+COARSE_ITS = 3
+COARSE_TOL = 0.1
+
+
+class _CoarseCorrection:
+    """Coarse-grid correction of the adhesion rows of the Newton system: ``Pr (Lc^-1 - Pc) R``.
+
+    The one-level preconditioner P (cumulative sum and circulant A^-1 of the whole periodic grid)
+    misjudges the smooth part of the answer, which depends on the shape of the adhesion area: its
+    GMRES iterations grow with the grid (13 / 17 / 21 at 100² / 200² / 400² on the circ case).  On
+    a grid of f x f merged elements (the operator's ``coarsened``), the cells mostly in adhesion
+    form the coarse problem Lc pc = rc: L of the coarse grid with the tractions of all other cells
+    held at zero (slip elements are held in their direction by their own rows).  R is the mean over
+    a cell's adhesion elements (slips are intensive), Pr the injection of the cell's traction into
+    them.  Lc^-1 is approximated by a few GMRES iterations preconditioned by the coarse grid's own P
+    (Pc); subtracting Pc R r leaves P in charge of what the coarse grid cannot see and replaces its
+    smooth part by the coarse solution.  The product is not linear in r (inner GMRES), so the outer
+    GMRES must keep its preconditioned vectors (:func:`conformal.solvers.krylov.gmres` does:
+    flexible GMRES).  Measured in :meth:`_Newton.preconditioner`."""
+
+    def __init__(self, L: "_SlipOperator", ia: np.ndarray, f: int):
+        from types import SimpleNamespace
+
+        self.L, self.ok = L, False
+        mx, my = L.mx, L.my
+        fy = f if my >= 4 * f else 1
+        g = L.idx[ia]
+        mxc, myc = -(-mx // f), -(-my // fy)
+        cell = ((g // my) // f) * myc + (g % my) // fy
+        stick = np.bincount(cell, minlength=mxc * myc) >= COARSE_STICK * f * fy
+        if stick.sum() < 4:
+            return
+        cop, shared = L.coarse_level(f, fy)
+        if cop is None:
+            return
+        self.ok = True
+        self.Lc = Lc = _SlipOperator(cop, SimpleNamespace(mx=mxc, dx=f * L.dx), stick.reshape(mxc, myc), L.steady,
+                                     shared)
+        Lc.products = 0
+        self.scale = (mxc * myc) / (mx * my)   # a coarse product in units of a fine one
+        self.sel = np.flatnonzero(stick[cell])  # the adhesion rows (positions in ia) that have a cell
+        self.pos = np.searchsorted(Lc.idx, cell[self.sel])
+        self.ncc = ncc = Lc.idx.size
+        self.wmean = 1.0 / np.bincount(self.pos, minlength=ncc)
+        # prolongation by one take: adhesion row j of component k reads entry k (ncc + 1) + pos of
+        # the coarse field padded with a zero per component (rows without a cell read the zero)
+        pmap = np.full(ia.size, ncc)
+        pmap[self.sel] = self.pos
+        self.pmap = np.concatenate([pmap, pmap + ncc + 1])
+        self._pad = np.zeros((2, ncc + 1))
+
+    def restrict(self, ra: np.ndarray) -> np.ndarray:
+        """R: (2, nA) adhesion residual -> (2, ncc), the mean over each cell's adhesion rows."""
+        return np.stack([np.bincount(self.pos, weights=ra[k, self.sel], minlength=self.ncc) * self.wmean
+                         for k in (0, 1)])
+
+    def prolong(self, ec: np.ndarray) -> np.ndarray:
+        """Pr: (2, ncc) -> (2 nA,) flat, each adhesion row the value of its cell (0 without one)."""
+        self._pad[:, :self.ncc] = ec
+        return self._pad.reshape(-1).take(self.pmap)
+
+    def __call__(self, ra: np.ndarray) -> np.ndarray:
+        """Pr (Lc^-1 - Pc) R ra for the adhesion part ra (2, nA) of a residual; flat (2 nA,)."""
+        Lc = self.Lc
+        rc = self.restrict(ra)
+        x, _, _ = gmres(lambda v: Lc.apply(v.reshape(2, -1), fast=True).reshape(-1), rc.reshape(-1),
+                        precond=lambda v: Lc.precondition(v.reshape(2, -1)).reshape(-1), tol=COARSE_TOL,
+                        maxit=COARSE_ITS, restart=COARSE_ITS)
+        self.L.coarse_products += Lc.products * self.scale
+        Lc.products = 0
+        return self.prolong(x.reshape(2, -1) - Lc.precondition(rc))
 
 
 # ----------------------------------------------------------------------------- the Newton method
@@ -433,6 +560,10 @@ class _Newton:
         diag = L.diag
         w = np.where(sigma > STIFF_RATIO * diag, 0.0, (diag / (diag + sigma)) ** SLIP_WEIGHT_POWER)
         local = (1.0 - w) / (sigma + diag)
+        cc = None
+        if L.steady and COARSE_FACTOR and COARSE_FROM and self.nc >= COARSE_FROM and nA:
+            cc = _CoarseCorrection(L, ia, COARSE_FACTOR)
+            cc = cc if cc.ok else None
 
         def prec(r):
             d = np.zeros(2 * nc)
@@ -442,6 +573,8 @@ class _Newton:
             q = L.precondition(d.reshape(2, nc))
             out = np.empty_like(r)
             out[:2 * nA] = q.reshape(-1).take(ia2)
+            if cc is not None:
+                out[:2 * nA] += cc(r[:2 * nA].reshape(2, nA))
             out[2 * nA:2 * nA + nS] = w * (t[0] * q[0].take(isl) + t[1] * q[1].take(isl)) + local * rt
             out[2 * nA + nS:] = r[2 * nA + nS:]
             return out

@@ -291,6 +291,61 @@ def test_weighted_slip_preconditioner_changes_the_path_not_the_solution(monkeypa
     assert a.products < 0.85 * b.products
 
 
+def last_newton_system_iterations(op, g, pn, sol, xi: float, mu: float = 0.3, rtol: float = 1e-3) -> int:
+    """GMRES iterations of the Newton system at the converged solution ``sol`` (steady rolling,
+    creepage xi) to the relative residual ``rtol``: the preconditioner's quality on the final slip
+    set, free of the Newton path."""
+    L = tang._SlipOperator(op, g, pn > 0, True)
+    idx = L.idx
+    gk = (mu * pn).ravel()[idx]
+    w = tang.column_rigid_slip(g, xi, 0.0, 0.0, True).reshape(2, -1)[:, idx].copy()
+    newton = tang._Newton(L, w, gk, gk, np.full(idx.size, g.area), [], mu * float(pn.sum() * g.area))
+    newton.creep0 = np.array([xi, 0.0])
+    p = np.stack([sol.px.ravel()[idx], sol.py.ravel()[idx]])
+    st = newton.fresh(tang._State(p, None, np.array([xi, 0.0]), sol.status.ravel()[idx] == SLIP))
+    F, ferr, slip = newton.residual(st.p, st.s, st.slipping)
+    return newton.step(st, F, ferr, slip, rtol)[3]
+
+
+def test_coarse_correction_keeps_the_iterations_flat(monkeypatch):
+    """The coarse-grid correction of the adhesion rows (tangential._CoarseCorrection): GMRES
+    iterations of the last Newton system of case circ (28 % slip, the normal problem solved; as
+    studies/steady_rolling_speed.py) to 1e-6 grow by at most 3 from 100² to 200² (measured 22 / 24).
+    The one-level preconditioner (COARSE_FROM = 0) fails that: 26 / 31.  (By default the correction
+    starts at larger grids, where it also pays in CPU time; here it is switched on at 100².)"""
+    monkeypatch.setattr(tang, "COARSE_FROM", 4000)
+    its = {}
+    hz = hertz_from_curvatures(0.001, 0.001, STEEL, normal_force=100e3)
+    for n in (100, 200):
+        g = PlanarGrid.around_ellipse(hz.a, hz.b, n=n, scale=1.1)
+        op, pn = setup(g, STEEL, lambda X, Y: 0.001 * (X**2 + Y**2), 100e3)
+        assert np.count_nonzero(pn) >= tang.COARSE_FROM
+        sol = solve(op, g, pn, xi=0.001)
+        assert sol.converged
+        with monkeypatch.context() as m:
+            m.setattr(tang, "COARSE_FROM", 0)
+            one_level = last_newton_system_iterations(op, g, pn, sol, 0.001, rtol=1e-6)
+        its[n] = (last_newton_system_iterations(op, g, pn, sol, 0.001, rtol=1e-6), one_level)
+    assert its[200][0] <= its[100][0] + 3, its
+    assert its[200][1] > its[100][1] + 3, its          # the growth the correction removes
+    assert its[200][0] <= its[200][1] - 4, its
+
+
+def test_coarse_correction_changes_the_path_not_the_solution(monkeypatch):
+    """Steady rolling with spin and lateral creepage at 100 x 100 (6500 contact elements; the
+    correction switched on from 4000): the same tractions with and without the coarse-grid correction, to the solver
+    tolerance (1e-6 on the friction-law residual; measured 6e-7 of mu pmax), in fewer products."""
+    op, g, pn = circ(100)
+    monkeypatch.setattr(tang, "COARSE_FROM", 4000)
+    a = solve(op, g, pn, xi=0.0004, eta=-0.0003, phi=1e-4)
+    monkeypatch.setattr(tang, "COARSE_FROM", 0)
+    b = solve(op, g, pn, xi=0.0004, eta=-0.0003, phi=1e-4)
+    assert a.converged and b.converged
+    scale = 0.3 * pn.max()
+    assert np.abs(a.px - b.px).max() < 5e-6 * scale and np.abs(a.py - b.py).max() < 5e-6 * scale
+    assert a.products < b.products
+
+
 # ----------------------------------------------------------------------------- hard cases
 def test_full_slip_large_creepage():
     op, g, pn = circ(30)
