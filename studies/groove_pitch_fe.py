@@ -21,7 +21,12 @@ in its last bits is a new FE cache key: minutes of FE per step):
   the default sizes); ``fe_big`` (--big): ``fe_body_size`` 32.
 
 Also ``default``: the project's default model (``influence = "halfspace"`` with its own creep
-point and grid placement), as a user gets it.
+point and grid placement), as a user gets it; and the coupling decomposition (:data:`MIXED`,
+:func:`mixed_kernel`): the FE kernel without its normal-tangential coupling (``fe_uncoupled``),
+without the x-n terms alone (``fe_without_xn``: u_x due to p_n, u_n due to p_x) or the s-n terms
+alone (``fe_without_sn``), with Blanco's variant 3 or 4 coupling in place of its own
+(``fe_blanco3_coupling``, ``fe_blanco4_coupling``), and variant 4 with the FE coupling
+(``blanco4_fe_coupling``).
 
 Per row: the free-rolling pitch creepage omega R_nom / V - 1 (CONTACT's VPITCH), pmax, the
 contact area, the developed normal force, elements in adhesion and the spin moment MZ at free
@@ -34,7 +39,7 @@ Rows already in the CSV of the output folder are kept unless rerun (--grooves, -
 Run:  nice -n 5 python studies/groove_pitch_fe.py [--quick]
       (full: 4 grooves x 5 forms, FE numbers about 3-6 min per groove with an empty cache on the
        2-core machine, each solve about 1 min; --quick: the 10.25 mm groove on a grid of twice
-       CONTACT's element sizes, fe and blanco4 and planar, about 60 s with an empty cache)
+       CONTACT's element sizes, QUICK_FORMS, about 70 s with an empty FE cache)
 """
 from __future__ import annotations
 
@@ -71,22 +76,27 @@ FORMS = {"planar": {"influence": "halfspace_planar", **CREEP},
          "fe_uncoupled": {"influence": "fe", **CREEP},
          "fe_blanco3_coupling": {"influence": "fe", **CREEP},
          "fe_blanco4_coupling": {"influence": "fe", **CREEP},
-         "blanco4_fe_coupling": {"influence": "fe", **CREEP}}
-#: mixed forms: (kernel, coupling terms from), None = no coupling
-MIXED = {"fe_uncoupled": ("fe", None), "fe_blanco3_coupling": ("fe", 3), "fe_blanco4_coupling": ("fe", 4),
-         "blanco4_fe_coupling": (4, "fe")}
+         "blanco4_fe_coupling": {"influence": "fe", **CREEP},
+         "fe_without_xn": {"influence": "fe", **CREEP},
+         "fe_without_sn": {"influence": "fe", **CREEP}}
+#: mixed forms: (kernel, coupling terms from (None: zero), tangential components replaced: 0 = x, 1 = s)
+MIXED = {"fe_uncoupled": ("fe", None, (0, 1)), "fe_blanco3_coupling": ("fe", 3, (0, 1)),
+         "fe_blanco4_coupling": ("fe", 4, (0, 1)), "blanco4_fe_coupling": (4, "fe", (0, 1)),
+         "fe_without_xn": ("fe", None, (0,)), "fe_without_sn": ("fe", None, (1,))}
 MAIN_FORMS = ("planar", "blanco3", "blanco4", "fe", "default")
 #: CONTACT's element sizes DX, DS of the deck (mm)
 DX, DS = 0.095833, 0.25
-#: --quick: twice CONTACT's element sizes (a quarter of the elements)
+#: --quick: twice CONTACT's element sizes (a quarter of the elements), the 10.25 mm groove
 QUICK_SCALE = 2.0
+QUICK_FORMS = ("fe", "planar", "blanco3", "blanco4", "fe_without_xn", "fe_blanco3_coupling")
 
 
 @contextmanager
 def mixed_kernel(form: str):
     """Within the block, ``influence = "fe"`` solves with the mixed kernel of ``form`` (:data:`MIXED`):
     the FE two-body kernel or Blanco's variant 3 / 4 of the planar half-space numbers on the same
-    grid, its coupling terms K[..., n, (x, s)] and K[..., (x, s), n] replaced by another's (or zero).
+    grid, its coupling terms K[..., n, t] and K[..., t, n] (t = x, s or both) replaced by another's
+    (or zero).
     A study device: conformal.influence.fe.wheel_rail_kernel is wrapped for the block."""
     if form not in MIXED:
         yield
@@ -95,7 +105,7 @@ def mixed_kernel(form: str):
     from conformal.influence.blanco import blanco_kernel
     from conformal.influence.curved import curved_halfspace_kernel
 
-    base, coupling = MIXED[form]
+    base, coupling, comps = MIXED[form]
     original = fe.wheel_rail_kernel
 
     def wrapped(grid, material, *args, **kw):
@@ -106,8 +116,9 @@ def mixed_kernel(form: str):
                    4: blanco_kernel(planar, np.asarray(grid.delta, float), 4)}
         k = kernels[base].copy()
         c = None if coupling is None else kernels[coupling]
-        k[..., 2, :2] = 0.0 if c is None else c[..., 2, :2]
-        k[..., :2, 2] = 0.0 if c is None else c[..., :2, 2]
+        for t in comps:
+            k[..., 2, t] = 0.0 if c is None else c[..., 2, t]
+            k[..., t, 2] = 0.0 if c is None else c[..., t, 2]
         return k, info
 
     fe.wheel_rail_kernel = wrapped
@@ -193,37 +204,43 @@ def main(argv=None):
     ap.add_argument("--out", default=None,
                     help="output folder (default studies/out/groove_pitch_fe; with --quick a temporary folder)")
     ap.add_argument("--quick", action="store_true",
-                    help="10.25 mm groove on twice CONTACT's element sizes: fe, blanco4, planar")
+                    help="10.25 mm groove on twice CONTACT's element sizes: " + ", ".join(QUICK_FORMS))
     ap.add_argument("--grooves", default=",".join(GROOVE_LI), help="grooves to (re)run: 1025,1010,1005,1002")
     ap.add_argument("--forms", default=",".join(MAIN_FORMS),
                     help=f"formulations to (re)run, of {list(FORMS)}")
+    ap.add_argument("--scale", type=float, default=None,
+                    help=f"element sizes in units of CONTACT's DX, DS (default 1; --quick {QUICK_SCALE:g})")
     args = ap.parse_args(argv)
     out = output_dir("groove_pitch_fe", args)
     out.mkdir(parents=True, exist_ok=True)
     grooves = ("1025",) if args.quick else tuple(args.grooves.split(","))
-    forms = ("fe", "blanco4", "planar") if args.quick else tuple(args.forms.split(","))
+    forms = QUICK_FORMS if args.quick else tuple(args.forms.split(","))
     bad = [g for g in grooves if g not in GROOVE_LI] + [f for f in forms if f not in FORMS]
     if bad:
         print(f"groove_pitch_fe: unknown groove or form {bad}; grooves {list(GROOVE_LI)}, forms {list(FORMS)}",
               file=sys.stderr)
         return 2
-    scale = QUICK_SCALE if args.quick else 1.0
+    scale = args.scale or (QUICK_SCALE if args.quick else 1.0)
+    if not 0.5 <= scale <= 4.0:
+        print(f"groove_pitch_fe: --scale must lie in [0.5, 4], got {scale:g}", file=sys.stderr)
+        return 2
     path = out / "groove_pitch_fe.csv"
-    rows = [r for r in read_csv(path) if not (r["groove"] in grooves and r["form"] in forms)] \
+    rows = [r for r in read_csv(path) if not (r["groove"] in grooves and r["form"] in forms
+                                              and float(r["scale"]) == scale)] \
         if path.is_file() and not args.quick else []
     order = list(FORMS)
     for g in grooves:
         for form in forms:
             rows.append(row(g, form, scale))
             print("row", rows[-1], flush=True)
-            rows.sort(key=lambda r: (-int(r["groove"]), order.index(r["form"])))
+            rows.sort(key=lambda r: (float(r["scale"]), -int(r["groove"]), order.index(r["form"])))
             write_csv(path, with_fe_deviation(rows))          # each row as it comes (FE rows take minutes)
     text = summary(rows)
     tmp = out / "groove_pitch_fe.md.tmp"
     tmp.write_text(text, encoding="utf-8")
     os.replace(tmp, out / "groove_pitch_fe.md")
     write_sidecar(out, __file__, vars(args), extra={"summary": {
-        f"{r['groove']}:{r['form']}": {"pitch_vs_fe_pct": None if r["dev_pitch_creepage_fe_pct"] is None
+        f"{r['groove']}:{r['form']}:{float(r['scale']):g}": {"pitch_vs_fe_pct": None if r["dev_pitch_creepage_fe_pct"] is None
                                        else round(float(r["dev_pitch_creepage_fe_pct"]), 3),
                                        "pmax_vs_fe_pct": None if r["dev_pmax_fe_pct"] is None
                                        else round(float(r["dev_pmax_fe_pct"]), 3)} for r in rows}})
