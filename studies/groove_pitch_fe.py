@@ -88,7 +88,7 @@ MAIN_FORMS = ("planar", "blanco3", "blanco4", "fe", "default")
 DX, DS = 0.095833, 0.25
 #: --quick: twice CONTACT's element sizes (a quarter of the elements), the 10.25 mm groove
 QUICK_SCALE = 2.0
-QUICK_FORMS = ("fe", "planar", "blanco3", "blanco4", "fe_without_xn", "fe_blanco3_coupling")
+QUICK_FORMS = ("fe", "planar", "blanco4", "fe_without_xn", "fe_blanco3_coupling")
 
 
 @contextmanager

@@ -19,11 +19,12 @@ def _read_csv(path):
 
 @pytest.mark.slow
 def test_groove_pitch_fe_quick(tmp_path):
-    """Twice CONTACT's element sizes (about 70 s with an empty FE cache).  Measured on this grid
+    """Twice CONTACT's element sizes, five solves (about 70 s on the shared 2-core machine with the
+    FE numbers cached; their FE adds about 50 s).  Measured on this grid
     (CONTACT's grid: docs/validation/disagreements.md):
 
-    * the FE bodies roll freely at a pitch creepage 29 % above the project's turned frames
-      (Blanco's variant 4, -29.4 % against FE) and 24 % above CONTACT's planar numbers: the x-n
+    * the free-rolling pitch creepage of the project's turned frames (Blanco's variant 4) lies
+      29.4 % below the FE bodies', CONTACT's planar numbers' 23.6 % below: the x-n
       coupling of the real bodies, which no half-space form of identical materials has; the FE
       kernel without its x-n terms lies among the half-space forms (0-20 % above variant 4's pitch,
       measured +11.8 % on CONTACT's grid);
@@ -34,13 +35,13 @@ def test_groove_pitch_fe_quick(tmp_path):
       numbers above by more than 1 % (+1.55 %)."""
     out = run_study("groove_pitch_fe", tmp_path / "out", timeout=600.0)
     rows = {r["form"]: r for r in _read_csv(out / "groove_pitch_fe.csv")}
-    assert set(rows) == {"fe", "planar", "blanco3", "blanco4", "fe_without_xn", "fe_blanco3_coupling"}
+    assert set(rows) == {"fe", "planar", "blanco4", "fe_without_xn", "fe_blanco3_coupling"}
     fe = rows["fe"]
     assert fe["rail_margin_limited_by"] is None and fe["wheel_margin_limited_by"] == "section width"
     assert fe["wheel_margin_mm"] == pytest.approx(19.8, rel=1e-6)        # the deck's crown: y = +-9.9 mm
     pitch = {k: r["pitch_creepage"] for k, r in rows.items()}
-    assert 1.2 < pitch["fe"] / pitch["blanco4"] < 1.4
-    assert 1.15 < pitch["fe"] / pitch["planar"] < 1.35
+    assert -0.35 < pitch["blanco4"] / pitch["fe"] - 1.0 < -0.2
+    assert -0.3 < pitch["planar"] / pitch["fe"] - 1.0 < -0.15
     assert 0.0 < pitch["fe_without_xn"] / pitch["blanco4"] - 1.0 < 0.2
     assert pitch["fe_blanco3_coupling"] == pytest.approx(pitch["fe_without_xn"], rel=0.01)
     assert rows["blanco4"]["dev_pmax_fe_pct"] == pytest.approx(0.0, abs=0.3)
