@@ -17,8 +17,10 @@ in its last bits is a new FE cache key: minutes of FE per step):
 * ``blanco4``: ``halfspace_blanco``, variant 4 = the project's turned frames (``halfspace``, to 1e-16);
 * ``fe``: ``influence = "fe"``, the converged defaults (split, P1, ``fe_body_size`` 16, closure
   ``"extend"``), the wheel and the rail meshed from the deck's profiles;
-* ``fe_fine`` (--fine, one groove): the FE mesh refined (``fe_h_patch`` 1, ``fe_h_load`` 0.25, half
-  the default sizes); ``fe_big`` (--big): ``fe_body_size`` 32.
+* ``fe_fine``: the FE mesh refined (``fe_h_patch`` 1, ``fe_h_load`` 0.25, half the default sizes;
+  on the 10.25 mm groove at twice CONTACT's element sizes this run ends in a segmentation fault
+  inside a compiled library); ``fe_fine_patch``: ``fe_h_patch`` 1 alone; ``fe_big``:
+  ``fe_body_size`` 32.
 
 Also ``default``: the project's default model (``influence = "halfspace"`` with its own creep
 point and grid placement), as a user gets it; and the coupling decomposition (:data:`MIXED`,
@@ -69,6 +71,7 @@ FORMS = {"planar": {"influence": "halfspace_planar", **CREEP},
          "blanco4": {"influence": "halfspace_blanco", "blanco_variant": 4, **CREEP},
          "fe": {"influence": "fe", **CREEP},
          "fe_fine": {"influence": "fe", "fe_h_patch": 1.0, "fe_h_load": 0.25, **CREEP},
+         "fe_fine_patch": {"influence": "fe", "fe_h_patch": 1.0, **CREEP},
          "fe_big": {"influence": "fe", "fe_body_size": 32.0, **CREEP},
          "default": {"influence": "halfspace"},
          # the FE kernel with its normal-tangential coupling terms (u_n due to p_x, p_s and u_x, u_s due to
