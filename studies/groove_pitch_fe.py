@@ -172,7 +172,7 @@ def with_fe_deviation(rows: list[dict]) -> list[dict]:
 
 def summary(rows: list[dict]) -> str:
     lines = ["# Free rolling in the Li groove with FE influence numbers (studies/groove_pitch_fe.py)", "",
-             "CONTACT's groove_li cases 1-4 (R10 wheel, 10 kN, mu = 0.3), its grid and rigid slip for every "
+             "CONTACT's groove_li (R10 wheel, 10 kN, mu = 0.3), its grid and rigid slip for every "
              "formulation but `default`.  Deviations in %.", "",
              "| groove | form | grid | pitch creepage | vs FE | vs CONTACT | pmax | vs FE | area (mm²) | vs FE | FN (N) "
              "| adhesion | MZ (N mm) |",
