@@ -19,8 +19,8 @@ def _read_csv(path):
 
 @pytest.mark.slow
 def test_groove_pitch_fe_quick(tmp_path):
-    """Twice CONTACT's element sizes, five solves (about 70 s on the shared 2-core machine with the
-    FE numbers cached; their FE adds about 50 s).  Measured on this grid
+    """Twice CONTACT's element sizes, five solves (14-70 s on the shared 2-core machine with the
+    FE numbers cached, depending on its load; their FE adds about 50 s).  Measured on this grid
     (CONTACT's grid: docs/validation/disagreements.md):
 
     * the free-rolling pitch creepage of the project's turned frames (Blanco's variant 4) lies
