@@ -43,6 +43,7 @@ STUDIES=(
   "flange_contact|studies/flange_contact.py"                        # ~10 min (FE, cached after)
   "speed_vs_error|studies/speed_vs_error.py"                        # ~15 min (FE)
   "fe_body_size|studies/fe_body_size.py"                            # ~15 min (FE)
+  "groove_pitch_fe|studies/groove_pitch_fe.py --forms fe,planar,blanco3,blanco4,default,fe_without_xn,fe_without_sn,fe_uncoupled,fe_blanco3_coupling,fe_blanco4_coupling,blanco4_fe_coupling"   # ~60 min (FE; the --scale 2 rows are kept)
   "fe_influence_speed_error|studies/fe_influence_speed_error.py --quick"   # ~5 min (FE)
   "fe_contact_convergence|studies/fe_contact_reference.py --convergence"   # ~10 min (FE contact)
   "fe_contact_comparison|studies/fe_contact_reference.py --comparison"     # ~15 min (FE contact)
