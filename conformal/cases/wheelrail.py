@@ -378,12 +378,44 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
 
     main = max(range(len(pgs)), key=lambda k: pgs[k].approach)
     a_m, c_m = pgs[main].approach, c[main]
-    F0 = f(0.0) + W
-    x0 = 0.0
-    x1 = (a_m * ((W / F0) ** (2.0 / 3.0) - 1.0) / c_m) if F0 > 0 else a_m / c_m
+    # grid theories: the first trial height from Hertz on the patch curvatures (no grid solves),
+    # where every patch is Hertzian and Hertz carries the load there
+    x0 = _hertz_lowering(pgs, scene, c, w) if on_grid else None
+    F0 = f(x0) + W if x0 is not None else 0.0
+    if not F0 > 0:
+        x0 = 0.0
+        F0 = f(0.0) + W
+    a0 = a_m + x0 * c_m
+    x1 = x0 + ((a0 * ((W / F0) ** (2.0 / 3.0) - 1.0) / c_m) if F0 > 0 and a0 > 0 else a_m / c_m)
     x = secant_on_hertz_growth(f, W, x0, x1, tol=1e-7, maxit=12, xtol=1e-10, rtol=1e-12,
                                message="[load] wheel_load: the linearised vertical balance did not settle")
     return x, fns_at(x)
+
+
+def _hertz_lowering(pgs: list, scene: Scene, c: list, w: list) -> float | None:
+    """The lowering dz at which Hertz on the patch curvatures carries the wheel load,
+    sum_i FN_i^Hertz(a_i + dz cos d_i) w_i = W (the start of a grid balance of several patches), or
+    None where a patch is not Hertzian or the secant does not settle."""
+    if not all(pg.hertzian for pg in pgs):
+        return None
+    W = scene.load.wheel_load
+
+    def f(dz: float) -> float:
+        total = 0.0
+        for pg, ck, wk in zip(pgs, c, w):
+            a = pg.approach + dz * ck
+            if a > 0:
+                total += hertz_from_curvatures(pg.A, pg.B, scene.material, approach=a).FN * wk
+        return total - W
+
+    main = max(range(len(pgs)), key=lambda k: pgs[k].approach)
+    a_m, c_m = pgs[main].approach, c[main]
+    F0 = f(0.0) + W
+    x1 = (a_m * ((W / F0) ** (2.0 / 3.0) - 1.0) / c_m) if F0 > 0 else a_m / c_m
+    try:
+        return secant_on_hertz_growth(f, W, 0.0, x1, tol=1e-6, maxit=20, xtol=1e-10, rtol=1e-12, message="")
+    except (ConvergenceError, ValueError, ZeroDivisionError):
+        return None
 
 
 def _raise_not_hertzian(pg: PatchGeometry):
@@ -1037,7 +1069,7 @@ def _one_patch_start(scene: Scene, pl: Placement, warm: "WarmStart", fields: lis
             st = None
     if st is None or len(st.patches) != 1:   # no neighbour, or the contact changed: the normal balance
         _, st, fns = loaded_state(scene, pl, ratios=ratios, counts_out=counts, warn=False, fields=fields,
-                                  lowering=warm.lowering)
+                                  lowering=warm.lowering, start=st)
         fn = fns[0] if len(fns) == 1 else None
     if len(st.patches) != 1:
         return None
