@@ -612,6 +612,8 @@ def resample(src: PlanarGrid, values: np.ndarray, dst: PlanarGrid) -> np.ndarray
         w = f - i0
         return np.clip(i0, -1, n_src) + 1, np.clip(i0 + 1, -1, n_src) + 1, w   # indices into the padded array
 
+    if (src.mx, src.my, src.dx, src.dy, src.xl, src.yl) == (dst.mx, dst.my, dst.dx, dst.dy, dst.xl, dst.yl):
+        return np.array(values, dtype=float)      # the same grid (the passes of a position)
     v = np.pad(np.asarray(values, float), 1)
     ia, ib, wi = axis(src.mx, src.xl, src.dx, dst.mx, dst.xl, dst.dx)
     ja, jb, wj = axis(src.my, src.yl, src.dy, dst.my, dst.yl, dst.dy)

@@ -201,13 +201,19 @@ def test_contact_solve_from_its_converged_solution_stops_at_once():
 
 def test_resample_onto_the_same_grid_keeps_the_contact_edge():
     """A pressure resampled onto its own grid (offsets that rounding does not keep exactly: xl
-    -2.3 mm, 0.2 mm elements) is bitwise itself: no tiny pressures beyond the contact edge, which
-    would enter the starting contact set of the next normal solve."""
+    -2.3 mm, 0.2 mm elements) is bitwise itself, and so onto a larger grid whose centres fall on
+    the source's: no tiny pressures beyond the contact edge, which would enter the starting
+    contact set of the next normal solve."""
     g = PlanarGrid(23, 17, 0.2, 0.2, -2.3, -1.7)
     X, Y = g.mesh()
     p = np.sqrt(np.maximum(1.0 - (X / 1.9) ** 2 - (Y / 1.3) ** 2, 0.0))
     out = wr.resample(g, p, g)
     np.testing.assert_array_equal(out, p)
+    # a larger grid of the same spacing whose centres fall on the source's (a neighbour's grid)
+    big = PlanarGrid(27, 19, 0.2, 0.2, -2.3 - 0.4, -1.7 - 0.2)
+    out = wr.resample(g, p, big)
+    np.testing.assert_array_equal(out[2:25, 1:18], p)
+    assert np.count_nonzero(out) == np.count_nonzero(p)
     shifted = PlanarGrid(23, 17, 0.2, 0.2, -2.3 + 0.1, -1.7)      # half an element: interpolated
     assert np.count_nonzero(wr.resample(g, p, shifted)) > np.count_nonzero(p) - 40
 
