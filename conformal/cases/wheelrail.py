@@ -48,7 +48,7 @@ from conformal.registry import CONFORMAL_GEOMETRY, CURVED_STRIP, GRID, MODELS, W
 from conformal.result import Result
 from conformal.scene import Scene, WheelRailGeometry
 from conformal.solvers.conformal import DELTA_SPREAD_WARN
-from conformal.solvers.normal import solve_normal
+from conformal.solvers.normal import solve_normal, warm_precondition
 from conformal.theories.hertz import hertz_from_curvatures
 
 GRID_THEORIES = MODELS.accepting(GRID)   # theories whose normal problem is solved on the grid
@@ -306,7 +306,8 @@ def _fn_at(pg: PatchGeometry, scene: Scene, approach: float, warnings: list, cou
         start = None if p_start is None else p_start.get(key)
         try:
             sol = solve_normal(None, pg.grid, pg.h, approach=approach, material=scene.material,
-                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit, p_start=start)
+                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit, p_start=start,
+                               precondition=warm_precondition(pg.grid, start))
         except NoContactError:
             return 0.0
         if p_start is not None:
@@ -349,9 +350,10 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
         if on_grid:
             counts[0] += 1
             side = st.pair.side
+            start = _normal_start(fields, pg, side)
             sol = solve_normal(None, pg.grid, pg.h, normal_force=fn, material=scene.material,
-                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit,
-                               p_start=_normal_start(fields, pg, side))
+                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit, p_start=start,
+                               precondition=warm_precondition(pg.grid, start))
             _check_normal(sol, pg, warnings)
             a = float(sol.approach)
             if fields is not None:

@@ -52,11 +52,20 @@ from conformal.materials import Material
 #: studies/halfspace_scaling.py: at 50 x 50 both variants take about the same time, from 100 x 100 on
 #: the preconditioned iteration is faster and its iteration count grows much more slowly)
 PRECONDITION_FROM = 2500
-#: ... and from this many on when the iteration starts from a given pressure (a neighbouring
-#: solution: a sweep, a balance, the passes of a contact solve), where the preconditioned
-#: iteration needs fewer products: measured on the Manchester A-2.2 sweep's 55 x 33 patch grids,
-#: 9 instead of 21 iterations (3-4 ms instead of 9 ms a solve)
+#: ... and from this many on where a caller starts the iteration from a neighbouring solution (a
+#: sweep, a balance, the passes of a contact solve: :func:`warm_precondition`), where the
+#: preconditioned iteration needs fewer products: measured on the Manchester A-2.2 sweep's
+#: 55 x 33 patch grids, 9 instead of 21 iterations (3-4 ms instead of 9 ms a solve)
 PRECONDITION_WARM_FROM = 400
+
+
+def warm_precondition(grid, p_start) -> bool | None:
+    """The ``precondition`` argument of :func:`solve_normal` for a start from a neighbouring
+    solution: True from PRECONDITION_WARM_FROM elements on when ``p_start`` has a positive
+    pressure, else None (the default rule).  Callers opt in, so that the alternations of the
+    exact and the conformal theories keep the same arithmetic (their planar limit)."""
+    warm = p_start is not None and bool(np.any(np.asarray(p_start) > 0))
+    return True if warm and grid.size >= PRECONDITION_WARM_FROM else None
 
 
 @dataclass(frozen=True, eq=False)
@@ -194,8 +203,8 @@ def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, 
     tol, maxit : stop when sum|dp| / sum p < tol; at most maxit iterations.
     p_start : a starting pressure (e.g. the previous outer iteration), optional.
     precondition : use the operator's preconditioner where it has one (the FFT one of the planar
-        half-space; default: from PRECONDITION_FROM elements on, from PRECONDITION_WARM_FROM with
-        a ``p_start``).
+        half-space; default: from PRECONDITION_FROM elements on; :func:`warm_precondition` for a
+        start from a neighbouring solution).
     weights : w, the projection of the approach direction onto each element's normal (module
         docstring), > 0; default 1 (planar).
 
@@ -220,8 +229,7 @@ def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, 
         raise InputError(f"[model] maxit: must be >= 1, got {maxit!r}")
     h_eff = h if extra_un is None else h + checks.field("extra_un", extra_un, grid.shape)
     if precondition is None:
-        warm = p_start is not None and bool(np.any(np.asarray(p_start) > 0))
-        precondition = grid.size >= (PRECONDITION_WARM_FROM if warm else PRECONDITION_FROM)
+        precondition = grid.size >= PRECONDITION_FROM
     pc = op.normal_preconditioner() if precondition else None
     dA, a = element_areas(grid)
     w = _positive_weights("[model] load direction: weights w", weights, grid.shape)
