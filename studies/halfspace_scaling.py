@@ -66,7 +66,7 @@ def time_normal(n: int, precondition: bool, repeats: int, uniform_start: bool = 
     p0 = np.full(grid.shape, FN / (grid.area * grid.size)) if uniform_start else None
     for _ in range(repeats):
         t0 = time.perf_counter()
-        op = HalfSpaceInfluence.for_grid(grid.mx, grid.my, grid.dx, grid.dy, MAT)
+        op = HalfSpaceInfluence.for_grid(grid.mx, grid.my, grid.dx, grid.dy, MAT, shared=False)
         sol = solve_normal(op, grid, h, normal_force=FN, tol=TOL, precondition=precondition, p_start=p0)
         best = min(best, time.perf_counter() - t0)
     return best, sol
@@ -81,7 +81,7 @@ def time_rolling(n: int, normal, repeats: int):
     best, tang = np.inf, None
     for _ in range(repeats):
         t0 = time.perf_counter()
-        op = HalfSpaceInfluence.for_grid(grid.mx, grid.my, grid.dx, grid.dy, MAT)
+        op = HalfSpaceInfluence.for_grid(grid.mx, grid.my, grid.dx, grid.dy, MAT, shared=False)
         tang = solve_tangential(op, grid, normal.pn, xi=XI, eta=0.0, phi=0.0, mu_static=MU, mu_kinetic=MU,
                                 rolling="steady", tol=TOL)
         best = min(best, time.perf_counter() - t0)

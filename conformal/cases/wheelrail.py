@@ -48,7 +48,7 @@ from conformal.registry import CONFORMAL_GEOMETRY, CURVED_STRIP, GRID, MODELS, W
 from conformal.result import Result
 from conformal.scene import Scene, WheelRailGeometry
 from conformal.solvers.conformal import DELTA_SPREAD_WARN
-from conformal.solvers.normal import solve_normal
+from conformal.solvers.normal import solve_normal, warm_precondition
 from conformal.theories.hertz import hertz_from_curvatures
 
 BALANCE_TOL = 1e-4                       # relative tolerance of the vertical force balance
@@ -305,7 +305,8 @@ def _fn_at(pg: PatchGeometry, scene: Scene, approach: float, warnings: list, cou
         start = None if p_start is None else p_start.get(key)
         try:
             sol = solve_normal(None, pg.grid, pg.h, approach=approach, material=scene.material,
-                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit, p_start=start)
+                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit, p_start=start,
+                               precondition=warm_precondition(pg.grid, start))
         except NoContactError:
             return 0.0
         if p_start is not None:
@@ -348,9 +349,10 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
         if on_grid:
             counts[0] += 1
             side = st.pair.side
+            start = _normal_start(fields, pg, side)
             sol = solve_normal(None, pg.grid, pg.h, normal_force=fn, material=scene.material,
-                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit,
-                               p_start=_normal_start(fields, pg, side))
+                               tol=min(scene.model.tol, 1e-6), maxit=scene.model.maxit, p_start=start,
+                               precondition=warm_precondition(pg.grid, start))
             _check_normal(sol, pg, warnings)
             a = float(sol.approach)
             if fields is not None:
@@ -377,12 +379,44 @@ def linear_balance(st: PairState, scene: Scene, ratios=None, *, counts: list | N
 
     main = max(range(len(pgs)), key=lambda k: pgs[k].approach)
     a_m, c_m = pgs[main].approach, c[main]
-    F0 = f(0.0) + W
-    x0 = 0.0
-    x1 = (a_m * ((W / F0) ** (2.0 / 3.0) - 1.0) / c_m) if F0 > 0 else a_m / c_m
+    # grid theories: the first trial height from Hertz on the patch curvatures (no grid solves),
+    # where every patch is Hertzian and Hertz carries the load there
+    x0 = _hertz_lowering(pgs, scene, c, w) if on_grid else None
+    F0 = f(x0) + W if x0 is not None else 0.0
+    if not F0 > 0:
+        x0 = 0.0
+        F0 = f(0.0) + W
+    a0 = a_m + x0 * c_m
+    x1 = x0 + ((a0 * ((W / F0) ** (2.0 / 3.0) - 1.0) / c_m) if F0 > 0 and a0 > 0 else a_m / c_m)
     x = secant_on_hertz_growth(f, W, x0, x1, tol=1e-7, maxit=12, xtol=1e-10, rtol=1e-12,
                                message="[load] wheel_load: the linearised vertical balance did not settle")
     return x, fns_at(x)
+
+
+def _hertz_lowering(pgs: list, scene: Scene, c: list, w: list) -> float | None:
+    """The lowering dz at which Hertz on the patch curvatures carries the wheel load,
+    sum_i FN_i^Hertz(a_i + dz cos d_i) w_i = W (the start of a grid balance of several patches), or
+    None where a patch is not Hertzian or the secant does not settle."""
+    if not all(pg.hertzian for pg in pgs):
+        return None
+    W = scene.load.wheel_load
+
+    def f(dz: float) -> float:
+        total = 0.0
+        for pg, ck, wk in zip(pgs, c, w):
+            a = pg.approach + dz * ck
+            if a > 0:
+                total += hertz_from_curvatures(pg.A, pg.B, scene.material, approach=a).FN * wk
+        return total - W
+
+    main = max(range(len(pgs)), key=lambda k: pgs[k].approach)
+    a_m, c_m = pgs[main].approach, c[main]
+    F0 = f(0.0) + W
+    x1 = (a_m * ((W / F0) ** (2.0 / 3.0) - 1.0) / c_m) if F0 > 0 else a_m / c_m
+    try:
+        return secant_on_hertz_growth(f, W, 0.0, x1, tol=1e-6, maxit=20, xtol=1e-10, rtol=1e-12, message="")
+    except (ConvergenceError, ValueError, ZeroDivisionError):
+        return None
 
 
 def _raise_not_hertzian(pg: PatchGeometry):
@@ -566,13 +600,21 @@ class PatchField:
 def resample(src: PlanarGrid, values: np.ndarray, dst: PlanarGrid) -> np.ndarray:
     """``values`` (src's shape, per element) bilinearly interpolated at the element centres of
     ``dst`` (both grids in their patch's tangent-plane coordinates about the reference point), 0
-    beyond src; equal to ``values`` where dst is src."""
+    beyond src; equal to ``values`` where dst is src (and where a dst centre lies within 1e-9
+    elements of a src centre, the src value exactly)."""
     def axis(n_src, lo_src, d_src, n_dst, lo_dst, d_dst):
         f = (lo_dst + (np.arange(n_dst) + 0.5) * d_dst - lo_src) / d_src - 0.5   # src index coordinate
+        # an element centre on a source centre takes its value alone: rounding of f (1e-15) would
+        # otherwise leave a tiny pressure on the neighbours beyond the contact edge, which puts them
+        # in the starting contact set (a converged start then took 8 iterations instead of 1)
+        near = np.rint(f)
+        f = np.where(np.abs(f - near) <= 1e-9, near, f)
         i0 = np.floor(f).astype(int)
         w = f - i0
         return np.clip(i0, -1, n_src) + 1, np.clip(i0 + 1, -1, n_src) + 1, w   # indices into the padded array
 
+    if (src.mx, src.my, src.dx, src.dy, src.xl, src.yl) == (dst.mx, dst.my, dst.dx, dst.dy, dst.xl, dst.yl):
+        return np.array(values, dtype=float)      # the same grid (the passes of a position)
     v = np.pad(np.asarray(values, float), 1)
     ia, ib, wi = axis(src.mx, src.xl, src.dx, dst.mx, dst.xl, dst.dx)
     ja, jb, wj = axis(src.my, src.yl, src.dy, dst.my, dst.yl, dst.dy)
@@ -1032,7 +1074,7 @@ def _one_patch_start(scene: Scene, pl: Placement, warm: "WarmStart", fields: lis
             st = None
     if st is None or len(st.patches) != 1:   # no neighbour, or the contact changed: the normal balance
         _, st, fns = loaded_state(scene, pl, ratios=ratios, counts_out=counts, warn=False, fields=fields,
-                                  lowering=warm.lowering)
+                                  lowering=warm.lowering, start=st)
         fn = fns[0] if len(fns) == 1 else None
     if len(st.patches) != 1:
         return None

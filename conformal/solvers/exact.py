@@ -27,7 +27,7 @@ from conformal.grid import PlanarGrid
 from conformal.influence.operator import InfluenceOperator, build_operator
 from conformal.problem import ContactProblem
 from conformal.result import ADHESION, EXTERIOR, Result, TractionField
-from conformal.solvers.normal import NormalSolution, solve_normal
+from conformal.solvers.normal import NormalSolution, solve_normal, warm_precondition
 
 #: at most this many normal/tangential alternations for K != 0 ([model] maxout overrides)
 MAXOUT = 50
@@ -190,9 +190,12 @@ def solve(problem: ContactProblem) -> Result:
     start = problem.start    # a neighbouring solution on this grid: the iterations start there
 
     def normal_stage(extra_un, p_start, tang):
-        if p_start is None and start is not None:
+        pre = None
+        if p_start is None and start is not None:   # a neighbouring solution: preconditioned from 400 elements
             p_start = start[0]
-        return solve_normal(op, grid, h, tol=tol, maxit=maxit, extra_un=extra_un, p_start=p_start, **load)
+            pre = warm_precondition(grid, p_start)
+        return solve_normal(op, grid, h, tol=tol, maxit=maxit, extra_un=extra_un, p_start=p_start,
+                            precondition=pre, **load)
 
     def tangential_stage(pn, extra_u, p_start):
         if p_start is None and start is not None and start[1] is not None:

@@ -52,6 +52,20 @@ from conformal.materials import Material
 #: studies/halfspace_scaling.py: at 50 x 50 both variants take about the same time, from 100 x 100 on
 #: the preconditioned iteration is faster and its iteration count grows much more slowly)
 PRECONDITION_FROM = 2500
+#: ... and from this many on where a caller starts the iteration from a neighbouring solution (a
+#: sweep, a balance, the passes of a contact solve: :func:`warm_precondition`), where the
+#: preconditioned iteration needs fewer products: measured on the Manchester A-2.2 sweep's
+#: 55 x 33 patch grids, 9 instead of 21 iterations (3-4 ms instead of 9 ms a solve)
+PRECONDITION_WARM_FROM = 400
+
+
+def warm_precondition(grid, p_start) -> bool | None:
+    """The ``precondition`` argument of :func:`solve_normal` for a start from a neighbouring
+    solution: True from PRECONDITION_WARM_FROM elements on when ``p_start`` has a positive
+    pressure, else None (the default rule).  Callers opt in, so that the alternations of the
+    exact and the conformal theories keep the same arithmetic (their planar limit)."""
+    warm = p_start is not None and bool(np.any(np.asarray(p_start) > 0))
+    return True if warm and grid.size >= PRECONDITION_WARM_FROM else None
 
 
 @dataclass(frozen=True, eq=False)
@@ -189,7 +203,8 @@ def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, 
     tol, maxit : stop when sum|dp| / sum p < tol; at most maxit iterations.
     p_start : a starting pressure (e.g. the previous outer iteration), optional.
     precondition : use the operator's preconditioner where it has one (the FFT one of the planar
-        half-space; default: from PRECONDITION_FROM elements on).
+        half-space; default: from PRECONDITION_FROM elements on; :func:`warm_precondition` for a
+        start from a neighbouring solution).
     weights : w, the projection of the approach direction onto each element's normal (module
         docstring), > 0; default 1 (planar).
 

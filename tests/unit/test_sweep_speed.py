@@ -172,3 +172,89 @@ def test_warm_sweep_equals_independent_balance_and_before():
             for k in ("FN", "FX", "FY"):
                 assert abs(getattr(r, k) - before[k]) <= 3e-4 * W, (y, k)
             assert abs(r.extra["FY_track"] - before["FY_track"]) <= 3e-4 * W
+
+
+def test_contact_solve_from_its_converged_solution_stops_at_once():
+    """A contact solve (Manchester A-2.2 at 3 mm, 0.4 mm elements, steady rolling) started from
+    its own converged tractions, handed over as a sweep does (a PatchField resampled onto the
+    problem's grid), stops after one normal iteration and one tangential Newton step (the
+    residual check of the start), with the forces of the first solve to the tolerance 1e-6."""
+    from dataclasses import replace
+
+    from conformal.models import solve_problem
+
+    sc = mbench_case(3.0, element_size=0.4)
+    pl = wr.place_scene(sc)
+    st = wr.state_at(pl.pair, pl.top, pl.z_touch + 0.06, pl.roll, sc)
+    pg = st.patches[0]
+    problem = wr.problems_at(sc, pl, st, [9800.0])[0]
+    first = solve_problem(problem)
+    assert first.converged and first.extra["normal_iterations"] > 2 and first.extra["tangential_iterations"] >= 1
+    f = first.field
+    fields = [wr.PatchField(pg.patch.s_ref, f.grid, f.pn, f.px, f.py)]
+    again = solve_problem(replace(problem, start=wr._contact_start(fields, pg, problem)))
+    assert again.converged
+    assert again.extra["normal_iterations"] <= 2 and again.extra["tangential_iterations"] <= 2
+    for k in ("FN", "FX", "FY"):
+        assert abs(getattr(again, k) - getattr(first, k)) <= 1e-5 * first.FN, k
+
+
+def test_resample_onto_the_same_grid_keeps_the_contact_edge():
+    """A pressure resampled onto its own grid (offsets that rounding does not keep exactly: xl
+    -2.3 mm, 0.2 mm elements) is bitwise itself, and so onto a larger grid whose centres fall on
+    the source's: no tiny pressures beyond the contact edge, which would enter the starting
+    contact set of the next normal solve."""
+    g = PlanarGrid(23, 17, 0.2, 0.2, -2.3, -1.7)
+    X, Y = g.mesh()
+    p = np.sqrt(np.maximum(1.0 - (X / 1.9) ** 2 - (Y / 1.3) ** 2, 0.0))
+    out = wr.resample(g, p, g)
+    np.testing.assert_array_equal(out, p)
+    # a larger grid of the same spacing whose centres fall on the source's (a neighbour's grid)
+    big = PlanarGrid(27, 19, 0.2, 0.2, -2.3 - 0.4, -1.7 - 0.2)
+    out = wr.resample(g, p, big)
+    np.testing.assert_array_equal(out[2:25, 1:18], p)
+    assert np.count_nonzero(out) == np.count_nonzero(p)
+    shifted = PlanarGrid(23, 17, 0.2, 0.2, -2.3 + 0.1, -1.7)      # half an element: interpolated
+    assert np.count_nonzero(wr.resample(g, p, shifted)) > np.count_nonzero(p) - 40
+
+
+def test_shared_halfspace_operator_equals_a_fresh_one():
+    """Grids of equal shape, spacing and material share one half-space operator in the process;
+    its kernels, transforms, preconditioner and products equal those of a fresh operator bitwise;
+    another spacing or material gives another operator; the cache is bounded."""
+    from conformal.influence import halfspace as hs
+    from conformal.materials import Material
+
+    mat = Material.identical(82000.0, 0.28)
+    a = hs.HalfSpaceInfluence.for_grid(21, 13, 0.2, 0.15, mat)
+    b = hs.HalfSpaceInfluence.for_grid(21, 13, 0.2, 0.15, mat)
+    fresh = hs.HalfSpaceInfluence.for_grid(21, 13, 0.2, 0.15, mat, shared=False)
+    assert a is b and fresh is not a
+    assert hs.HalfSpaceInfluence.for_grid(21, 13, 0.2, 0.2, mat) is not a
+    assert hs.HalfSpaceInfluence.for_grid(21, 13, 0.2, 0.15, Material.identical(70000.0, 0.3)) is not a
+    for i, j in ((2, 2), (0, 0), (0, 1), (1, 1)):
+        np.testing.assert_array_equal(a.kernel_hat(i, j), fresh.kernel_hat(i, j))
+    np.testing.assert_array_equal(a.self_influence(), fresh.self_influence())
+    p = np.random.default_rng(1).random((2, 21, 13))
+    np.testing.assert_array_equal(a.tangential_product32()(p), fresh.tangential_product32()(p))
+    assert a.tangential_product32() is a.tangential_product32()
+    np.testing.assert_array_equal(a.normal_preconditioner()(p[0]), fresh.normal_preconditioner()(p[0]))
+    assert hs._shared_operator.cache_info().maxsize == hs.CACHE_SIZE
+    big = int(hs.CACHE_ELEMENTS ** 0.5) + 1
+    assert hs.HalfSpaceInfluence.for_grid(big, big, 0.2, 0.2, mat) is not hs.HalfSpaceInfluence.for_grid(
+        big, big, 0.2, 0.2, mat)
+
+
+def test_touch_height_refined_from_its_points_equals_full_searches(monkeypatch):
+    """The touching height with the contact points refined from their own coordinates equals the
+    one with a full contact search at every correction (tread, flange) to 1e-9 mm."""
+    from conformal.geometry import search
+
+    for y in (2.0, 7.0):
+        pl = wr.place_scene(mbench_case(y))
+        fast, _ = search.touch_height(pl.pair, pl.top)
+        with monkeypatch.context() as m:
+            m.setattr(search, "_refined", lambda pair, top, z, prev: search.find_contacts(
+                pair.wheel(z), pair.rail, top, locus=search.pair_locus(pair, top, z)))
+            full, _ = search.touch_height(pl.pair, pl.top)
+        assert fast == pytest.approx(full, abs=1e-9)
