@@ -186,3 +186,37 @@ def test_conformal_meets_the_section_truth_at_the_same_lateral_load():
     hs, hs2 = fts.conformal_at(scene), fts.conformal_at(scene, -0.002)
     assert hs["pmax"] / t["pmax"] - 1 < -0.10 and hs["area"] / t["area"] - 1 > 0.3
     assert abs(hs2["pmax"] / hs["pmax"] - 1) > 0.02
+
+
+@pytest.mark.slow
+def test_prescribed_lateral_force_moves_the_wheel_rigidly():
+    """ContactModel.solve with a prescribed lateral force (a second rigid motion s of the wheel
+    along e, across the load direction): given the lateral force of the solution at the nominal
+    position it returns that solution (s = 0); given 5 % more, both resultants hold exactly and the
+    wheel moves towards the flange (s > 0), by micrometres (coarse flange scene at 6.2 mm, 10 kN)."""
+    from conformal.cases.fe_contact import load_direction, run_wheel_rail
+    from conformal.scene import load_scene
+
+    sys.path.insert(0, str(ROOT / "studies"))
+    from fe_truth_convergence import lateral_direction
+
+    scene = load_scene(ROOT / "meshes/scenes/flange_s1002_uic60.toml")
+    scene = scene.with_model(theory="fe_contact", options={"fec_n": 2, "fec_order": 1, "fec_far_field": "clamped"})
+    run, prob = run_wheel_rail(scene)
+    d = load_direction(prob.grid)
+    e = lateral_direction(d)
+    assert abs(e @ d) < 1e-12 and e[1] > 0
+    s0 = run.solution
+    f0 = float(s0.force_vector @ e)
+    assert f0 > 3000.0                                 # the flange root pushes the rail outwards
+    same = run.model.solve(normal_force=prob.normal_force, shift_direction=e, shift_force=f0,
+                           approach_guess=s0.approach)
+    assert abs(same.shift) < 1e-7 and abs(same.approach - s0.approach) < 1e-7
+    np.testing.assert_allclose(same.force, s0.force, rtol=1e-6, atol=1e-9 * s0.FN)
+    more = run.model.solve(normal_force=prob.normal_force, shift_direction=e, shift_force=1.05 * f0,
+                           approach_guess=s0.approach)
+    assert abs(more.F_load - prob.normal_force) < 1e-9 * prob.normal_force
+    assert abs(more.force_vector @ e - 1.05 * f0) < 1e-9 * f0
+    assert 1e-4 < more.shift < 0.05
+    with pytest.raises(InputError):
+        run.model.solve(approach=0.01, shift_direction=e, shift_force=f0)
