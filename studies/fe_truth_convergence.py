@@ -97,6 +97,30 @@ def _edge(sol, run) -> bool:
     return bool(np.any((a - lo < tol) | (hi - a < tol)))
 
 
+def spread_share(s_nodes, f_nodes, widths, s_b: float) -> float:
+    """Share of the force at s < s_b with each nodal force spread uniformly over [s - w/2, s + w/2]
+    (w its element's width along s): the flank share without the one-element jumps of counting
+    whole elements on one side of the boundary (the 45-degree line of the deep pair runs through
+    the middle of the patch, where one column of elements carries 3-5 % of FN)."""
+    s, f = np.asarray(s_nodes, float), np.asarray(f_nodes, float)
+    w = np.broadcast_to(np.asarray(widths, float), s.shape)
+    frac = np.clip((s_b - (s - 0.5 * w)) / w, 0.0, 1.0)
+    return float((f * frac).sum() / f.sum())
+
+
+def grid_widths(s_nodes) -> np.ndarray:
+    """Widths along s of the elements whose centres are ``s_nodes`` (a grid's columns: half the
+    distance to the neighbouring centres on each side)."""
+    s = np.asarray(s_nodes, float)
+    u = np.unique(np.round(s, 9))
+    if u.size < 2:
+        return np.ones_like(s)
+    mid = 0.5 * (u[1:] + u[:-1])
+    edges = np.concatenate([[u[0] - (mid[0] - u[0])], mid, [u[-1] + (u[-1] - mid[-1])]])
+    k = np.searchsorted(u, np.round(s, 9))
+    return (edges[k + 1] - edges[k])
+
+
 def truth_run(scene, opts: dict, f_lat: float | None) -> dict:
     """One truth mesh: solved at the nominal position and at the prescribed vertical and lateral
     load (lateral force ``f_lat``, or this mesh's own at the nominal position when None)."""
@@ -177,7 +201,9 @@ def _at(scene, influence):
         r = gt._conformal(sc, influence)
         grid = curved_problem_from_wheel_rail(sc).grid
         r["LV"] = gt.normal_lv(r, grid)
-        r["flank_share"] = gt.share(r, gt.flank_boundary(grid))
+        s_b = gt.flank_boundary(grid)
+        r["flank_share"] = gt.share(r, s_b)
+        r["flank_share_spread"] = spread_share(r["s_nodes"], r["f_nodes"], grid_widths(r["s_nodes"]), s_b)
         r["dy"] = dy
         for k in ("profile_s", "profile_p", "s_nodes", "f_nodes"):
             r.pop(k, None)
@@ -213,33 +239,67 @@ def match_lv(scene, target, influence, lo, hi, tol=2e-4) -> dict:
     return r
 
 
+def _update(path: Path, fresh: dict, key: str, label: str, value: dict) -> dict:
+    """Read the part file again, set rec[key][label] = value and write it back (truths and
+    models are run by separate processes; each keeps the other's entries)."""
+    rec = json.loads(path.read_text()) if path.exists() else {}
+    if rec.get("base_options") != fresh["base_options"] or rec.get("wheel_load") != fresh["wheel_load"]:
+        rec = dict(fresh, truths={}, models={})
+    rec.setdefault(key, {})[label] = value
+    gt._write_json(path, rec)
+    return rec
+
+
+def seed_from_ground_truth(name: str, parts: Path) -> None:
+    """Take the reference truth of studies/out/fe_ground_truth/parts/<name>.json (the same options,
+    solved at the nominal position, where the loaded state is the same solution: s = 0) as this
+    study's reference when it has none (its lateral force, contact-area bounds and resolution
+    were not stored there)."""
+    path = parts / f"{name}.json"
+    src = gt.OUT / "parts" / f"{name}.json"
+    if (path.exists() and "reference" in json.loads(path.read_text()).get("truths", {})) or not src.exists():
+        return
+    old = json.loads(src.read_text())
+    t = old["truth"]
+    if t["options"] != gt.TRUTH:
+        return
+    st = {"FN": t["FN"], "pmax": t["pmax"], "area": t["area"], "area_bounds": None,
+          "area_resolution": None, "F_lat": None, "shift": 0.0, "s_nodes": t["s_nodes"], "f_nodes": t["f_nodes"],
+          "edge": t["edge"], "flank_share": t["flank_share"], "LV": t["LV"]}
+    rec = {"options": t["options"], "nominal": st, "loaded": dict(st), "F_lat_target": None,
+           "n_unknowns": t["n_unknowns"], "dofs_body1": t["stats"]["dofs_body1"], "dofs_body2": t["stats"]["dofs_body2"],
+           "h_contact": t["h_contact"], "x_range_rail": t["mesh1"]["x_range"], "wall_s": t["wall_s"],
+           "rss_gib": t["rss_gib"], "from": str(src.relative_to(ROOT))}
+    _update(path, {"scene": name, "base_options": gt.TRUTH, "wheel_load": old["wheel_load"]}, "truths", "reference", rec)
+
+
 def run_scene(name, scene, variants: dict, parts: Path, only=None, models=True, quick=False) -> dict:
     path = parts / f"{name}.json"
     rec = json.loads(path.read_text()) if path.exists() else {}
     base = gt.QUICK_TRUTH if quick else gt.TRUTH
+    fresh = {"scene": name, "base_options": base, "wheel_load": scene.load.wheel_load}
     if rec.get("base_options") != base or rec.get("wheel_load") != scene.load.wheel_load:
-        rec = {"scene": name, "base_options": base, "wheel_load": scene.load.wheel_load, "truths": {}, "models": {}}
+        rec = dict(fresh, truths={}, models={})
     for label, extra in variants.items():
         if only is not None and label not in only:
             continue
         opts = dict(base, **extra)
         old = rec["truths"].get(label)
-        if old is not None and old.get("options") == opts:
+        if old is not None and old.get("options") == opts and "from" not in old:
             continue
         f_lat = None if label == "reference" else rec["truths"]["reference"]["F_lat_target"]
         print(f"{name}: {label} {opts}", flush=True)
-        rec["truths"][label] = truth_run(scene, opts, f_lat)
-        _say(name, label, rec["truths"][label])
-        gt._write_json(path, rec)
+        r = truth_run(scene, opts, f_lat)
+        _say(name, label, r)
+        rec = _update(path, fresh, "truths", label, r)
     if models and "reference" in rec["truths"]:
         t = rec["truths"]["reference"]["loaded"]
         todo = [("conformal half-space", None, "halfspace"), ("conformal FE", None, "fe")]
         if not quick:
             todo += [(f"conformal half-space, grid n = {n}", n, "halfspace") for n in GRID_N]
-            todo += [(f"conformal FE, grid n = {n}", n, "fe") for n in GRID_N[:1]]
         for label, n, infl in (todo[:1] if quick else todo):
             old = rec["models"].get(label)
-            if old is not None and abs(old.get("target_LV", -1) - t["LV"]) < 1e-9:
+            if old is not None and abs(old.get("target_LV", -1) - t["LV"]) < 1e-9 and "flank_share_spread" in old:
                 continue
             print(f"{name}: {label}", flush=True)
             hs = rec["models"].get("conformal half-space" if n is None else f"conformal half-space, grid n = {n}", {})
@@ -249,8 +309,10 @@ def run_scene(name, scene, variants: dict, parts: Path, only=None, models=True, 
             except Exception as exc:   # reported, not hidden
                 m = {"error": f"{type(exc).__name__}: {exc}"}
             m["target_LV"] = t["LV"]
-            rec["models"][label] = m
-            gt._write_json(path, rec)
+            print(f"  {name} {label}: " + ("FAILED " + m["error"] if "error" in m else
+                  f"dy {1e3 * m['dy']:+.2f} um FN {m['FN']:.1f} pmax {m['pmax']:.2f} area {m['area']:.2f} "
+                  f"flank {100 * m['flank_share']:.2f} % L/V {m['LV']:.4f} ({m['wall_s']:.0f} s)"), flush=True)
+            rec = _update(path, fresh, "models", label, m)
     return rec
 
 
@@ -264,26 +326,31 @@ def _say(name, label, r):
           flush=True)
 
 
-def summarise(rec: dict) -> dict:
+def summarise(rec: dict, s_b: float) -> dict:
     """Differences of every truth against the reference (nominal and loaded), the Richardson
-    limits of the mesh series, and every production model's errors against the reference."""
+    limits of the mesh series, and every production model's errors against the reference
+    (``s_b``: the flank boundary's arc length; the truths' spread flank share is added here, each
+    node's force spread over its element size h)."""
     T = rec["truths"]
     ref = T.get("reference")
     out: dict = {"convergence": {}, "richardson": {}, "errors": {}}
     if ref is None:
         return out
+    for r in T.values():
+        for k in ("nominal", "loaded"):
+            r[k]["flank_share_spread"] = spread_share(r[k]["s_nodes"], r[k]["f_nodes"], r["h_contact"], s_b)
     for label, r in T.items():
         if label == "reference":
             continue
         out["convergence"][label] = {k: {q: r[k][q] / ref[k][q] - 1.0 for q in ("FN", "pmax", "area")}
-                                     | {"flank_share": r[k]["flank_share"] - ref[k]["flank_share"]}
+                                     | {q: r[k][q] - ref[k][q] for q in ("flank_share", "flank_share_spread")}
                                      for k in ("nominal", "loaded")}
     if all(m in T for m in MESH_SERIES):
         hs = [T[m]["h_contact"] for m in MESH_SERIES]
-        for q in ("FN", "pmax", "area", "flank_share"):
+        for q in ("FN", "pmax", "area", "flank_share_spread"):
             rr = richardson(hs, [T[m]["loaded"][q] for m in MESH_SERIES])
             if rr is not None:
-                rr["limit_vs_reference"] = (rr["limit"] - ref["loaded"][q]) if q == "flank_share" else \
+                rr["limit_vs_reference"] = (rr["limit"] - ref["loaded"][q]) if q.startswith("flank") else \
                     rr["limit"] / ref["loaded"][q] - 1.0
             out["richardson"][q] = rr
     t = ref["loaded"]
@@ -292,6 +359,8 @@ def summarise(rec: dict) -> dict:
             continue
         out["errors"][label] = {q: m[q] / t[q] - 1.0 for q in ("FN", "pmax", "area")} | \
             {"flank_share": m["flank_share"] - t["flank_share"], "LV": m["LV"] - t["LV"]}
+        if "flank_share_spread" in m:
+            out["errors"][label]["flank_share_spread"] = m["flank_share_spread"] - t["flank_share_spread"]
     return out
 
 
@@ -303,12 +372,15 @@ def build(out: Path) -> dict:
          "and at the prescribed vertical AND lateral load (the reference mesh's lateral force at the nominal "
          "position; the wheel's lateral shift s is then an output). Differences against the reference mesh "
          "(fec_n = 6, 20 patch sizes). Area resolution: mean triangle area in contact / area. Flank share: FN "
-         f"at rail contact angles above {gt.FLANK_ANGLE:g} degrees (differences in percentage points).", ""]
+         f"at rail contact angles above {gt.FLANK_ANGLE:g} degrees (differences in percentage points; 'counted / spread': each node's or element's force counted on the side of its centre, or spread uniformly over its width along s).", ""]
     L += ["| scene | truth | fec_n | size | unknowns | h [mm] | state | FN [N] | pmax [N/mm²] | area [mm²] | "
           "area bounds | area resolution | flank share | L/V | shift [µm] | FN diff | pmax diff | area diff | "
           "flank diff |", "|" + "---|" * 19]
+    from conformal.cases.conformal import curved_problem_from_wheel_rail
+
+    scs = dict(gt.scenes(False)) | dict(gt.scenes(True))
     for rec in recs:
-        S = summarise(rec)
+        S = summarise(rec, gt.flank_boundary(curved_problem_from_wheel_rail(scs[rec["scene"]]).grid))
         rec["summary"] = S
         for label, r in rec["truths"].items():
             for k in ("nominal", "loaded"):
@@ -316,11 +388,12 @@ def build(out: Path) -> dict:
                 c = S["convergence"].get(label, {}).get(k)
                 dif = ("| | | | " if c is None else
                        f"| {100 * c['FN']:+.2f} % | {100 * c['pmax']:+.2f} % | {100 * c['area']:+.2f} % | "
-                       f"{100 * c['flank_share']:+.2f} ")
+                       f"{100 * c['flank_share']:+.2f} / {100 * c['flank_share_spread']:+.2f} ")
                 L.append(f"| {rec['scene']} | {label} | {r['options']['fec_n']} | {r['options']['fec_section_size']:g} | "
                          f"{r['n_unknowns']} | {r['h_contact']:.3f} | {k} | {s['FN']:.1f} | {s['pmax']:.1f} | "
-                         f"{s['area']:.2f} | {s['area_bounds'][0]:.2f} .. {s['area_bounds'][1]:.2f} | "
-                         f"{100 * (s['area_resolution'] or 0):.2f} % | {100 * s['flank_share']:.2f} % | "
+                         f"{s['area']:.2f} | {'' if s['area_bounds'] is None else '%.2f .. %.2f' % tuple(s['area_bounds'])} | "
+                         f"{'' if s['area_resolution'] is None else '%.2f %%' % (100 * s['area_resolution'])} | {100 * s['flank_share']:.2f} / "
+                         f"{100 * s['flank_share_spread']:.2f} % | "
                          f"{s['LV']:.4f} | {1e3 * s['shift']:+.2f} {dif}|"
                          + (" slave edge" if s["edge"] else ""))
     L += ["", "Richardson extrapolation of the mesh series (loaded state; f = f0 + C h^p through fec_n = 6, 8, 10; "
@@ -333,25 +406,30 @@ def build(out: Path) -> dict:
                      f"p = {rr['p']:.2f}, limit {rr['limit']:.4g} ({100 * rr['limit_vs_reference']:+.2f} % against the reference)"))
     L += ["", "Production model (theory conformal) at the truth reference's L/V (loaded state); errors against "
           "the reference truth:", "",
-          "| scene | model | grid n | dy [µm] | FN [N] | pmax [N/mm²] | area [mm²] | flank share | L/V | FN err | "
-          "pmax err | area err | flank diff | wall [s] |", "|" + "---|" * 14]
+          "| scene | model | grid n | dy [µm] | FN [N] | pmax [N/mm²] | area [mm²] | area resolution | flank share | "
+          "L/V | FN err | pmax err | area err | flank diff | wall [s] |", "|" + "---|" * 15]
     for rec in recs:
         for label, m in rec.get("models", {}).items():
             if "FN" not in m:
-                L.append(f"| {rec['scene']} | {label} | failed: {m.get('error', '')} |" + "|" * 11)
+                L.append(f"| {rec['scene']} | {label} | failed: {m.get('error', '')} |" + "|" * 12)
                 continue
             e = rec["summary"]["errors"][label]
             L.append(f"| {rec['scene']} | {label} | {m['grid_n']} | {1e3 * m['dy']:+.1f} | {m['FN']:.1f} | "
-                     f"{m['pmax']:.1f} | {m['area']:.2f} | {100 * m['flank_share']:.2f} % | {m['LV']:.4f} | "
+                     f"{m['pmax']:.1f} | {m['area']:.2f} | "
+                     f"{'' if m.get('area_resolution') is None else '%.2f %%' % (100 * m['area_resolution'])} | "
+                     f"{100 * m['flank_share']:.2f} / {100 * m.get('flank_share_spread', float('nan')):.2f} % | "
+                     f"{m['LV']:.4f} | "
                      f"{100 * e['FN']:+.2f} % | {100 * e['pmax']:+.2f} % | {100 * e['area']:+.2f} % | "
-                     f"{100 * e['flank_share']:+.2f} | {m['wall_s']:.0f} |")
+                     f"{100 * e['flank_share']:+.2f} / {100 * e.get('flank_share_spread', float('nan')):+.2f} | "
+                     f"{m['wall_s']:.0f} |")
     L += ["", "Truth runs:", ""]
     for rec in recs:
         for label, r in rec["truths"].items():
             L.append(f"- {rec['scene']}, {label}: {r['options']}, {r['n_unknowns']} unknowns ({r['dofs_body1']} rail, "
                      f"{r['dofs_body2']} wheel), rail x = {r['x_range_rail'][0]:.0f} .. {r['x_range_rail'][1]:.0f} mm, "
-                     f"lateral force {r['F_lat_target']:.1f} N, wall {r['wall_s']:.0f} s, process peak RSS "
-                     f"{r['rss_gib']:.2f} GiB")
+                     + ("" if r["F_lat_target"] is None else f"lateral force {r['F_lat_target']:.1f} N, ")
+                     + f"wall {r['wall_s']:.0f} s, process peak RSS {r['rss_gib']:.2f} GiB"
+                     + (f"; the stored reference of {r['from']}" if "from" in r else ""))
     md = "\n".join(L) + "\n"
     out.mkdir(parents=True, exist_ok=True)
     (out / "convergence.md").write_text(md)
@@ -366,6 +444,8 @@ def main(argv=None) -> int:
     ap.add_argument("--variants", nargs="*", help="truth variants to run (default: all)")
     ap.add_argument("--no-models", action="store_true", help="truths only")
     ap.add_argument("--models-only", action="store_true", help="production models only (truths stored)")
+    ap.add_argument("--seed", action="store_true",
+                    help="a scene without a reference takes the stored one of studies/out/fe_ground_truth")
     ap.add_argument("--out", type=Path, default=OUT)
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
@@ -375,6 +455,8 @@ def main(argv=None) -> int:
         if args.scenes and name not in args.scenes:
             continue
         only = [] if args.models_only else args.variants
+        if args.seed:
+            seed_from_ground_truth(name, args.out / "parts")
         run_scene(name, sc, variants, args.out / "parts", only, models=not args.no_models, quick=args.quick)
     build(args.out)
     write_sidecar(args.out, __file__, vars(args) | {"out": str(args.out)}, {"wall_s": time.perf_counter() - t0})

@@ -220,3 +220,27 @@ def test_prescribed_lateral_force_moves_the_wheel_rigidly():
     assert 1e-4 < more.shift < 0.05
     with pytest.raises(InputError):
         run.model.solve(approach=0.01, shift_direction=e, shift_force=f0)
+
+
+def _convergence() -> dict:
+    import json
+
+    path = ROOT / "studies/out/fe_truth_convergence/convergence.json"
+    return {r["scene"]: r for r in json.loads(path.read_text())["scenes"]}
+
+
+def test_truth_series_carry_the_prescribed_loads():
+    """Every truth mesh of studies/fe_truth_convergence.py was solved again at the prescribed
+    vertical AND lateral load (the reference mesh's lateral force): both resultants hold to
+    rounding, and on the reference mesh that solve is the nominal one (shift 0)."""
+    for name, rec in _convergence().items():
+        T = rec["truths"]
+        ref = T["reference"]
+        if "from" in ref:          # a stored reference (nominal position only)
+            continue
+        assert abs(ref["loaded"]["shift"]) < 1e-6
+        assert abs(ref["loaded"]["FN"] / ref["nominal"]["FN"] - 1) < 1e-6
+        for label, r in T.items():
+            assert abs(r["loaded"]["F_load"] / rec["wheel_load"] - 1) < 1e-9, (name, label)
+            assert abs(r["loaded"]["F_lat"] / ref["F_lat_target"] - 1) < 1e-9, (name, label)
+            assert r["loaded"]["area_bounds"][0] <= r["loaded"]["area"] <= r["loaded"]["area_bounds"][1]
