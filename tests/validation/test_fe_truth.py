@@ -244,3 +244,49 @@ def test_truth_series_carry_the_prescribed_loads():
             assert abs(r["loaded"]["F_load"] / rec["wheel_load"] - 1) < 1e-9, (name, label)
             assert abs(r["loaded"]["F_lat"] / ref["F_lat_target"] - 1) < 1e-9, (name, label)
             assert r["loaded"]["area_bounds"][0] <= r["loaded"]["area"] <= r["loaded"]["area_bounds"][1]
+
+
+def test_deep_pair_reference_is_converged_at_prescribed_loads():
+    """The deep pair's reference truth (clamped blocks, quadratic, a / 6, 20 patch sizes) against a
+    finer mesh (a / 8) and a larger body (40 patch sizes), each at the same vertical and lateral
+    load (studies/fe_truth_convergence.py): FN and pmax within the issue's 0.5 % (measured FN
+    0.00 / 0.00 %, pmax +0.46 / -0.25 %), the flank share (spread) within 0.2 points, the contact
+    area within 1.5 % (+1.10 / 0.00 %; its two bounds lie +-9 % apart)."""
+    rec = _convergence()["deep_pair"]
+    c = rec["summary"]["convergence"]
+    for label in ("finer mesh", "larger body"):
+        d = c[label]["loaded"]
+        assert abs(d["FN"]) < 0.005 and abs(d["pmax"]) < 0.005, label
+        assert abs(d["flank_share_spread"]) < 0.002 and abs(d["area"]) < 0.015, label
+
+
+def test_production_model_meets_the_reference_at_the_same_loads():
+    """conformal + FE influence numbers (the package's defaults) at the truth's L/V, against the
+    reference truth (studies/fe_truth_convergence.py): the issue's targets pmax 2 %, contact area
+    5 %, flank share 2 points, on the deep pair (measured +1.24 %, +1.81 %, -0.16 points; FN +0.63 %)
+    and at 6.2 mm (+0.82 %, -1.28 %, 0 points (root only); FN +0.34 %)."""
+    recs = _convergence()
+    for name in ("deep_pair", "flange_y6.2"):
+        e = recs[name]["summary"]["errors"]["conformal FE"]
+        assert abs(e["pmax"]) < 0.02 and abs(e["area"]) < 0.05 and abs(e["FN"]) < 0.01, name
+        assert abs(e["flank_share_spread"]) < 0.02, name
+        assert abs(e["LV"]) < 2e-3, name                            # compared at the same L/V
+
+
+@pytest.mark.slow
+def test_halfspace_model_at_the_deep_pair_truths_lv():
+    """Recomputed here: conformal + half-space numbers matched to the stored deep-pair reference
+    truth's L/V (wheelset shift an output) meets it within pmax 2 %, area 5 %, flank share
+    (spread) 2 points, FN 1 % (measured +1.17 %, +1.81 %, -0.16 points, +0.75 %)."""
+    sys.path.insert(0, str(ROOT / "studies"))
+    import fe_ground_truth as gt
+    import fe_truth_convergence as ftc
+
+    rec = _convergence()["deep_pair"]
+    t = rec["truths"]["reference"]["loaded"]
+    m = ftc.production(dict(gt.scenes(False))["deep_pair"], t["LV"], None, "halfspace", lo=-0.01, hi=0.01)
+    assert abs(m["LV"] - t["LV"]) < 5e-4
+    assert abs(m["pmax"] / t["pmax"] - 1) < 0.02
+    assert abs(m["area"] / t["area"] - 1) < 0.05
+    assert abs(m["FN"] / t["FN"] - 1) < 0.01
+    assert abs(m["flank_share_spread"] - t["flank_share_spread"]) < 0.02
