@@ -126,7 +126,7 @@ def _conformal(scene, influence: str) -> dict:
     r = solve_scene(sc)
     wall = time.perf_counter() - t0
     parts = r.patches or (r,)
-    s_all, f_all, area = [], [], 0.0
+    s_all, f_all, area, n_el = [], [], 0.0, 0
     for p in parts:
         f = p.field
         if f is None:
@@ -139,13 +139,15 @@ def _conformal(scene, influence: str) -> dict:
         s_all.append(np.broadcast_to(s_c[None, :], F.shape).ravel())
         f_all.append(F.ravel())
         area += float((dA * (f.status != 0)).sum())
+        n_el += int((f.status != 0).sum())
     s = np.concatenate(s_all)
     F = np.concatenate(f_all)
     keep = F > 0
     main = max(parts, key=lambda p: p.FN).field
     ix = int(np.argmin(np.abs(main.grid.x)))
     s_prof = np.asarray(main.curved.s) - main.curved.s_ref if hasattr(main.curved, "s") else None
-    return {"FN": r.FN, "pmax": r.pmax, "area": area, "wall_s": wall, "s_nodes": s[keep].tolist(),
+    return {"FN": r.FN, "pmax": r.pmax, "area": area, "area_resolution": 1.0 / max(n_el, 1),
+            "wall_s": wall, "s_nodes": s[keep].tolist(),
             "f_nodes": F[keep].tolist(),
             "profile_s": (s_prof.tolist() if s_prof is not None else []), "profile_p": main.pn[ix].tolist(),
             "warnings": r.extra.get("warnings", [])}

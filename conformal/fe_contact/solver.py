@@ -148,6 +148,8 @@ class FEContactSolution:
     (mm²); pressure = force / area (N/mm²); gap (n,) the deformed gap; active (n,) bool; tris
     (t, 3) the slave triangles (as indices into these arrays) and tri_area (t,) their areas.
     approach : rigid approach delta of body 2 along ``direction`` (mm).
+    shift, shift_direction : a second rigid motion of body 2, ``shift`` (mm) along the unit
+        ``shift_direction`` (zero unless a lateral force was prescribed, :meth:`ContactModel.solve`).
     """
 
     nodes: np.ndarray
@@ -166,6 +168,8 @@ class FEContactSolution:
     stats: dict
     tris: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
     tri_area: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    shift: float = 0.0
+    shift_direction: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     @property
     def pressure(self) -> np.ndarray:
@@ -401,7 +405,7 @@ class ContactModel:
     def displacements(self, sol: FEContactSolution) -> tuple[np.ndarray, np.ndarray]:
         """Displacements (common frame, mm) of the mesh vertices of body 1 and body 2 under the
         contact pressure of ``sol`` (a solution of this model): K u = B^T (a lambda) on each body,
-        one more solve with the factorised stiffness; body 2's include its rigid approach
+        one more solve with the factorised stiffness; body 2's include its rigid approach (and shift)
         ``sol.approach`` along the load direction.  Clamped far field only (the half-space field
         on the cut faces is not reconstructed here).  For studies of the bodies' structural
         deflection (the rail head's and the wheel rim's motion)."""
@@ -410,15 +414,32 @@ class ContactModel:
         return self._fields(sol)
 
     def solve(self, *, approach: float | None = None, normal_force: float | None = None,
-              approach_guess: float = 0.0) -> FEContactSolution:
-        """See :func:`solve_contact`."""
+              approach_guess: float = 0.0, shift_direction=None, shift_force: float | None = None
+              ) -> FEContactSolution:
+        """See :func:`solve_contact`.  With ``shift_direction`` e (a vector across the load
+        direction d) and ``shift_force`` F_e (N), body 2 moves rigidly by delta d + s e and both
+        forces are prescribed: sum a_j lambda_j (n_j . d) = normal_force and
+        sum a_j lambda_j (n_j . e) = F_e (the second rigid motion s is one more unknown, its
+        gap term -s (n . e) linearised as the approach's in (1)).  A wheel on a real rail has a
+        lateral position relative to the rail head that depends on the structure (web bending,
+        rim bending): prescribing the lateral force as well compares contacts at the same
+        loads, not at the same position of distant points."""
+        if (shift_force is None) != (shift_direction is None):
+            raise InputError("shift_force and shift_direction: give both or neither")
+        if shift_force is not None:
+            if normal_force is None:
+                raise InputError("shift_force: needs a prescribed normal_force")
+            e = np.asarray(shift_direction, dtype=float)
+            if e.shape != (3,) or not np.isfinite(e).all() or np.linalg.norm(e) == 0 or not math.isfinite(shift_force):
+                raise InputError("shift_direction: need a finite non-zero 3-vector and a finite shift_force")
+            return self._run(approach, normal_force, float(approach_guess), (e / np.linalg.norm(e), float(shift_force)))
         if (approach is None) == (normal_force is None):
             raise InputError("[load] normal_force: give exactly one of normal_force (N) or approach (mm)")
         if approach is not None and not math.isfinite(approach):
             raise InputError(f"[load] approach: must be finite, got {approach}")
         if normal_force is not None and not (normal_force > 0 and math.isfinite(normal_force)):
             raise InputError(f"[load] normal_force: must be > 0, got {normal_force}")
-        return self._run(approach, normal_force, float(approach_guess))
+        return self._run(approach, normal_force, float(approach_guess), None)
 
 
 def solve_contact(body1: ContactBody, body2: ContactBody, *, approach: float | None = None,
@@ -587,9 +608,13 @@ def prepare_contact(body1: ContactBody, body2: ContactBody, *, direction=(0.0, 0
             "dofs_body2": int(f2.ndofs), "slave_nodes": int(n_c), "quadrature_points": int(Q), "solver": solver,
             "far_field": settings.far_field}
 
-    def run(approach, normal_force, approach_guess):
+    def run(approach, normal_force, approach_guess, lateral):
         t_start = time.perf_counter()
         prescribed_force = normal_force is not None
+        if lateral is not None:      # the second rigid motion: v_i = int psi_i n.e dA / a_i
+            e_sh, f_sh = lateral
+            v = np.bincount(rowq.ravel(), weights=(wphi * (nq @ e_sh)[:, None]).ravel(), minlength=n_c) / area
+        shift = 0.0
         delta = float(approach_guess if prescribed_force else approach)
         g_rigid = g0 - delta * w
         if g_rigid.min() >= 0:
@@ -607,6 +632,16 @@ def prepare_contact(body1: ContactBody, body2: ContactBody, *, direction=(0.0, 0
             WA = W[:, col_of[Aidx]]                        # (n_c, |A|)
             lam = np.zeros(n_c)
             dl = delta
+            ds = 0.0
+            if lateral is not None:
+                k = Aidx.size
+                M = np.zeros((k + 2, k + 2))
+                M[:k, :k] = WA[Aidx]
+                M[:k, k], M[:k, k + 1] = -w[Aidx], -v[Aidx]
+                M[k, :k], M[k + 1, :k] = (area * w)[Aidx], (area * v)[Aidx]
+                sol = np.linalg.solve(M, np.concatenate([-g0[Aidx], [normal_force, f_sh]]))
+                lam[Aidx], dl, ds = sol[:k], float(sol[k]), float(sol[k + 1])
+                return lam, dl, ds, g0 - dl * w - ds * v + WA @ lam[Aidx]
             if prescribed_force:
                 M = np.zeros((Aidx.size + 1, Aidx.size + 1))
                 M[:-1, :-1] = WA[Aidx]
@@ -616,7 +651,7 @@ def prepare_contact(body1: ContactBody, body2: ContactBody, *, direction=(0.0, 0
                 lam[Aidx], dl = sol[:-1], float(sol[-1])
             else:
                 lam[Aidx] = np.linalg.solve(WA[Aidx], -(g0 - dl * w)[Aidx])
-            return lam, dl, g0 - dl * w + WA @ lam[Aidx]
+            return lam, dl, ds, g0 - dl * w + WA @ lam[Aidx]
 
         # primal-dual active set (semismooth Newton): all changes at once; if a set comes back
         # (cycling, possible where W is not an M-matrix), one change per step: drop the most
@@ -627,7 +662,7 @@ def prepare_contact(body1: ContactBody, body2: ContactBody, *, direction=(0.0, 0
             Aidx = np.where(A)[0]
             if Aidx.size == 0:
                 raise NoContactError("the active set became empty (no contact)")
-            lam, delta, gap = solve_set(Aidx)
+            lam, delta, shift, gap = solve_set(Aidx)
             neg = A & (lam <= 0.0)
             pen = ~A & (gap < -tol)
             if not neg.any() and not pen.any():
@@ -653,7 +688,8 @@ def prepare_contact(body1: ContactBody, body2: ContactBody, *, direction=(0.0, 0
                      total_s=prep["pairing_s"] + prep["factor_s"] + t_end - t_start)
         return FEContactSolution(nodes=nodes, X=X, normal=normal, uv=uv, g0=g0, force=lam * area, area=area, gap=gap,
                                  active=A.copy(), approach=delta, direction=d, iterations=it,
-                                 n_unknowns=int(f1.ndofs + f2.ndofs), stats=stats, tris=loc_tris, tri_area=loc_area)
+                                 n_unknowns=int(f1.ndofs + f2.ndofs), stats=stats, tris=loc_tris, tri_area=loc_area,
+                                 shift=shift, shift_direction=(np.zeros(3) if lateral is None else e_sh))
 
     def fields(sol: FEContactSolution):
         if halfspace:
@@ -664,6 +700,6 @@ def prepare_contact(body1: ContactBody, body2: ContactBody, *, direction=(0.0, 0
             U = np.zeros(fb.ndofs)
             U[fb.free] = fb.factor.solve(rhs[fb.free][:, None])[:, 0]
             out.append(U[fb.dofmap[:, :len(fb.points)]].T)
-        return out[0], out[1] + sol.approach * sol.direction[None, :]
+        return out[0], out[1] + sol.approach * sol.direction[None, :] + sol.shift * sol.shift_direction[None, :]
 
     return ContactModel(run, prep, fields)

@@ -186,3 +186,128 @@ def test_conformal_meets_the_section_truth_at_the_same_lateral_load():
     hs, hs2 = fts.conformal_at(scene), fts.conformal_at(scene, -0.002)
     assert hs["pmax"] / t["pmax"] - 1 < -0.10 and hs["area"] / t["area"] - 1 > 0.3
     assert abs(hs2["pmax"] / hs["pmax"] - 1) > 0.02
+
+
+@pytest.mark.slow
+def test_prescribed_lateral_force_moves_the_wheel_rigidly():
+    """ContactModel.solve with a prescribed lateral force (a second rigid motion s of the wheel
+    along e, across the load direction): given the lateral force of the solution at the nominal
+    position it returns that solution (s = 0); given 5 % more, both resultants hold exactly and the
+    wheel moves towards the flange (s > 0), by micrometres (coarse flange scene at 6.2 mm, 10 kN)."""
+    from conformal.cases.fe_contact import load_direction, run_wheel_rail
+    from conformal.scene import load_scene
+
+    sys.path.insert(0, str(ROOT / "studies"))
+    from fe_truth_convergence import lateral_direction
+
+    scene = load_scene(ROOT / "meshes/scenes/flange_s1002_uic60.toml")
+    scene = scene.with_model(theory="fe_contact", options={"fec_n": 2, "fec_order": 1, "fec_far_field": "clamped"})
+    run, prob = run_wheel_rail(scene)
+    d = load_direction(prob.grid)
+    e = lateral_direction(d)
+    assert abs(e @ d) < 1e-12 and e[1] > 0
+    s0 = run.solution
+    f0 = float(s0.force_vector @ e)
+    assert f0 > 3000.0                                 # the flange root pushes the rail outwards
+    same = run.model.solve(normal_force=prob.normal_force, shift_direction=e, shift_force=f0,
+                           approach_guess=s0.approach)
+    assert abs(same.shift) < 1e-7 and abs(same.approach - s0.approach) < 1e-7
+    np.testing.assert_allclose(same.force, s0.force, rtol=1e-6, atol=1e-9 * s0.FN)
+    more = run.model.solve(normal_force=prob.normal_force, shift_direction=e, shift_force=1.05 * f0,
+                           approach_guess=s0.approach)
+    assert abs(more.F_load - prob.normal_force) < 1e-9 * prob.normal_force
+    assert abs(more.force_vector @ e - 1.05 * f0) < 1e-9 * f0
+    assert 1e-4 < more.shift < 0.05
+    with pytest.raises(InputError):
+        run.model.solve(approach=0.01, shift_direction=e, shift_force=f0)
+
+
+def _convergence() -> dict:
+    import json
+
+    path = ROOT / "studies/out/fe_truth_convergence/convergence.json"
+    return {r["scene"]: r for r in json.loads(path.read_text())["scenes"]}
+
+
+def test_truth_series_carry_the_prescribed_loads():
+    """Every truth mesh of studies/fe_truth_convergence.py was solved again at the prescribed
+    vertical AND lateral load (the reference mesh's lateral force): both resultants hold to
+    rounding, and on the reference mesh that solve is the nominal one (shift 0)."""
+    for name, rec in _convergence().items():
+        T = rec["truths"]
+        ref = T["reference"]
+        if "from" in ref:          # a stored reference (nominal position only)
+            continue
+        assert abs(ref["loaded"]["shift"]) < 1e-6
+        assert abs(ref["loaded"]["FN"] / ref["nominal"]["FN"] - 1) < 1e-6
+        for label, r in T.items():
+            assert abs(r["loaded"]["F_load"] / rec["wheel_load"] - 1) < 1e-9, (name, label)
+            assert abs(r["loaded"]["F_lat"] / ref["F_lat_target"] - 1) < 1e-9, (name, label)
+            assert r["loaded"]["area_bounds"][0] <= r["loaded"]["area"] <= r["loaded"]["area_bounds"][1]
+
+
+def test_deep_pair_reference_is_converged_at_prescribed_loads():
+    """The deep pair's reference truth (clamped blocks, quadratic, a / 6, 20 patch sizes) against a
+    finer mesh (a / 8) and a larger body (40 patch sizes), each at the same vertical and lateral
+    load (studies/fe_truth_convergence.py): FN and pmax within the issue's 0.5 % (measured FN
+    0.00 / 0.00 %, pmax +0.46 / -0.25 %), the flank share (spread) within 0.2 points, the contact
+    area within 1.5 % (+1.10 / 0.00 %; its two bounds lie +-9 % apart).  A third mesh (a / 10)
+    shows pmax still rising by 0.4-0.5 % per step (+0.85 % against a / 6: a miss of the 0.5 %
+    between a / 6 and a / 10, recorded with its bound; a / 8 to a / 10 +0.39 %), FN converged."""
+    rec = _convergence()["deep_pair"]
+    T = rec["truths"]
+    c = rec["summary"]["convergence"]
+    for label in ("finer mesh", "larger body"):
+        d = c[label]["loaded"]
+        assert abs(d["FN"]) < 0.005 and abs(d["pmax"]) < 0.005, label
+        assert abs(d["flank_share_spread"]) < 0.002 and abs(d["area"]) < 0.015, label
+    d = c["finest mesh"]["loaded"]
+    assert abs(d["FN"]) < 0.001 and 0.0 < d["pmax"] < 0.01 and abs(d["area"]) < 0.03
+    assert abs(T["finest mesh"]["loaded"]["pmax"] / T["finer mesh"]["loaded"]["pmax"] - 1) < 0.005
+
+
+def test_production_model_meets_the_reference_at_the_same_loads():
+    """conformal + FE influence numbers (the package's defaults) at the truth's L/V, against the
+    reference truth (studies/fe_truth_convergence.py): the issue's targets pmax 2 %, contact area
+    5 %, flank share 2 points, on the deep pair (measured +1.24 %, +1.81 %, -0.16 points; FN +0.63 %),
+    at 6.2 mm (+0.82 %, -1.28 %, 0 points (root only); FN +0.34 %) and at 6.25 mm (+0.91 %,
+    +4.32 %, -0.90 points; FN +0.65 %)."""
+    recs = _convergence()
+    for name in ("deep_pair", "flange_y6.2", "flange_y6.25"):
+        e = recs[name]["summary"]["errors"]["conformal FE"]
+        assert abs(e["pmax"]) < 0.02 and abs(e["area"]) < 0.05 and abs(e["FN"]) < 0.01, name
+        assert abs(e["flank_share_spread"]) < 0.02, name
+        assert abs(e["LV"]) < 2e-3, name                            # compared at the same L/V
+
+
+@pytest.mark.slow
+def test_halfspace_model_at_the_deep_pair_truths_lv():
+    """Recomputed here: conformal + half-space numbers matched to the stored deep-pair reference
+    truth's L/V (wheelset shift an output) meets it within pmax 2 %, area 5 %, flank share
+    (spread) 2 points, FN 1 % (measured +1.17 %, +1.81 %, -0.16 points, +0.75 %)."""
+    sys.path.insert(0, str(ROOT / "studies"))
+    import fe_ground_truth as gt
+    import fe_truth_convergence as ftc
+
+    rec = _convergence()["deep_pair"]
+    t = rec["truths"]["reference"]["loaded"]
+    m = ftc.production(dict(gt.scenes(False))["deep_pair"], t["LV"], None, "halfspace", lo=-0.01, hi=0.01)
+    assert abs(m["LV"] - t["LV"]) < 5e-4
+    assert abs(m["pmax"] / t["pmax"] - 1) < 0.02
+    assert abs(m["area"] / t["area"] - 1) < 0.05
+    assert abs(m["FN"] / t["FN"] - 1) < 0.01
+    assert abs(m["flank_share_spread"] - t["flank_share_spread"]) < 0.02
+
+
+def test_flange_625_reference_mesh_convergence_at_prescribed_loads():
+    """Root + flank at 6.25 mm: the a / 8 truth at the reference's vertical and lateral load
+    (studies/fe_truth_convergence.py): FN within the issue's 0.5 % (+0.01 %), pmax just outside it
+    (-0.66 %: a miss recorded with its bound), the area inside the a / 6 reference's own bounds
+    (+3.6 % against bounds of +-9.5 %), flank share (spread) within 0.2 points; the wheel hardly
+    moves laterally once the lateral force is prescribed (|s| < 0.1 µm)."""
+    rec = _convergence()["flange_y6.25"]
+    ref, fine = rec["truths"]["reference"]["loaded"], rec["truths"]["finer mesh"]["loaded"]
+    d = rec["summary"]["convergence"]["finer mesh"]["loaded"]
+    assert abs(d["FN"]) < 0.005 and abs(d["pmax"]) < 0.008
+    assert ref["area_bounds"][0] < fine["area"] < ref["area_bounds"][1]
+    assert abs(d["flank_share_spread"]) < 0.002 and abs(fine["shift"]) < 1e-4
