@@ -423,8 +423,8 @@ FE_CONTACT = Method("fe_contact", "fec_", "meshed bodies of the direct FE contac
                         Option("section_size", "float", 20.0, "patch sizes", "\"section\": rail ends and wheel "
                                "sector cuts beyond the patch", checked=False),
                         Option("section_h_max", "float", 12.0, "mm", "\"section\": largest element", checked=False),
-                        Option("slave", "float", 1.6, "", "\"section\": contact candidates = the patch enlarged by "
-                               "this factor", checked=False),
+                        Option("slave", "float", 1.6, "", "wheel-rail (\"disc\" and \"section\"): contact candidates "
+                               "= the patch enlarged by this factor", checked=False),
                     ))
 
 _PLANAR = frozenset({TANGENTIAL})
