@@ -21,11 +21,11 @@ half-space estimate's FN: pmax, contact area, approach).  Every row records what
 body's disc radius, margin, profile closure and node count (the key asked for is not evidence).
 
     python studies/fe_contact_body_size.py            # the deep pair (about 20 min on a busy core)
-    python studies/fe_contact_body_size.py --quick    # a sphere on a block, P1, sizes 1-4 (< 60 s; a test)
+    python studies/fe_contact_body_size.py --quick    # the deep pair, coarse, 4 solves (< 60 s; a test)
 
-``--quick``: a sphere (R 50 mm) on a flat block at the approach 0.08 mm, linear elements with 2
-per semi-axis, clamped at sizes 1, 2, 4 and the half-space far field at 4: the clamped series'
-limit against the half-space far field's value (two routes to the same large body).
+``--quick``: the deep pair on a coarse mesh (linear elements, 2 per semi-axis), clamped at sizes
+4, 8, 16 and the half-space far field at 16: the clamped series' limit against the half-space
+far field's value (two routes to the same large body).
 
 Output: studies/out/fe_contact_body_size/fe_contact_body_size.{md,json,png} and run.json.
 """
@@ -52,57 +52,45 @@ richardson = runpy.run_path(str(Path(__file__).resolve().parent / "fe_far_field_
 
 SIZES = (1.0, 2.0, 4.0, 8.0, 16.0)
 FARS = ("halfspace", "clamped")
-QUICK_SIZES = (1.0, 2.0, 4.0)
+QUICK_SIZES = (4.0, 8.0, 16.0)
 DEEP_APPROACH = 0.05
 KEYS = ("FN", "pmax_load", "area_load", "approach_load")
+#: successive-difference ratios taken as the 1/size regime (0.5 there; the issue's band 0.5 +- 0.1,
+#: widened to 0.3-0.8 before an R3 is trusted at all)
+REGIME = (0.3, 0.8)
 #: the acceptance of the default (issue: pair FN within 0.5 % of the size-converged limit)
 FN_TOL = 0.005
 
 
 # ----------------------------------------------------------------------------- runs
-def deep_scene(size: float, far: str):
+def deep_scene(size: float, far: str, coarse: bool = False):
+    """The deep pair at the prescribed approach; ``coarse``: linear elements, 2 per semi-axis."""
     from conformal.scene import load_scene
 
     sc = load_scene(SCENES / "deep_conformal_pair.toml").with_model(theory="fe_contact")
-    return (sc.with_("load.approach", DEEP_APPROACH).with_("model.fec_body_size", float(size))
-            .with_("model.fec_far_field", far))
+    sc = (sc.with_("load.approach", DEEP_APPROACH).with_("model.fec_body_size", float(size))
+          .with_("model.fec_far_field", far))
+    return sc.with_("model.fec_n", 2).with_("model.fec_order", 1) if coarse else sc
 
 
-def run_deep(size: float, far: str) -> dict:
+def run_deep(size: float, far: str, coarse: bool = False) -> dict:
     """One size and far field of the deep pair: FN at the approach; pmax, area and approach at the
-    half-space estimate's load (the same load at every size)."""
+    half-space estimate's FN taken as the load along the load direction (vertical; the same load
+    at every size)."""
     from conformal.cases.fe_contact import edge_warning, run_wheel_rail
 
     t0 = time.perf_counter()
-    run, _ = run_wheel_rail(deep_scene(size, far))
+    run, _ = run_wheel_rail(deep_scene(size, far, coarse))
     t1 = time.perf_counter()
     load = float(run.info["estimate"]["FN"])
     at_load = run.model.solve(normal_force=load)
     sol = run.solution
-    return {"case": "deep", "far_field": far, "size": size, "FN": sol.FN, "pmax": sol.pmax,
+    return {"case": "deep_coarse" if coarse else "deep", "far_field": far, "size": size, "FN": sol.FN,
+            "pmax": sol.pmax, "F_load": sol.F_load,
             "area": sol.contact_area, "load": load, "pmax_load": at_load.pmax, "area_load": at_load.contact_area,
             "approach_load": at_load.approach, "n_unknowns": sol.n_unknowns, "columns": sol.stats.get("columns"),
             "solve_s": t1 - t0, "load_s": time.perf_counter() - t1, "bodies": run.info["bodies"],
             "warning": edge_warning(run)}
-
-
-def run_sphere(size: float, far: str) -> dict:
-    """The quick case: a sphere on a block, P1, 2 elements per semi-axis."""
-    from conformal.fe_contact.problems import run_quadratic
-    from conformal.problem import problems_from_scene
-    from conformal.scene import scene_from_dict
-
-    sc = scene_from_dict({"geometry": {"kind": "quadratic", "A": 0.01, "B": 0.01}, "load": {"approach": 0.08},
-                          "model": {"theory": "fe_contact", "fec_n": 2, "fec_order": 1, "fec_body_size": float(size),
-                                    "fec_far_field": far}})
-    t0 = time.perf_counter()
-    run = run_quadratic(problems_from_scene(sc)[0])
-    sol = run.solution
-    bodies = {b.mesh.body.kind: {"nodes": int(len(b.mesh.points)), "depth_mm": float(b.mesh.extent.depth)}
-              for b in (run.body1, run.body2)}
-    return {"case": "sphere", "far_field": far, "size": size, "FN": sol.FN, "pmax": sol.pmax,
-            "area": sol.contact_area, "n_unknowns": sol.n_unknowns, "solve_s": time.perf_counter() - t0,
-            "bodies": bodies}
 
 
 # ----------------------------------------------------------------------------- summary
@@ -125,22 +113,36 @@ def summarise(rows) -> dict:
 
 
 def converged(rows, summary) -> list[dict]:
-    """Per case and quantity: the limit (R3 of the half-space far field, else R2), its error bar
-    (|R2 - R3| and the clamped series' limit against it), and every size's distance from it."""
+    """Per case and quantity: the limit (R3 of the half-space far field's series, else R2), its
+    error bar (|R2 - R3| and the clamped series' limit against it), the clamped series' limits
+    and ratio, the half-space far field's value at its largest size, and every half-space size's
+    distance from the limit."""
     out = []
     for case, per in summary.items():
-        hs = per.get("halfspace", {})
-        for k, lim in hs.items():
-            best = lim.get("R3", lim["R2"])
-            bars = [abs(lim["R2"] - best)]
-            cl = per.get("clamped", {}).get(k, {})
-            if cl:
-                bars.append(abs(cl.get("R3", cl["R2"]) - best))
-            offs = {f"{r['size']:g}": r[k] / best - 1.0 for r in rows
-                    if r["case"] == case and r["far_field"] == "halfspace" and k in r}
-            out.append({"case": case, "quantity": k, "limit": best, "R2": lim["R2"], "err": max(bars),
-                        "ratio": lim.get("ratio"), "clamped_limit": cl.get("R3", cl.get("R2")) if cl else None,
-                        "off": offs})
+        hs, cl = per.get("halfspace", {}), per.get("clamped", {})
+        for k in dict.fromkeys(list(hs) + list(cl)):
+            h, c = hs.get(k, {}), cl.get(k, {})
+            hs_rows = sorted((r for r in rows if r["case"] == case and r["far_field"] == "halfspace" and k in r),
+                             key=lambda r: r["size"])
+            row = {"case": case, "quantity": k, "clamped_R2": c.get("R2"), "clamped_R3": c.get("R3"),
+                   "clamped_ratio": c.get("ratio"),
+                   "halfspace_largest": hs_rows[-1][k] if hs_rows else None,
+                   "halfspace_largest_size": hs_rows[-1]["size"] if hs_rows else None}
+            if h:
+                vals = [r[k] for r in hs_rows]
+                if "R3" in h and REGIME[0] <= h["ratio"] <= REGIME[1]:
+                    best, how = h["R3"], "R3"
+                    bars = [abs(h["R2"] - best)]
+                else:
+                    # no 1/size trend above the mesh scatter: the mean of the two largest sizes,
+                    # with the scatter of the whole series about it as its error bar
+                    best, how = 0.5 * (vals[-1] + vals[-2]), "mean of the two largest sizes"
+                    bars = [0.5 * abs(vals[-1] - vals[-2]), float(np.std(vals))]
+                bars += [abs(c.get("R3", c["R2"]) - best)] if c and (c.get("ratio") is None
+                                                                    or REGIME[0] <= c["ratio"] <= REGIME[1]) else []
+                row.update(limit=best, how=how, R2=h["R2"], R3=h.get("R3"), ratio=h.get("ratio"), err=max(bars),
+                           off={f"{r['size']:g}": r[k] / best - 1.0 for r in hs_rows})
+            out.append(row)
     return out
 
 
@@ -151,6 +153,8 @@ def choose_default(rows, conv, tol: float = FN_TOL) -> dict:
     if fn is None:
         return {}
     hs = sorted((r for r in rows if r["case"] == "deep" and r["far_field"] == "halfspace"), key=lambda r: r["size"])
+    if "off" not in fn:
+        return {}
     ok = [abs(fn["off"][f"{r['size']:g}"]) <= tol for r in hs]
     pick = next((r for i, r in enumerate(hs) if all(ok[i:])), None)
     base = next((r for r in hs if r["size"] == 1.0), None)
@@ -174,14 +178,20 @@ def report(rows, summary, conv, pick) -> str:
         lines.append(f"| {r['case']} | {r['far_field']} | {r['size']:g} | {rad} | {nodes} | {r['n_unknowns']} | "
                      f"{r['FN']:.1f} | {r.get('pmax_load', r['pmax']):.1f} | {r.get('area_load', r['area']):.2f} | "
                      f"{r.get('approach_load', float('nan')):.5f} | {r['solve_s']:.0f} |")
-    lines += ["", "| case | quantity | limit (R3, half-space far field) | R2 | error bar | ratio of differences "
-              "| clamped limit | distance of each size from the limit |", "|---|---|---|---|---|---|---|---|"]
+    lines += ["", "| case | quantity | half-space: limit | how | R3 | R2 | ratio of differences | error bar | "
+              "clamped: R3 | R2 | ratio | half-space at the largest size | distance of each half-space size from "
+              "the limit |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+
+    def f(v, fmt="{:.5g}"):
+        return "-" if v is None else fmt.format(v)
+
     for c in conv:
-        offs = ", ".join(f"{s}: {v:+.2%}" for s, v in c["off"].items())
-        cl = "-" if c["clamped_limit"] is None else f"{c['clamped_limit']:.5g}"
-        ratio = "-" if c["ratio"] is None else f"{c['ratio']:.2f}"
-        lines.append(f"| {c['case']} | {c['quantity']} | {c['limit']:.5g} | {c['R2']:.5g} | {c['err']:.3g} | "
-                     f"{ratio} | {cl} | {offs} |")
+        offs = ", ".join(f"{s}: {v:+.2%}" for s, v in c.get("off", {}).items()) or "-"
+        lines.append(f"| {c['case']} | {c['quantity']} | {f(c.get('limit'))} | {c.get('how', '-')} | "
+                     f"{f(c.get('R3'))} | {f(c.get('R2'))} | "
+                     f"{f(c.get('ratio'), '{:.2f}')} | {f(c.get('err'), '{:.3g}')} | {f(c['clamped_R3'])} | "
+                     f"{f(c['clamped_R2'])} | {f(c['clamped_ratio'], '{:.2f}')} | {f(c['halfspace_largest'])} "
+                     f"({f(c['halfspace_largest_size'], '{:g}')}) | {offs} |")
     if pick:
         lines += ["", f"Smallest size with FN at the approach within {pick['tol']:.1%} of the limit at it and every "
                   f"larger size: {pick['size']}" + ("" if pick.get("size") is None else
@@ -250,7 +260,7 @@ def finish(out: Path, rows, args=None) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="a sphere on a block, P1, sizes 1-4 (a test)")
+    ap.add_argument("--quick", action="store_true", help="the deep pair, coarse, clamped 4-16 and half-space 16")
     ap.add_argument("--out", default=None, help="output folder (default studies/out/fe_contact_body_size)")
     ap.add_argument("--sizes", default=",".join(f"{s:g}" for s in SIZES), help="comma-separated body sizes")
     ap.add_argument("--far", default=",".join(FARS), help="comma-separated far fields: halfspace, clamped")
@@ -265,8 +275,8 @@ def main(argv=None) -> int:
         return 0
     if args.quick:
         for s in QUICK_SIZES:
-            rows.append(run_sphere(s, "clamped"))
-        rows.append(run_sphere(QUICK_SIZES[-1], "halfspace"))
+            rows.append(run_deep(s, "clamped", coarse=True))
+        rows.append(run_deep(QUICK_SIZES[-1], "halfspace", coarse=True))
         finish(out, rows, args)
         return 0
     sizes = [float(v) for v in args.sizes.split(",") if v]
