@@ -203,7 +203,7 @@ def report(rows, summary, conv, pick) -> str:
     return "\n".join(lines) + "\n"
 
 
-def plot(rows, summary, path: Path) -> None:
+def plot(rows, summary, conv, path: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -222,14 +222,21 @@ def plot(rows, summary, path: Path) -> None:
                     continue
                 ax.plot([1 / r["size"] for r in sel], [r[k] for r in sel], style, ms=4, label=far)
                 lim = summary.get(case, {}).get(far, {}).get(k)
-                if lim:
-                    ax.plot([0], [lim.get("R3", lim["R2"])], "*", ms=10, color=ax.lines[-1].get_color())
+                star = None
+                if far == "halfspace":
+                    star = next((c.get("limit") for c in conv if c["case"] == case and c["quantity"] == k), None)
+                elif lim and "R3" in lim and REGIME[0] <= lim["ratio"] <= REGIME[1]:
+                    star = lim["R3"]
+                if star is not None:
+                    ax.plot([0], [star], "*", ms=10, color=ax.lines[-1].get_color())
             ax.set_xlabel("1 / fec_body_size")
             unit = {"FN": "N", "pmax_load": "N/mm²", "area_load": "mm²", "approach_load": "mm"}[k]
             ax.set_title(f"{case}: {k} ({unit})", fontsize=9)
             ax.tick_params(labelsize=8)
             ax.legend(fontsize=7)
-    fig.suptitle("fe_contact over the body size; stars: Richardson limits (R3, else R2)", fontsize=10)
+    fig.suptitle("fe_contact (deep pair R10/R10.2) over the body size; stars: the limits (half-space far field: "
+                 "R3 in the 1/size regime, else the mean of the two largest sizes; clamped: R3 in that regime)",
+                 fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -251,7 +258,7 @@ def finish(out: Path, rows, args=None) -> dict:
     tmp = out / "fe_contact_body_size.md.tmp"
     tmp.write_text(text)
     os.replace(tmp, out / "fe_contact_body_size.md")
-    plot(rows, summary, out / "fe_contact_body_size.png")
+    plot(rows, summary, conv, out / "fe_contact_body_size.png")
     if args is not None:
         write_sidecar(out, __file__, args, extra={"default_choice": pick})
     print(text)
