@@ -25,6 +25,7 @@ accuracy of that processing (docs/validation/halfspace.md, Manchester benchmark)
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -200,7 +201,35 @@ def solve_case(case: Module1Case, raw: dict, base_dir: Path):
             raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
                               f"the project's wheel-rail set-up fails here ({text})") from None
 
-    return run(raw)
+    r = run(raw)
+    extra = dict(r.extra)
+    extra["warnings"] = list(extra.get("warnings", [])) + _combination_warnings(case, raw, base_dir, r)
+    return replace(r, extra=extra)
+
+
+def _combination_warnings(case: Module1Case, raw: dict, base_dir: Path, r) -> list[str]:
+    """The warnings of conformal.contact_inp.combine: where CONTACT would combine, blend or turn
+    the contact regions at the solved wheelset height differently from the patches solved here."""
+    from conformal.contact_inp.combine import combination_warnings, regions_at
+    from conformal.errors import ConvergenceError, InputError, NoContactError
+    from conformal.scene import scene_from_dict
+
+    z = r.extra.get("z_ws")
+    if z is None:
+        return []
+    scene = scene_from_dict(raw, base_dir=base_dir, name=raw["name"])
+    try:
+        regions = regions_at(scene, float(z))
+    except (InputError, NoContactError, ConvergenceError):
+        return []
+    return combination_warnings(regions, scene.geometry.patch_combine, *thresholds(case))
+
+
+def thresholds(case: Module1Case) -> tuple[float, float, float, float]:
+    """The deck's (D_COMB, D_SEP, D_TURN, A_SEP); D_TURN defaults to 2 D_SEP - D_COMB as in CONTACT."""
+    a_sep, d_sep, d_comb = case.discretisation[3:6]
+    d_turn = case.discretisation[6] if len(case.discretisation) > 6 else 2.0 * d_sep - d_comb
+    return d_comb, d_sep, d_turn, a_sep
 
 
 def summary(case: Module1Case, r) -> dict:
