@@ -117,6 +117,15 @@ def combination_warnings(regions: list[Region], reader_gap: float, d_comb: float
     return out
 
 
+def reader_gap(scene) -> float:
+    """The distance along the rail profile (mm) below which this reader joins contact regions into
+    one patch: ``[geometry] patch_combine`` on the planar path; none (0) with conformal strips
+    ``[grid] strips = "separate"``, which puts every contact region on a strip of its own."""
+    if getattr(scene.grid, "strips", "coupled") == "separate":
+        return 0.0
+    return float(scene.geometry.patch_combine)
+
+
 def loaded_warnings(scene, d_comb: float, d_sep: float, d_turn: float, a_sep: float) -> list[str]:
     """The warnings of :func:`combination_warnings` at the height of the scene's normal balance
     alone (conformal.cases.wheelrail.loaded_state, no tangential solve): a survey of a deck's
@@ -124,4 +133,25 @@ def loaded_warnings(scene, d_comb: float, d_sep: float, d_turn: float, a_sep: fl
     from conformal.cases.wheelrail import loaded_state
 
     _, st, _ = loaded_state(scene, grids=scene.load.wheel_load is not None, warn=False)
-    return combination_warnings(regions_at(scene, st.z), scene.geometry.patch_combine, d_comb, d_sep, d_turn, a_sep)
+    return combination_warnings(regions_at(scene, st.z), reader_gap(scene), d_comb, d_sep, d_turn, a_sep)
+
+
+def contact_patch_count(regions: list[Region], d_comb: float, d_sep: float, d_turn: float, a_sep: float) -> int:
+    """How many patches CONTACT forms from the regions: neighbours that it combines or blends
+    (d <= D_SEP, angles within A_SEP) share one patch."""
+    if not regions:
+        return 0
+    return 1 + sum(contact_treatment(region_distance(a, b), a.angle - b.angle, d_comb, d_sep, d_turn, a_sep)
+                   not in ("combined", "blended") for a, b in zip(regions, regions[1:]))
+
+
+def strip_count_warning(regions: list[Region], n_solved: int, d_comb: float, d_sep: float, d_turn: float,
+                        a_sep: float) -> list[str]:
+    """The warning of a conformal case (separate strips) that solves more or fewer strips than the
+    patches CONTACT forms from the interpenetration regions (a region whose contact splits into
+    parts gets a strip per part here)."""
+    n = contact_patch_count(regions, d_comb, d_sep, d_turn, a_sep)
+    if n == n_solved:
+        return []
+    return [f"{PREFIX} CONTACT forms {n} patch(es) from the {len(regions)} interpenetration region(s) (D_COMB = "
+            f"{d_comb:g} mm, D_SEP = {d_sep:g} mm); this reader solves {n_solved} separate strips"]

@@ -22,6 +22,11 @@ origins together: placement "single") and friction varying with the surface incl
 every row of a strip at its own contact angle (``[friction] angle_table``).  The geometry processing is the project's own (smoothing spline,
 contact search, patch reference point and angle), so the results agree with CONTACT's to the
 accuracy of that processing (docs/validation/halfspace.md, Manchester benchmark), not to its printed digits.
+
+CONTACT's combination of nearby contact regions (D_COMB, blending up to D_SEP, turning up to
+D_TURN) is not applied; every case where that rule treats the regions at the solved height
+differently from the patches solved here carries a ``patch combination:`` warning naming the
+parameter and the distance (conformal.contact_inp.combine).
 """
 from __future__ import annotations
 
@@ -210,7 +215,7 @@ def solve_case(case: Module1Case, raw: dict, base_dir: Path):
 def _combination_warnings(case: Module1Case, raw: dict, base_dir: Path, r) -> list[str]:
     """The warnings of conformal.contact_inp.combine: where CONTACT would combine, blend or turn
     the contact regions at the solved wheelset height differently from the patches solved here."""
-    from conformal.contact_inp.combine import combination_warnings, regions_at
+    from conformal.contact_inp.combine import combination_warnings, reader_gap, regions_at, strip_count_warning
     from conformal.errors import ConvergenceError, InputError, NoContactError
     from conformal.scene import scene_from_dict
 
@@ -222,7 +227,10 @@ def _combination_warnings(case: Module1Case, raw: dict, base_dir: Path, r) -> li
         regions = regions_at(scene, float(z))
     except (InputError, NoContactError, ConvergenceError):
         return []
-    return combination_warnings(regions, scene.geometry.patch_combine, *thresholds(case))
+    out = combination_warnings(regions, reader_gap(scene), *thresholds(case))
+    if case.conformal and not out:         # one region whose contact splits into strips, or the reverse
+        out = strip_count_warning(regions, len(r.patches or (r,)), *thresholds(case))
+    return out
 
 
 def thresholds(case: Module1Case) -> tuple[float, float, float, float]:
