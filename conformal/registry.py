@@ -420,8 +420,11 @@ FE_CONTACT = Method("fe_contact", "fec_", "meshed bodies of the direct FE contac
                                "contact", checked=False),
                         Option("h_max", "float", 0.25, "body depths", "largest element, relative to the body depth",
                                checked=False),
+                        # 1: size-converged with the half-space far field (studies/fe_contact_body_size.py:
+                        # the deep pair's FN within 0.4 % of its large-body limit, inside the mesh scatter)
                         Option("body_size", "float", 1.0, "patch sizes", "margin of the bodies beyond the contact "
-                               "patch", checked=False),
+                               "patch (1: FN within 0.4 % of the large-body limit with the half-space far field)",
+                               checked=False),
                         Option("patch", "float", 1.3, "semi-axes", "fine patch extent in contact semi-axes",
                                checked=False),
                         Option("far_field", "str", "halfspace", "", "cut faces: \"halfspace\" | \"clamped\"",
@@ -434,8 +437,8 @@ FE_CONTACT = Method("fe_contact", "fec_", "meshed bodies of the direct FE contac
                         Option("section_size", "float", 20.0, "patch sizes", "\"section\": rail ends and wheel "
                                "sector cuts beyond the patch", checked=False),
                         Option("section_h_max", "float", 12.0, "mm", "\"section\": largest element", checked=False),
-                        Option("slave", "float", 1.6, "", "\"section\": contact candidates = the patch enlarged by "
-                               "this factor", checked=False),
+                        Option("slave", "float", 1.6, "", "wheel-rail (\"disc\" and \"section\"): contact candidates "
+                               "= the patch enlarged by this factor", checked=False),
                     ))
 
 _PLANAR = frozenset({TANGENTIAL})

@@ -51,6 +51,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "studies"))
 import fe_ground_truth as gt  # noqa: E402
+import fe_truth_structure as ts  # noqa: E402
 from _provenance import write_sidecar  # noqa: E402
 
 OUT = ROOT / "studies" / "out" / "fe_truth_convergence"
@@ -212,30 +213,11 @@ def _at(scene, influence):
 
 
 def match_lv(scene, target, influence, lo, hi, tol=2e-4) -> dict:
-    """The wheelset shift dy (mm) where the normal-force L/V equals ``target``, for either influence (secant/Illinois in dy)."""
+    """The wheelset shift dy (mm) where the normal-force L/V equals ``target``, for either influence
+    (:func:`fe_truth_structure.match_lv`), with the slope dL/V / dy at the match (1/mm)."""
     at = _at(scene, influence)
-    r_lo, r_hi = at(lo), at(hi)
-    f_lo, f_hi = r_lo["LV"] - target, r_hi["LV"] - target
-    if f_lo > 0 or f_hi < 0:
-        raise ValueError(f"L/V {target:.4f} outside the bracket dy = {lo:g} .. {hi:g} mm")
-    side = 0
-    for _ in range(30):
-        dy = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
-        r = at(dy)
-        fm = r["LV"] - target
-        if abs(fm) < tol or hi - lo < 1e-6:
-            break
-        if fm < 0:
-            lo, f_lo = dy, fm
-            if side == -1:
-                f_hi *= 0.5
-            side = -1
-        else:
-            hi, f_hi = dy, fm
-            if side == 1:
-                f_lo *= 0.5
-            side = 1
-    r["slope"] = (at(dy + 1e-3)["LV"] - r["LV"]) / 1e-3                  # dL/V / dy at the match (1/mm)
+    r = ts.match_lv(scene, target, lo, hi, tol, at=at)
+    r["slope"] = (at(r["dy"] + 1e-3)["LV"] - r["LV"]) / 1e-3
     return r
 
 

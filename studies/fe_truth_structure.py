@@ -198,17 +198,22 @@ def conformal_at(scene, dy: float = 0.0, droll: float = 0.0) -> dict:
     return r
 
 
-def match_lv(scene, target: float, lo: float = -0.06, hi: float = 0.02, tol: float = 2e-4) -> dict:
+def match_lv(scene, target: float, lo: float = -0.06, hi: float = 0.02, tol: float = 2e-4,
+             at=None) -> dict:
     """The conformal half-space model at the wheelset shift dy (mm) where its normal-force L/V
     equals ``target`` (regula falsi, Illinois; L/V grows with dy): compared at the same vertical
-    AND lateral load, the lateral position is an output, as the approach is at a prescribed load."""
-    f_lo, f_hi = conformal_at(scene, lo)["LV"] - target, conformal_at(scene, hi)["LV"] - target
+    AND lateral load, the lateral position is an output, as the approach is at a prescribed load.
+    ``at(dy)`` (default: :func:`conformal_at` of the scene) gives the model's result dict with "LV"."""
+    if at is None:
+        def at(dy):
+            return conformal_at(scene, dy)
+    f_lo, f_hi = at(lo)["LV"] - target, at(hi)["LV"] - target
     if f_lo > 0 or f_hi < 0:
         raise ValueError(f"L/V {target:.3f} outside the bracket dy = {lo:g} .. {hi:g} mm")
     side = 0
     for _ in range(40):
         dy = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
-        r = conformal_at(scene, dy)
+        r = at(dy)
         fm = r["LV"] - target
         if abs(fm) < tol or hi - lo < 1e-6:
             break

@@ -29,7 +29,7 @@ import numpy as np
 
 from conformal.cases.conformal import curved_problem_from_wheel_rail
 from conformal.errors import NoContactError
-from conformal.fe_contact.bodies import wheel_rail_pair
+from conformal.fe_contact.bodies import slave_box, slave_region, wheel_rail_pair
 from conformal.fe_contact.problems import (FEContactRun, common_extra, extent, load_direction,
                                            pressure_along_profile, settings_from_options)
 from conformal.fe_contact.solver import prepare_contact
@@ -84,13 +84,46 @@ def run_wheel_rail(scene) -> tuple[FEContactRun, Any]:
         kw = {"semi_axis": est["semi_axis"],
               "box": (mesh.patch * est["x_half"], c - mesh.patch * half, c + mesh.patch * half)}
     b1, b2 = wheel_rail_pair(grid, problem.rail_points, problem.wheel_points, scene.material, mesh, **kw)
-    model = prepare_contact(b1, b2, direction=load_direction(grid), settings=st)
+    # a disc body's contact candidates: its patch enlarged by fec_slave (bodies.slave_region; the
+    # section bodies' free surface is that box already)
+    x_half = max(abs(grid.xl), abs(grid.xl + grid.mx * grid.dx))
+    if "box" in kw:
+        x_half = min(x_half, kw["box"][0])
+    region = slave_region(b1.mesh.patch, mesh.slave, x_half) if mesh.body == "disc" else None
+    model = prepare_contact(b1, b2, direction=load_direction(grid), settings=st, region=region)
     if problem.normal_force is not None:
         sol = model.solve(normal_force=problem.normal_force)
     else:
         sol = model.solve(approach=problem.approach)
-    info = {"estimate": est, "h_contact": float(b1.mesh.patch.dx)}
+    info = {"estimate": est, "h_contact": float(b1.mesh.patch.dx),
+            "bodies": {b.mesh.body.kind: _body_report(b.mesh) for b in (b1, b2)}}
+    if region is not None:
+        info["slave_box"] = [float(v) for v in slave_box(b1.mesh.patch, mesh.slave, x_half)]
     return FEContactRun(b1, b2, sol, frame="rail-profile", model=model, info=info), problem
+
+
+def _body_report(m) -> dict:
+    """What a meshed body really is: its disc radius and margin (mm), the closure of its profile's
+    ends, its nodes and tetrahedra (:func:`conformal.meshing.gmsh_body.mesh_body`'s stats)."""
+    keys = ("disc_radius_mm", "margin_mm", "margin_requested_mm", "closure_lo", "closure_hi", "extension_lo_mm",
+            "extension_hi_mm", "margin_limited_by", "nodes", "tets")
+    return {k: m.stats[k] for k in keys if k in m.stats}
+
+
+def edge_warning(run: FEContactRun) -> str:
+    """A warning where the contact reaches the edge of the contact candidates (``[model]
+    fec_slave``): the contact may be larger than the candidates allow."""
+    box = run.info.get("slave_box")
+    sol = run.solution
+    if not box or not sol.active.any():
+        return ""
+    uv = sol.uv[sol.active]
+    h = float(run.info.get("h_contact", 0.0))
+    xs, s_lo, s_hi = box
+    if np.abs(uv[:, 0]).max() > xs - 1.5 * h or uv[:, 1].min() < s_lo + 1.5 * h or uv[:, 1].max() > s_hi - 1.5 * h:
+        return ("fe_contact: the contact reaches the edge of the contact candidates (the patch enlarged by "
+                "[model] fec_slave); increase fec_slave or fec_patch")
+    return ""
 
 
 def result_from_run(run: FEContactRun, problem, scene) -> Result:
@@ -117,6 +150,8 @@ def result_from_run(run: FEContactRun, problem, scene) -> Result:
     z_ws = problem.info["z_ws_reference"] + sol.approach          # the wheelset moves along d (vertical)
     extra.update({"z_ws": z_ws, "overlap_approach": sol.overlap_approach})
     extra["fe_contact"].update(run.info)
+    if edge_warning(run):
+        extra["warnings"] = list(extra.get("warnings", [])) + [edge_warning(run)]
     return Result(theory="fe_contact", FN=sol.FN, FX=0.0, FY=float(Fy), MZ=0.0, a=a, b=b, pmax=sol.pmax,
                   approach=float(z_ws - problem.info["z_first_touch"]), converged=True, iterations=sol.iterations,
                   extra=extra)

@@ -40,6 +40,7 @@ def _case_numbers(text: str | None):
 
 
 def cmd_inp(args) -> int:
+    from conformal.contact_inp.combine import PREFIX
     from conformal.contact_inp.deck import read_deck, solve_deck
     from conformal.errors import InputError
 
@@ -56,6 +57,9 @@ def cmd_inp(args) -> int:
     for d in solve_deck(parsed, cases=cases):
         text = json.dumps(d)
         print(text, flush=True)
+        for w in d.get("warnings", []):      # CONTACT's patch combination not reproduced: one line each
+            if w.startswith(PREFIX):
+                print(f"case {d['case']}: {w}", file=sys.stderr)
         lines.append(text)
     if out_path is not None:
         out_path.parent.mkdir(parents=True, exist_ok=True)

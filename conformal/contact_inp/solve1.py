@@ -22,9 +22,15 @@ origins together: placement "single") and friction varying with the surface incl
 every row of a strip at its own contact angle (``[friction] angle_table``).  The geometry processing is the project's own (smoothing spline,
 contact search, patch reference point and angle), so the results agree with CONTACT's to the
 accuracy of that processing (docs/validation/halfspace.md, Manchester benchmark), not to its printed digits.
+
+CONTACT's combination of nearby contact regions (D_COMB, blending up to D_SEP, turning up to
+D_TURN) is not applied; every case where that rule treats the regions at the solved height
+differently from the patches solved here carries a ``patch combination:`` warning naming the
+parameter and the distance (conformal.contact_inp.combine).
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -200,7 +206,38 @@ def solve_case(case: Module1Case, raw: dict, base_dir: Path):
             raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
                               f"the project's wheel-rail set-up fails here ({text})") from None
 
-    return run(raw)
+    r = run(raw)
+    extra = dict(r.extra)
+    extra["warnings"] = list(extra.get("warnings", [])) + _combination_warnings(case, raw, base_dir, r)
+    return replace(r, extra=extra)
+
+
+def _combination_warnings(case: Module1Case, raw: dict, base_dir: Path, r) -> list[str]:
+    """The warnings of conformal.contact_inp.combine: where CONTACT would combine, blend or turn
+    the contact regions at the solved wheelset height differently from the patches solved here."""
+    from conformal.contact_inp.combine import combination_warnings, reader_gap, regions_at, strip_count_warning
+    from conformal.errors import ConvergenceError, InputError, NoContactError
+    from conformal.scene import scene_from_dict
+
+    z = r.extra.get("z_ws")
+    if z is None:
+        return []
+    scene = scene_from_dict(raw, base_dir=base_dir, name=raw["name"])
+    try:
+        regions = regions_at(scene, float(z))
+    except (InputError, NoContactError, ConvergenceError):
+        return []
+    out = combination_warnings(regions, reader_gap(scene), *thresholds(case))
+    if case.conformal and not out:         # one region whose contact splits into strips, or the reverse
+        out = strip_count_warning(regions, len(r.patches or (r,)), *thresholds(case))
+    return out
+
+
+def thresholds(case: Module1Case) -> tuple[float, float, float, float]:
+    """The deck's (D_COMB, D_SEP, D_TURN, A_SEP); D_TURN defaults to 2 D_SEP - D_COMB as in CONTACT."""
+    a_sep, d_sep, d_comb = case.discretisation[3:6]
+    d_turn = case.discretisation[6] if len(case.discretisation) > 6 else 2.0 * d_sep - d_comb
+    return d_comb, d_sep, d_turn, a_sep
 
 
 def summary(case: Module1Case, r) -> dict:

@@ -57,8 +57,8 @@ class ContactMesh:
     section_size : "section" bodies: the rail's ends and the wheel's sector cuts lie this many
         patch sizes beyond the patch (on each side).
     section_h_max : "section" bodies: the largest element (mm).
-    slave : "section" bodies: the contact candidate surface is the patch enlarged by this factor
-        (its half extents).
+    slave : wheel-rail bodies ("disc" and "section"): the contact candidate surface is the patch
+        enlarged by this factor (its half extents; :func:`slave_region`).
     """
 
     n: int = 4
@@ -255,6 +255,41 @@ def wheel_rail_pair(grid, rail_points: np.ndarray, wheel_points: np.ndarray, mat
     return _pair(rail, p1, wheel, p2, material, mesh, rotation2=M, origin2=origin)
 
 
+def slave_box(patch: StripPatch, factor: float, x_half: float = 0.0) -> tuple[float, float, float]:
+    """The contact candidates of a body around its finely meshed patch: (x_half, s_lo, s_hi), the
+    patch's half extents (along x at least ``x_half``) times ``factor`` about its centre
+    (``[model] fec_slave``)."""
+    e = patch.edges
+    c, half = 0.5 * (e[0] + e[-1]), 0.5 * (e[-1] - e[0])
+    xp = max(0.5 * patch.mx * patch.dx, float(x_half))
+    return factor * xp, c - factor * half, c + factor * half
+
+
+def slave_region(patch: StripPatch, factor: float, x_half: float = 0.0):
+    """The mask uv (n, 2) -> bool of the points inside :func:`slave_box` (the ``region`` of
+    :func:`conformal.fe_contact.solver.prepare_contact`).
+
+    Why a disc body needs it: its free surface reaches ``fec_body_size`` patch sizes from the
+    contact, where the elements grow to tens of mm.  The dual multipliers (psi = 4 phi - 1) are not
+    positive, so the weighted gap of a node on such a coarse triangle is not bounded by the gaps
+    at its points and can come out negative where the surfaces stand apart; on the deep pair at
+    16 patch sizes that put spurious contact (six times the real load) on nodes 100 mm away.
+    The contact candidates, like those of the section bodies, are therefore the patch enlarged by
+    ``fec_slave``.
+
+    >>> inside = slave_region(StripPatch(4, 1.0, (0.0, 1.0, 2.0)), 1.5)
+    >>> inside(np.array([[0.0, 1.0], [2.9, 1.0], [3.1, 1.0], [0.0, 2.6]])).tolist()
+    [True, True, False, False]
+    """
+    xs, s_lo, s_hi = slave_box(patch, factor, x_half)
+
+    def inside(uv: np.ndarray) -> np.ndarray:
+        uv = np.asarray(uv, dtype=float)
+        return (np.abs(uv[:, 0]) <= xs) & (uv[:, 1] >= s_lo) & (uv[:, 1] <= s_hi)
+
+    return inside
+
+
 def body_section(body: BodyModel, extension: float, block: bool = False):
     """The whole cross-section of a wheel-rail body (:mod:`conformal.geometry.sections`): the 60E1
     rail section under a symmetric UIC 60 / 60E1 head (ends on both flanks at the same depth,
@@ -294,10 +329,8 @@ def section_pair(rail: BodyModel, p1: StripPatch, wheel: BodyModel, p2: StripPat
         if body.revolved and float(sec.points[:, 1].min()) <= float(body.axle_z) + 10.0:
             raise InputError(f"wheel {sec.name}: reaches {-float(sec.points[:, 1].min()):.0f} mm towards the axle, "
                              f"beyond the wheel radius {-float(body.axle_z):.0f} mm; reduce [model] fec_section_size")
-        e = patch.edges
-        c, half = 0.5 * (e[0] + e[-1]), 0.5 * (e[-1] - e[0])
         xp = 0.5 * patch.mx * patch.dx
-        slave = (mesh.slave * xp, c - mesh.slave * half, c + mesh.slave * half)
+        slave = slave_box(patch, mesh.slave)
         xr = xp + margin
         # a solid block (no thin web) takes elements up to a tenth of its margin far away
         h_max = mesh.section_h_max if not sec.name.startswith("block") else max(mesh.section_h_max, 0.2 * margin)

@@ -29,7 +29,8 @@ key                    default    meaning
                                   (solid blocks around both profiles, clamped far away)
 ``fec_section_size``   20         "section": rail ends and wheel sector cuts, patch sizes beyond the patch
 ``fec_section_h_max``  12         "section": largest element (mm)
-``fec_slave``          1.6        "section": contact candidates = the patch enlarged by this factor
+``fec_slave``          1.6        wheel-rail ("disc" and "section"): contact candidates = the patch
+                                  enlarged by this factor
 =====================  =========  ===========================================================
 """
 from __future__ import annotations

@@ -160,14 +160,22 @@ def _mesh_isolated(model, patch, spec):
     from concurrent.futures import ProcessPoolExecutor
     from concurrent.futures.process import BrokenProcessPool
 
-    try:
-        with ProcessPoolExecutor(1, mp_context=mp.get_context("fork")) as ex:
-            return ex.submit(mesh_body, model, patch, spec, algorithm3d=1).result()
-    except BrokenProcessPool:
-        from conformal.influence.factor import FESolveError
+    for algorithm in _ALGORITHMS_3D:
+        try:
+            with ProcessPoolExecutor(1, mp_context=mp.get_context("fork")) as ex:
+                return ex.submit(mesh_body, model, patch, spec, algorithm3d=algorithm).result()
+        except BrokenProcessPool:
+            continue
+    from conformal.influence.factor import FESolveError
 
-        raise FESolveError(f"stresses: gmsh aborted meshing the {model.kind} body; try other [model] fe_h_load / "
-                           "fe_h_patch or [grid] n") from None
+    raise FESolveError(f"stresses: gmsh aborted meshing the {model.kind} body (3-D algorithms "
+                       f"{', '.join(str(a) for a in _ALGORITHMS_3D)}); try other [model] fe_h_load / "
+                       "fe_h_patch or [grid] n")
+
+
+#: gmsh's 3-D meshers tried in turn on the slab bodies: Delaunay, then Frontal (both abort on some
+#: of these bodies: Delaunay on the deep pair's wheel after the frame-sense correction moved its patch)
+_ALGORITHMS_3D = (1, 4)
 
 
 def _rot_y(phi: float) -> np.ndarray:

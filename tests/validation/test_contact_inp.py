@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from conformal.cli import main
+from conformal.contact_inp.combine import PREFIX
 from conformal.contact_inp.deck import plan, read_deck, solve_deck
 from conformal.contact_inp.module3 import Unsupported
 from conformal.contact_inp.refout import compare, read_ref_out
@@ -92,6 +93,85 @@ def test_supported_fraction_in_the_manifest():
     assert {p.name for p in DECKS.glob("*.inp")} == set(SUPPORTED)
     assert set(DIGITS) | set(WHEELRAIL) == set(SUPPORTED)
     assert sum(SUPPORTED[n]["supported"] for n in ("mbench_a22_left.inp", "mbench_a22_right.inp")) == 42
+    # module-1 cases run with the patch-combination warning: supported, not counted as agreeing
+    assert MANIFEST["patch_combination"] == sum(len(e.get("patch_combination", [])) for e in decks)
+    for e in decks:
+        assert len(set(e.get("patch_combination", []))) == len(e.get("patch_combination", []))
+        assert not set(e.get("patch_combination", [])) & set(e.get("refused_after_solve", []))
+        assert len(e.get("patch_combination", [])) <= e["supported"]
+
+
+@pytest.mark.slow
+def test_patch_combination_cases_of_the_manifest():
+    """The manifest's ``patch_combination`` cases of the site-B and testbank decks are those where
+    CONTACT's rule differs at the normal balance (tests/reference/contact_decks/extract.py)."""
+    from conformal.contact_inp.combine import loaded_warnings
+    from conformal.contact_inp.solve1 import thresholds
+    from conformal.errors import ConvergenceError, NoContactError
+    from conformal.scene import scene_from_dict
+
+    for name in ("iestim_site_b.inp", "testbank.inp"):
+        pl = plan(read_deck(DECKS / name, ignore_subsurface=True, ignore_temperature=True))
+        found = []
+        for case, raw in (item for chain in pl.chains for item in chain):
+            if getattr(case, "module", 3) != 1:
+                continue
+            try:
+                if loaded_warnings(scene_from_dict(raw, base_dir=DECKS, name=raw["name"]), *thresholds(case)):
+                    found.append(case.number)
+            except (InputError, NoContactError, ConvergenceError):
+                pass
+        assert found == WHEELRAIL[name].get("patch_combination", []), name
+
+
+def test_contacts_rule_for_contact_regions():
+    """CONTACT's distance between interpenetration regions (gaps of the x and y extents, height
+    difference at the facing lateral ends) and its four treatments by D_COMB <= D_SEP <= D_TURN."""
+    from conformal.contact_inp.combine import Region, contact_treatment, region_distance
+
+    a = Region(x=(-5.0, 5.0), y=(0.0, 10.0), z=(0.0, 1.0), angle=0.0, s=(0.0, 10.0))
+    b = Region(x=(-3.0, 3.0), y=(13.0, 20.0), z=(5.0, 6.0), angle=0.5, s=(15.0, 22.0))
+    c = Region(x=(8.0, 9.0), y=(2.0, 4.0), z=(0.0, 0.0), angle=0.0, s=(2.0, 4.0))
+    assert region_distance(a, b) == pytest.approx(5.0) == region_distance(b, a)   # dy 3, dz 4
+    assert region_distance(a, c) == pytest.approx(3.0)                            # x only
+    assert region_distance(a, a) == 0.0
+    th = dict(d_comb=4.0, d_sep=8.0, d_turn=12.0, a_sep=1.0)
+    assert [contact_treatment(d, 0.1, **th) for d in (4.0, 4.1, 8.0, 12.0, 12.1)] == [
+        "combined", "blended", "blended", "turned", "separate"]
+    assert contact_treatment(1.0, 1.2, **th) == "separate"                         # angles too far apart
+
+
+def test_patch_combination_warning_names_d_comb():
+    """Testbank case 35 (conformal, Z_WS prescribed): CONTACT combines its three interpenetration
+    regions (8.9 and 14.9 mm apart, D_COMB = 20 mm) into one patch; this reader solves separate
+    strips and says so.  mbench_conf case 1 (two patches 20 mm apart, D_SEP 9 mm, D_TURN 12 mm
+    by default): no warning.  The CLI repeats each such warning on stderr."""
+    from conformal.contact_inp.combine import loaded_warnings
+    from conformal.contact_inp.deck import deck_scene
+    from conformal.contact_inp.solve1 import thresholds
+    from conformal.scene import scene_from_dict
+
+    for name, number, expect in (("testbank.inp", 35, 2), ("mbench_conf.inp", 1, 0)):
+        case = read_deck(DECKS / name).cases[number - 1]
+        assert case.number == number
+        sc = scene_from_dict(deck_scene(DECKS / name, number), base_dir=DECKS)
+        w = loaded_warnings(sc, *thresholds(case))
+        assert len(w) == expect, w
+        assert all("D_COMB = 20 mm" in t and "separate patches" in t for t in w)
+        assert (number in WHEELRAIL[name].get("patch_combination", [])) == bool(expect)
+
+
+def test_cli_prints_the_patch_combination_warning(tmp_path, capsys, monkeypatch):
+    """One stderr line per such warning, naming the case; other warnings stay in the JSON only."""
+    import conformal.contact_inp.deck as deck
+
+    text = f"{PREFIX} CONTACT combines contact regions closer than D_COMB = 3 mm (regions 1.20 mm apart)"
+    monkeypatch.setattr(deck, "read_deck", lambda *a, **k: None)
+    monkeypatch.setattr(deck, "solve_deck", lambda *a, **k: iter([{"case": 4, "warnings": [text, "other"]}]))
+    assert main(["inp", str(tmp_path / "x.inp")]) == 0
+    out = capsys.readouterr()
+    assert json.loads(out.out)["warnings"] == [text, "other"]
+    assert out.err.strip().splitlines() == [f"case 4: {text}"]
 
 
 def test_wheelrail_decks_map_onto_scenes():
@@ -130,6 +210,8 @@ def test_wheelrail_deck_against_contact(name, cases):
         dev = compare_wheelrail(d, ref[d["case"]], mu=0.3)
         assert dev and max(dev.values()) <= 1.0, (d["case"], {k: v for k, v in dev.items() if v > 1})
         assert {"FX_track", "FY_track", "FZ_track", "patches"} <= set(d)
+        assert d["case"] not in WHEELRAIL[name].get("patch_combination", [])
+        assert not [w for w in d["warnings"] if w.startswith(PREFIX)]
 
 
 #: conformal (D = 4) module-1 cases against CONTACT (its .ref_out), with tolerances (%; angle in
@@ -162,6 +244,8 @@ def test_conformal_deck_against_contact(name, case):
     tol = CONFORMAL_TOL[name]
     bad = {k: round(v, 3) for k, v in dev.items() if abs(v) > tol[k.split(".")[-1]]}
     assert not bad, (name, case, bad)
+    # CONTACT's rule for contact regions agrees with the patches solved here (two patches far apart)
+    assert not [w for w in d["warnings"] if w.startswith(PREFIX)]
     if name == "groove_li.inp":
         assert "pitch_creepage" in dev and len(d["patches"]) == 1
     else:

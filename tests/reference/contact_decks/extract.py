@@ -5,7 +5,11 @@
 (names after the checkout: redo only those decks; the others keep their manifest entries).
 Cases with friction varying over the profile (module 1, V = 1) are solved, since whether the
 friction is constant over every conformal strip (D = 4), and whether the wheel-rail set-up can
-place the case, is known only then (about 6 minutes, testbank case 35).
+place the case, is known only then (about 6 minutes, testbank case 35).  Module-1 cases where
+CONTACT's rule for contact regions (D_COMB, D_SEP, D_TURN) differs from the reader's patches
+(conformal.contact_inp.combine, at the height of the normal balance; the warnings of the full
+solve for the ``t3_*`` decks) are listed per deck under
+``patch_combination``: they run, with a warning, and are not counted as agreeing with CONTACT.
 
 For every public deck (examples/*.inp, testbank/**/*.inp) it counts the cases (the ``Case``
 blocks of its .ref_out) and the cases ``conformal inp`` can solve, with the reasons for the
@@ -44,6 +48,30 @@ def trimmed_ref_out(text: str) -> str:
     return "\n".join(keep) + "\n"
 
 
+#: decks whose module-1 cases are solved for the patch-combination check (one case each, 1-2 minutes):
+#: their full solve ends a few micrometres from the normal balance, where the tread region splits in two
+SOLVED = {"t3_t1_conformal.inp", "t3_t2_conformal.inp", "t3_t1_force.inp", "t3_t2_force.inp"}
+
+
+def _combination(case, raw: dict, base_dir: Path) -> bool:
+    """Whether CONTACT combines, blends or turns the contact regions of a module-1 case differently
+    from the reader's patches (conformal.contact_inp.combine): at the height of the normal balance,
+    or from the warnings of the full solve for the decks in SOLVED."""
+    from conformal.contact_inp.combine import PREFIX, loaded_warnings
+    from conformal.contact_inp.solve1 import solve_case, summary, thresholds
+    from conformal.errors import ConvergenceError, NoContactError
+    from conformal.scene import scene_from_dict
+
+    if getattr(case, "module", 3) != 1:
+        return False
+    try:
+        if Path(case.deck).name in SOLVED:
+            return any(w.startswith(PREFIX) for w in summary(case, solve_case(case, raw, base_dir))["warnings"])
+        return bool(loaded_warnings(scene_from_dict(raw, base_dir=base_dir, name=raw["name"]), *thresholds(case)))
+    except (InputError, NoContactError, ConvergenceError):
+        return False
+
+
 def main(root: str, only=()) -> int:
     """``only``: deck file names to redo; the others keep their manifest entries."""
     root = Path(root)
@@ -77,6 +105,10 @@ def main(root: str, only=()) -> int:
                         entry["reasons"][why] = entry["reasons"].get(why, 0) + 1
                         entry["supported"] -= 1
                         entry.setdefault("refused_after_solve", []).append(case.number)
+            comb = [case.number for case, raw in (item for chain in pl.chains for item in chain)
+                    if case.number not in entry.get("refused_after_solve", []) and _combination(case, raw, inp.parent)]
+            if comb:
+                entry["patch_combination"] = comb
         except InputError as exc:
             entry["reasons"][str(exc).split(": ", 1)[-1]] = n_cases
         manifest.append(entry)
@@ -91,7 +123,8 @@ def main(root: str, only=()) -> int:
     total = sum(e["cases"] for e in manifest)
     ok = sum(e["supported"] for e in manifest)
     out = {"source": "github.com/eve70a/CONTACT (Apache-2.0), E.A.H. Vollebregt / Vtech CMCC",
-           "cases": total, "supported": ok, "decks": manifest}
+           "cases": total, "supported": ok,
+           "patch_combination": sum(len(e.get("patch_combination", [])) for e in manifest), "decks": manifest}
     (HERE / "manifest.json").write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
     print(f"{ok} of {total} cases ({100.0 * ok / total:.1f} %)")
     return 0
