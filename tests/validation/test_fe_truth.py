@@ -270,7 +270,7 @@ def test_production_model_meets_the_reference_at_the_same_loads():
     """conformal + FE influence numbers (the package's defaults) at the truth's L/V, against the
     reference truth (studies/fe_truth_convergence.py): the issue's targets pmax 2 %, contact area
     5 %, flank share 2 points, on the deep pair (measured +1.24 %, +1.81 %, -0.16 points; FN +0.63 %),
-    at 6.2 mm (+0.82 %, -1.28 %, 0 points (root only); FN +0.34 %) and at 6.25 mm (+0.91 %,
+    at 6.2 mm (+1.30 %, -1.28 %, 0 points (root only); FN +0.34 %) and at 6.25 mm (+0.91 %,
     +4.32 %, -0.90 points; FN +0.65 %)."""
     recs = _convergence()
     for name in ("deep_pair", "flange_y6.2", "flange_y6.25"):
@@ -311,3 +311,27 @@ def test_flange_625_reference_mesh_convergence_at_prescribed_loads():
     assert abs(d["FN"]) < 0.005 and abs(d["pmax"]) < 0.008
     assert ref["area_bounds"][0] < fine["area"] < ref["area_bounds"][1]
     assert abs(d["flank_share_spread"]) < 0.002 and abs(fine["shift"]) < 1e-4
+
+
+def test_flange_62_reference_is_converged_at_prescribed_loads():
+    """Root contact at 6.2 mm: a finer mesh (a / 8) and a larger body (40 patch sizes, rail +-494 mm)
+    at the reference's vertical and lateral load (studies/fe_truth_convergence.py): FN and pmax
+    within the issue's 0.5 % (measured FN 0.00 / 0.00 %, pmax +0.48 / +0.34 %), the area inside the
+    reference's own bounds (-2.2 / 0.0 % against +-8 %)."""
+    rec = _convergence()["flange_y6.2"]
+    ref = rec["truths"]["reference"]["loaded"]
+    for label in ("finer mesh", "larger body"):
+        d = rec["summary"]["convergence"][label]["loaded"]
+        assert abs(d["FN"]) < 0.005 and abs(d["pmax"]) < 0.005, label
+        assert ref["area_bounds"][0] < rec["truths"][label]["loaded"]["area"] < ref["area_bounds"][1], label
+
+
+def test_flange_625_reference_body_size_at_prescribed_loads():
+    """Root + flank at 6.25 mm, 20 -> 40 patch sizes at the same vertical and lateral load: FN
+    converged (+0.00 %), pmax +1.11 % (a miss of the issue's 0.5 %, recorded with its bound: the
+    rail's length still moves the peak where root and flank touch at once), the area +1.0 %
+    (inside the reference's +-9.5 % bounds); the wheel sits 49 µm further out on the longer rail."""
+    rec = _convergence()["flange_y6.25"]
+    d = rec["summary"]["convergence"]["larger body"]["loaded"]
+    assert abs(d["FN"]) < 0.005 and 0.0 < d["pmax"] < 0.015 and abs(d["area"]) < 0.03
+    assert abs(d["flank_share_spread"]) < 0.002
