@@ -347,24 +347,6 @@ def find_contacts(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = 
     return SearchResult(contacts, loc, cands)
 
 
-def _refined(pair, top: RailTop, z: float, previous: SearchResult | None) -> SearchResult:
-    """The contact search of ``pair`` at height z: the contact points of ``previous`` (the search
-    at a nearby height) refined by Newton-Raphson from their coordinates, or a full
-    :func:`find_contacts` without ``previous`` or where a refinement fails or two points merge."""
-    wheel, loc = pair.wheel(z), pair_locus(pair, top, z)
-    if previous is not None:
-        try:
-            out = [newton_contact(wheel, pair.rail, (c.s_w, c.theta, c.x, c.s_r)) for c in previous.contacts]
-        except ConvergenceError:
-            out = []
-        distinct = all(abs(a.s_w - b.s_w) >= 0.05 or abs(a.s_r - b.s_r) >= 0.05
-                       for i, a in enumerate(out) for b in out[i + 1:])
-        if out and distinct and all(abs(a.s_w - b.s_w) < 0.5 for a, b in zip(out, previous.contacts)):
-            out.sort(key=lambda c: -c.penetration)
-            return SearchResult(out, loc, previous.candidates)
-    return find_contacts(wheel, pair.rail, top, locus=loc)
-
-
 def touch_height(pair, top: RailTop | None = None, z0: float = 0.0, *, tol: float = 1e-9,
                  maxit: int = 20) -> tuple[float, SearchResult]:
     """Wheelset height z (side frame, z down) at which the wheel of ``pair`` first touches its
@@ -372,17 +354,14 @@ def touch_height(pair, top: RailTop | None = None, z0: float = 0.0, *, tol: floa
 
     The locus is rigid under vertical translation, so the vertical gap gives the height to the
     envelope's resolution in one step; Newton-Raphson contact points then correct it
-    (a vertical move dz changes the penetration by dz n_z).  The locus moves rigidly, so its
-    candidates stay those of the first search: after it, each contact point is refined from its
-    own converged coordinates (1-2 Newton steps instead of a start from the locus samples)."""
+    (a vertical move dz changes the penetration by dz n_z)."""
     top = top or RailTop.of(pair.rail)
     loc = pair_locus(pair, top, z0)
     if not np.isfinite(loc.gap).any():
         raise NoContactError("contact search: the wheel does not lie over the rail")
     z = z0 + float(np.nanmin(loc.gap))
-    sr = None
     for _ in range(maxit):
-        sr = _refined(pair, top, z, sr)
+        sr = find_contacts(pair.wheel(z), pair.rail, top, locus=pair_locus(pair, top, z))
         c = sr.contacts[0]
         dz = -c.penetration / c.normal[2]
         z += dz
