@@ -243,18 +243,3 @@ def test_shared_halfspace_operator_equals_a_fresh_one():
     big = int(hs.CACHE_ELEMENTS ** 0.5) + 1
     assert hs.HalfSpaceInfluence.for_grid(big, big, 0.2, 0.2, mat) is not hs.HalfSpaceInfluence.for_grid(
         big, big, 0.2, 0.2, mat)
-
-
-def test_touch_height_refined_from_its_points_equals_full_searches(monkeypatch):
-    """The touching height with the contact points refined from their own coordinates equals the
-    one with a full contact search at every correction (tread, flange) to 1e-9 mm."""
-    from conformal.geometry import search
-
-    for y in (2.0, 7.0):
-        pl = wr.place_scene(mbench_case(y))
-        fast, _ = search.touch_height(pl.pair, pl.top)
-        with monkeypatch.context() as m:
-            m.setattr(search, "_refined", lambda pair, top, z, prev: search.find_contacts(
-                pair.wheel(z), pair.rail, top, locus=search.pair_locus(pair, top, z)))
-            full, _ = search.touch_height(pl.pair, pl.top)
-        assert fast == pytest.approx(full, abs=1e-9)
