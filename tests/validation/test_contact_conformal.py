@@ -210,7 +210,10 @@ def mbench_conf(influence="halfspace_planar"):
     from conformal.contact_inp.deck import deck_scene
 
     raw = deck_scene(TB / "mbench_conf.inp", 1, influence=influence)
-    assert raw["friction"]["mu_static"] == 0.2 and raw["grid"]["strips"] == "separate"
+    (a0, mu0, mk0), (a1, mu1, mk1) = raw["friction"]["angle_table"]   # constant beyond the rows
+    assert math.degrees(a0) == pytest.approx(-20.0) and (mu0, mk0) == (0.2, 0.2)
+    assert math.degrees(a1) == pytest.approx(-10.0) and (mu1, mk1) == (0.3, 0.3)
+    assert raw["grid"]["strips"] == "separate"
     return scene_from_dict(raw, base_dir=TB, name="mbench_conf")
 
 
