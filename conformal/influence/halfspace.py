@@ -368,7 +368,16 @@ def _padded(op: HalfSpaceInfluence) -> HalfSpaceInfluence:
 class TangentialProduct32:
     """(u_x, u_y) = A_tt p by the zero-padded FFTs of :class:`HalfSpaceInfluence`, in single
     precision (2.5x faster at 200 x 200; relative error about 1e-7), for Krylov products.  Only the
-    mx non-zero rows are transformed along y, and only mx rows are transformed back."""
+    mx non-zero rows are transformed along y, and only mx rows are transformed back.
+
+    On large grids (the padded half-spectrum of both components above :data:`BLOCK_FROM_BYTES`)
+    the transforms along x, the product with the kernels and the transforms back run on blocks of
+    :data:`BLOCK_COLUMNS` columns of the half-spectrum, so that each block stays in the core's
+    cache between the three passes instead of streaming the whole spectrum through memory three
+    times: the same numbers (the transforms along x are per column), 14 % faster at 400 x 400
+    (800 x 800 padded) and 25 % at 500 x 500 on a 2-core machine with a 512 KiB L2 cache per core,
+    slower at 300 x 300 and below (the measurements at :data:`BLOCK_FROM_BYTES`).  Unblocked, one
+    product grew as N^1.24 from 200² to 400² on that machine (the cache), blocked as N^1.13."""
 
     def __init__(self, op: HalfSpaceInfluence):
         self.mx, self.my = op.mx, op.my
@@ -378,16 +387,40 @@ class TangentialProduct32:
         # real factor halves the cost of the products in Fourier space
         real = all(np.abs(v.imag).max() <= 1e-9 * np.abs(v).max() for v in k)
         self.k = [v.real.astype(np.float32) if real else v.astype(np.complex64) for v in k]
+        half = self.My // 2 + 1
+        self.block = BLOCK_COLUMNS if 2 * self.Mx * half * 8 > BLOCK_FROM_BYTES else half
 
     def __call__(self, p: np.ndarray) -> np.ndarray:
         """p: (2, mx, my) float32 (or castable); returns (2, mx, my) float32."""
         rows = sfft.rfft(p, n=self.My, axis=-1)
+        half = rows.shape[-1]
+        if self.block >= half:
+            return sfft.irfft(self._spectral(rows, slice(None)), n=self.My, axis=-1)[:, :, : self.my]
+        out = np.empty_like(rows)
+        for j0 in range(0, half, self.block):
+            cols = slice(j0, min(half, j0 + self.block))
+            out[:, :, cols] = self._spectral(rows[:, :, cols], cols)
+        return sfft.irfft(out, n=self.My, axis=-1)[:, :, : self.my]
+
+    def _spectral(self, rows: np.ndarray, cols: slice) -> np.ndarray:
+        """The transform along x of the row transforms ``rows`` (2, mx, nc) of the half-spectrum's
+        columns ``cols``, the product with the kernels there and the transform back, (2, mx, nc)."""
         h = sfft.fft(rows, n=self.Mx, axis=-2, overwrite_x=True)
-        kxx, kxy, kyy = self.k
+        kxx, kxy, kyy = (k[:, cols] for k in self.k)
         a0 = kxx * h[0]
         a0 += kxy * h[1]
         h[1] *= kyy
         h[1] += kxy * h[0]
         h[0] = a0
-        cols = sfft.ifft(h, axis=-2, overwrite_x=True)[:, : self.mx]
-        return sfft.irfft(cols, n=self.My, axis=-1)[:, :, : self.my]
+        return sfft.ifft(h, axis=-2, overwrite_x=True)[:, : self.mx]
+
+
+#: the single-precision tangential product works on column blocks of the half-spectrum
+#: (:class:`TangentialProduct32`) when both components' padded half-spectrum (complex64) exceed
+#: this many bytes (grids of 300 x 300, padded 600 x 600: 2.9 MB, unblocked; 400 x 400, padded
+#: 800 x 800: 5.1 MB, blocked).  Measured (best of 15, single product, loaded 2-core machine): blocks
+#: of 64 columns take 1.14 / 0.86 / 0.75 of the unblocked time at 300² / 400² / 500² (32: 1.19 /
+#: 0.85 / 0.76; 128: 1.09 / 0.86 / 0.78) ...
+BLOCK_FROM_BYTES = 4 * 2**20
+#: ... of this many columns (a block of 800 padded rows: 0.8 MB for both components)
+BLOCK_COLUMNS = 64

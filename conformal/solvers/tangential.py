@@ -243,6 +243,7 @@ class _SlipOperator:
         self._buf32 = np.zeros((2, rows * self.my), dtype=np.float32)
         self._buf64 = np.zeros((2, rows * self.my))
         self._pbuf = np.zeros((2, self.mx * self.my), dtype=np.float32)
+        self._last = None   # (tractions, field) of the last double-precision product
         if "inv" not in shared:
             self._build_preconditioner()
             shared["inv"], shared["diag"] = self._inv, self.diag
@@ -250,6 +251,14 @@ class _SlipOperator:
 
     # --- products
     def grid_u(self, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(u_x, u_y) = A p on the grid for tractions (px, py) given on the grid (zero outside the
+        contact elements): the field of the last double-precision :meth:`apply` when that was
+        for the same tractions (the final slip of a solve is computed from them), else one
+        product."""
+        last = self._last
+        if last is not None and np.array_equal(last[0][0], px.reshape(-1).take(self.idx)) \
+                and np.array_equal(last[0][1], py.reshape(-1).take(self.idx)):
+            return last[1][0, :self.mx], last[1][1, :self.mx]
         self.products += 1
         return self.op.apply_tangential(px, py)
 
@@ -267,6 +276,7 @@ class _SlipOperator:
             buf[self._m] = pc.reshape(-1)
             pop = self._ext if self._ext is not None else self.op
             u = np.stack(pop.apply_tangential(*buf))
+            self._last = (pc.reshape(2, -1).copy(), u)   # for grid_u
         if not self.steady:
             return u[self._m].astype(float).reshape(2, -1)
         if self._m_up is not None:
@@ -282,16 +292,28 @@ class _SlipOperator:
         return self._shared[key]
 
     # --- preconditioner
+    def _probe(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """(u_x, u_y) on the grid of a unit traction in component k at the centre element: by the
+        single-precision product where the operator has one (the preconditioner need not be
+        accurate: relative error about 1e-7), else in double precision."""
+        mx, my = self.mx, self.my
+        if self._fast is None:
+            e = np.zeros((2, mx, my))
+            e[k, mx // 2, my // 2] = 1.0
+            return self.grid_u(*e)
+        self.products += 1
+        e = np.zeros((2, self._rows, my), dtype=np.float32)
+        e[k, mx // 2, my // 2] = 1.0
+        u = self._fast(e)
+        return u[0, :mx].astype(float), u[1, :mx].astype(float)
+
     def _build_preconditioner(self) -> None:
         """Probe the kernel at the centre element (two products), fold it onto the unpadded
         periodic grid (Strang circulant) and invert its 2 x 2 symbol per Fourier mode."""
         mx, my = self.mx, self.my
         cx, cy = mx // 2, my // 2
-        e = np.zeros((mx, my))
-        e[cx, cy] = 1.0
-        z = np.zeros((mx, my))
-        kxx, kyx = self.grid_u(e, z)
-        kxy, kyy = self.grid_u(z, e)
+        kxx, kyx = self._probe(0)
+        kxy, kyy = self._probe(1)
         # diagonal of L per component (scalars): self term, minus the upstream neighbour if steady
         dxx, dyy = kxx[cx, cy], kyy[cx, cy]
         if self.steady:
@@ -743,12 +765,17 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
             w = w + eu
 
     def finish(px, py, sx, sy, status, xi_, eta_, its, res, conv, msg, nprod, L=None):
-        ux, uy = op.apply_tangential(px, py) if L is None else L.grid_u(px, py)
+        if L is None:
+            (ux, uy), nprod = op.apply_tangential(px, py), nprod + 1
+        else:
+            before = L.products
+            ux, uy = L.grid_u(px, py)
+            nprod += L.products - before
         if extra_u is not None:
             ux, uy = ux + extra_u[0], uy + extra_u[1]
         return TangentialSolution(px=px, py=py, sx=sx, sy=sy, ux=ux, uy=uy, status=status.astype(np.int8),
                                   xi=float(xi_), eta=float(eta_), iterations=its, residual=float(res),
-                                  converged=conv, message=msg, products=nprod + 1,
+                                  converged=conv, message=msg, products=nprod,
                                   coarse_products=float(getattr(L, "coarse_products", 0.0)))
 
     if not contact.any():
