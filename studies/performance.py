@@ -251,7 +251,19 @@ CONTACT = {
     "circ_source": "tests/reference/contact_performance.md, case circ (whole program run)",
     "gdsteady_growth_200_400": 1.53,
     "growth_source": "issue 23 (GDsteady, N^q from 200^2 to 400^2)",
+    # CONTACT's own performance case of the shift (T = 1): the Manchester right wheel at y = 6.2 mm,
+    # 71 x 81 elements of 0.1 mm, the deck perfc_test/tang_problm_1s.inp (tests/reference/contact_perfc);
+    # whole program (normal + shift), and its normal problem alone (norm_problm_1p, the same grid);
+    # no CONTACT time is stored for the shift of case circ, so this is the shift's anchor
+    "perfc_shift_s": 0.13,
+    "perfc_normal_s": 0.046,
+    "perfc_source": "tests/reference/contact_performance.md (CONTACT's performance cases, shift TangCG 71 x 81)",
+    # CONTACT's contact and slip element counts of that case (perfc_test/get_times.ref_out: ncon of
+    # norm_problm_1p, nslp of tang_problm_1s)
+    "perfc_ncon": 3148,
+    "perfc_nslip": 1730,
 }
+PERFC_SHIFT = ROOT / "tests" / "reference" / "contact_perfc" / "tang_problm_1s.inp"
 IMPORT_TARGET_S = 0.15
 MBENCH_REF = ROOT / "tests" / "reference" / "contact_cases.json"
 
@@ -312,6 +324,78 @@ def small_solve_process() -> dict:
     return r
 
 
+def perfc_case(path: Path = PERFC_SHIFT) -> dict:
+    """CONTACT's shift performance deck (module 3, one case): the numbers the job needs, read from
+    the lines CONTACT's input format fixes for this deck (PEN CKSI CETA CPHI; FSTAT FKIN; POISS GG;
+    MX MY XL YL DX DY; IBASE = 2: NN XM RM Y1 DY1 and the NN heights B(k)), and the undeformed
+    distance of IBASE = 2, h = B(y) (linear between the points) + (x - XM)^2 / (2 RM) (CONTACT's
+    m_sdis.f90).  Returns grid, h, approach, xi, eta, phi (the rigid shift, mm and rad), mu, material
+    and eps (CONTACT's tolerance)."""
+    from conformal.grid import PlanarGrid
+    from conformal.materials import Material
+
+    lines = [ln for ln in path.read_text().splitlines() if ln.strip() and not ln.lstrip().startswith("%")]
+
+    def numbers(tag: str, k: int, after: int = 0) -> list[float]:
+        i = next(j for j, ln in enumerate(lines) if tag in ln)
+        return [float(v) for v in lines[i + after].split()[:k]]
+
+    pen, cksi, ceta, cphi = numbers("PEN, CKSI", 4)
+    fstat, fkin = numbers("FSTAT, FKIN", 2)
+    nu1, nu2, g1, g2 = numbers("POISS 1,2", 4)
+    eps = numbers("MAXGS", 5)[4]
+    mx, my, xl, yl, dx, dy = numbers("MX,MY,XL,YL,DX,DY", 6)
+    nn, xm, rm, y1, dy1 = numbers("NN, XM", 5)
+    i = next(j for j, ln in enumerate(lines) if "NN, XM" in ln) + 1
+    b: list[float] = []
+    while len(b) < int(nn):
+        b += [float(v) for v in lines[i].split()]
+        i += 1
+    grid = PlanarGrid(int(mx), int(my), dx, dy, xl, yl)
+    X, Y = grid.mesh()
+    h = np.interp(Y, y1 + dy1 * np.arange(int(nn)), np.array(b[:int(nn)])) + (X - xm) ** 2 / (2.0 * rm)
+    if fstat != fkin:
+        raise ValueError(f"{path.name}: static and kinetic friction differ")
+    return dict(grid=grid, h=h, approach=pen, xi=cksi, eta=ceta, phi=cphi, mu=fstat,
+                material=Material(G1=g1, nu1=nu1, G2=g2, nu2=nu2), eps=eps)
+
+
+def perfc_shift(repeats: int, path: Path = PERFC_SHIFT) -> dict:
+    """CONTACT's shift performance case solved as CONTACT runs it: the influence numbers, the normal
+    problem with the approach prescribed, then the shift (T = 1) from zero tractions, both to the
+    deck's tolerance (1e-7), in this process; CPU and wall seconds, best and median of ``repeats``
+    (CONTACT's 0.13 s is its whole program), with the contact and slip element counts and the
+    forces (CONTACT's counts: ``CONTACT["perfc_ncon"]``, ``["perfc_nslip"]``)."""
+    from conformal.influence.halfspace import HalfSpaceInfluence
+    from conformal.solvers import tangential as tang
+    from conformal.solvers.normal import solve_normal
+
+    c = perfc_case(path)
+    g = c["grid"]
+    la = load()
+    runs = []
+    for _ in range(repeats):
+        t0, c0 = time.perf_counter(), time.process_time()
+        op = HalfSpaceInfluence.for_grid(g.mx, g.my, g.dx, g.dy, c["material"], shared=False)
+        ns = solve_normal(op, g, c["h"], approach=c["approach"], tol=c["eps"])
+        t1, c1 = time.perf_counter(), time.process_time()
+        ts = tang.solve_tangential(op, g, ns.pn, xi=c["xi"], eta=c["eta"], phi=c["phi"], mu_static=c["mu"],
+                                   mu_kinetic=c["mu"], rolling="shift", tol=c["eps"])
+        t2, c2 = time.perf_counter(), time.process_time()
+        runs.append((t2 - t0, c2 - c0, t1 - t0, c1 - c0, t2 - t1, c2 - c1))
+    r = np.array(runs)
+    names = ("wall_s", "cpu_s", "normal_wall_s", "normal_cpu_s", "shift_wall_s", "shift_cpu_s")
+    out = dict(kind="perfc_shift", deck=path.name, grid=[g.mx, g.my], repeats=repeats, load=la,
+               n_contact=int(ns.n_contact), n_slip=int(np.count_nonzero(ts.status == 2)),
+               FN=float(ns.FN), FX=float(ts.px.sum() * g.area), FY=float(ts.py.sum() * g.area),
+               normal_iterations=int(ns.iterations), newton_iterations=int(ts.iterations),
+               products=int(ts.products), coarse_products=float(ts.coarse_products), converged=bool(ts.converged))
+    for k, name in enumerate(names):
+        out[name] = float(r[:, k].min())
+        out[name.replace("_s", "_median_s")] = float(np.median(r[:, k]))
+    return out
+
+
 def contact_ratios(res: dict) -> list[dict]:
     """Every measured job as a ratio to CONTACT's time for it (< 1: faster than CONTACT)."""
     out = []
@@ -328,6 +412,14 @@ def contact_ratios(res: dict) -> list[dict]:
         if n in CONTACT["gdsteady_s"]:
             out.append(dict(job=f"steady rolling, circ {n}^2 (GDsteady)", ours_s=h["steady_wall_s"],
                             contact_s=CONTACT["gdsteady_s"][n], source=CONTACT["circ_source"], load=h["load"]))
+    pc = res.get("perfc_shift")
+    if pc:
+        out.append(dict(job=f"shift (T = 1), CONTACT's case {pc['grid'][0]} x {pc['grid'][1]}: influence numbers, "
+                            "normal problem and shift", ours_s=pc["wall_s"], cpu_s=pc["cpu_s"],
+                        contact_s=CONTACT["perfc_shift_s"], source=CONTACT["perfc_source"], load=pc["load"]))
+        out.append(dict(job="... its shift alone (CONTACT: whole run less its normal-only run)", ours_s=pc["shift_wall_s"],
+                        cpu_s=pc["shift_cpu_s"], contact_s=CONTACT["perfc_shift_s"] - CONTACT["perfc_normal_s"],
+                        source=CONTACT["perfc_source"], load=pc["load"]))
     sp = res.get("small_solve")
     if sp:
         out.append(dict(job="`conformal solve` circ 50^2 steady rolling, as a process", ours_s=sp["wall_s"],
@@ -423,6 +515,17 @@ def report(res: dict, out: Path) -> str:
                   f"{r['normal_solves']} normal solves in the balance, {r['tangential_solves']} contact solves; "
                   f"largest FN error against CONTACT {100 * r['max_FN_error']:.2f} % (target: 1 %, and <= "
                   f"{0.5 * CONTACT['mbench_right_s']:.3f} s on a quiet machine).", ""]
+        pc = res.get("perfc_shift")
+        if pc:
+            L += [f"CONTACT's shift performance case ({pc['deck']}, {pc['grid'][0]} x {pc['grid'][1]} elements, the "
+                  f"deck's tolerance): {pc['n_contact']} contact and {pc['n_slip']} slip elements (CONTACT "
+                  f"{CONTACT['perfc_ncon']} and {CONTACT['perfc_nslip']}), FN {pc['FN']:.0f} N, FX {pc['FX']:.1f} N, "
+                  f"FY {pc['FY']:.1f} N; best of {pc['repeats']}: {pc['cpu_s']:.3f} s CPU (median "
+                  f"{pc['cpu_median_s']:.3f}), of which the normal problem {pc['normal_cpu_s']:.3f} s "
+                  f"({pc['normal_iterations']} iterations) and the shift {pc['shift_cpu_s']:.3f} s "
+                  f"({pc['newton_iterations']} Newton steps, {pc['products']} + {pc['coarse_products']:.1f} "
+                  f"products); CONTACT {CONTACT['perfc_shift_s']} s whole program, "
+                  f"{CONTACT['perfc_normal_s']} s for the normal problem alone.", ""]
         st = res.get("startup")
         if st:
             L += [f"Start-up: `python -X importtime -c \"import conformal\"` {_f(st['importtime_s'], '.3f')} s for the "
@@ -480,6 +583,10 @@ def main(argv=None) -> int:
     res["startup"] = startup()
     print(f"[startup] importtime {res['startup']['importtime_s']} s, process {res['startup']['process_s']:.3f} s",
           flush=True)
+    res["perfc_shift"] = perfc_shift(3 if args.quick else 7)
+    pc = res["perfc_shift"]
+    print(f"[perfc shift] {pc['cpu_s']:.3f} s CPU ({pc['shift_cpu_s']:.3f} s the shift), {pc['n_contact']} contact "
+          f"and {pc['n_slip']} slip elements (CONTACT {CONTACT['perfc_ncon']}, {CONTACT['perfc_nslip']})", flush=True)
     res["small_solve"] = small_solve_process()
     print(f"[small solve] {res['small_solve']['wall_s']:.2f} s", flush=True)
     res["contact_ratios"] = contact_ratios(res)
