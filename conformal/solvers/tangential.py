@@ -104,6 +104,20 @@ best of 3; studies/steady_rolling_speed.py, CONTACT's GDsteady times in brackets
   inner iterations (11 / 12 / 15), cells taken from a quarter or 90 % adhesion (4 x 4, 2 inner
   iterations: 11 / 11 / 13 and 12 / 14 / 16), the correction in shifts too (more products: P
   alone is good there).
+* Fewer double-precision products: the preconditioner's kernel probes use the single-precision
+  product from PROBE32_FROM elements on, and the solution's (ux, uy) reuse the field of the last
+  (double-precision) slip computation: three double products fewer per solve, about 3 % of a
+  400^2 steady-rolling solve.  Near the tolerance (res < FRESH_BELOW tol) the slip is recomputed in
+  double precision before the next step: the slip updated by single-precision products drifts by
+  about 1e-7 of the early steps' size, which cost CONTACT's shift performance case
+  (tests/reference/contact_perfc, tol 1e-7) an eighth Newton step.
+* Shift start: the coarse solution is prolonged as the ratio of the traction to its bound
+  mu p_n (interpolated over the coarse contact elements only, normalised) times the fine bound,
+  so that slipping elements start on their bound: Newton steps on the fine grid of CONTACT's
+  shift performance case (71 x 81, 3 148 contact elements) 6 -> 4, products 33 -> 28 (+ 7 on the
+  coarse grid); case circ (shift 0.008 mm) 28 / 33 / 34 -> 23 / 23 / 26 products at 100^2 / 200^2 /
+  400^2.  Steady rolling keeps the linear interpolation of the tractions (with the ratio: 40 -> 47
+  products at 200^2, 46 -> 49 at 400^2).
 * Element-wise Gauss-Seidel (CONTACT's SteadyGS) costs O(N^2) per sweep and O(mx) sweeps
   (6.8 s / 211 s in CONTACT); not pursued.
 
