@@ -31,7 +31,10 @@ sensitive):
    CONTACT; the start-up (``python -X importtime -c "import conformal"``
    and the wall time of a process that only imports the package, less that of an empty
    process); one small solve as a process (``conformal solve`` of case circ, n = 50, steady
-   rolling, exact theory); and every half-space row as a ratio to CONTACT's time for it.
+   rolling, exact theory); CONTACT's own performance case of the shift (T = 1, the Manchester right
+   wheel at 6.2 mm, 71 x 81 elements: tests/reference/contact_perfc/tang_problm_1s.inp) solved as
+   CONTACT runs it, the whole job and its shift against CONTACT's stored times, with the contact and
+   slip element counts against CONTACT's; and every half-space row as a ratio to CONTACT's time for it.
 
 ``--quick``: n = 25, 50, 100, a 21 x 15 FE patch instead of 51 x 39, the smallest FE scene only,
 the Manchester sequence at 0, 5 and 7 mm only (0.4 mm elements), one demo run (used by tests/studies/test_performance_study.py).  Writes

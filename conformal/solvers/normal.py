@@ -57,6 +57,11 @@ PRECONDITION_FROM = 2500
 #: preconditioned iteration needs fewer products: measured on the Manchester A-2.2 sweep's
 #: 55 x 33 patch grids, 9 instead of 21 iterations (3-4 ms instead of 9 ms a solve)
 PRECONDITION_WARM_FROM = 400
+#: prescribed approach (:func:`_solve_for_approach`): each inner force-prescribed solve stops at this
+#: times the last relative mismatch of the approach (at most 1e-3, at least 0.1 tol) until the
+#: mismatch is below 10 tol, then the same force is solved to 0.1 tol; 0 solves every inner
+#: problem to 0.1 tol.  CONTACT's shift performance case (71 x 81, tests/reference/contact_perfc,
+#: tol 1e-7): 34 instead of 49 iterations, FN the same to 1e-8
 INEXACT_SECANT = 0.01
 
 
@@ -305,7 +310,8 @@ def _solve_for_approach(op, pc, a_self, E_star, h, delta, dA, tol, maxit, p_star
     The approach above first contact, d = approach - min h, grows monotonically with FN (as
     FN^(2/3) for Hertz, FN for a flat punch), so the secant runs on log FN against log d; each
     inner solve starts from the previous pressure.  A direct projected CG with the approach
-    prescribed was measured to oscillate for many iterations from a poor first guess.
+    prescribed was measured to oscillate for many iterations from a poor first guess.  The inner
+    solves are loose while the secant is far from the approach (:data:`INEXACT_SECANT`).
     Returns (p, u, total inner iterations, relative approach mismatch)."""
     hmin = weighted.first_touch(h)
     d_target = delta - hmin

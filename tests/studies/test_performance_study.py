@@ -62,6 +62,9 @@ def test_performance_study_quick(tmp_path):
     mb = res["mbench"][0]
     assert "error" not in mb and mb["cases"] == 3 and mb["max_FN_error"] < 0.01
     assert res["startup"]["importtime_s"] < 0.15
+    # CONTACT's shift performance case: the same contact and slip elements as CONTACT
+    pc = res["perfc_shift"]
+    assert (pc["n_contact"], pc["n_slip"]) == (3148, 1730) and pc["converged"]
     for r in res["contact_ratios"]:
         assert r["ratio"] == pytest.approx(r["ours_s"] / r["contact_s"], rel=1e-12) and r["source"]
     assert "## Against CONTACT (issue 23)" in text
