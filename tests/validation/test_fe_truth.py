@@ -335,3 +335,29 @@ def test_flange_625_reference_body_size_at_prescribed_loads():
     d = rec["summary"]["convergence"]["larger body"]["loaded"]
     assert abs(d["FN"]) < 0.005 and 0.0 < d["pmax"] < 0.015 and abs(d["area"]) < 0.03
     assert abs(d["flank_share_spread"]) < 0.002
+
+
+def test_truth_part_file_keeps_other_entries_and_supersedes_old_references(tmp_path):
+    """studies/fe_truth_convergence.py: a partial run adds its entry to the scene's part file and
+    keeps the others; a part file stored on other reference options is kept under "superseded"
+    (not compared, not lost); the 6.25 mm reference meshes the truth's own patch at about a / 6
+    (fec_n 8 of the half-space estimate) with the candidate box enlarged."""
+    import json
+
+    sys.path.insert(0, str(ROOT / "studies"))
+    import fe_truth_convergence as ftc
+
+    path = tmp_path / "s.json"
+    old = {"scene": "s", "base_options": {"fec_n": 6}, "wheel_load": 1.0, "truths": {"reference": {"x": 1}},
+           "models": {"m": {"y": 2}}}
+    path.write_text(json.dumps(old))
+    fresh = {"scene": "s", "base_options": {"fec_n": 8}, "wheel_load": 1.0}
+    ftc._update(path, fresh, "truths", "reference", {"x": 3})
+    ftc._update(path, fresh, "truths", "larger body", {"x": 4})
+    ftc._update(path, fresh, "models", "m", {"y": 5})
+    rec = json.loads(path.read_text())
+    assert rec["truths"] == {"reference": {"x": 3}, "larger body": {"x": 4}} and rec["models"] == {"m": {"y": 5}}
+    assert len(rec["superseded"]) == 1 and rec["superseded"][0]["truths"] == {"reference": {"x": 1}}
+    assert rec["superseded"][0]["base_options"] == {"fec_n": 6}
+    ref = ftc.reference_options("flange_y6.25")
+    assert ref["fec_n"] == 8 and ref["fec_slave"] == 2.0 and ftc.reference_options("flange_y6.2") == ftc.gt.TRUTH
