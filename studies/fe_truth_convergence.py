@@ -342,6 +342,11 @@ def run_scene(name, scene, variants: dict, parts: Path, only=None, models=True, 
             old = rec["models"].get(label)
             if old is not None and abs(old.get("target_LV", -1) - t["LV"]) < 1e-9 and "flank_share_spread" in old:
                 continue
+            kept = _kept_model(rec, label, t["LV"])
+            if kept is not None:
+                print(f"{name}: {label} kept (matched to L/V {kept['target_LV']:.5f})", flush=True)
+                rec = _update(path, fresh, "models", label, kept)
+                continue
             print(f"{name}: {label}", flush=True)
             hs = rec["models"].get("conformal half-space" if n is None else f"conformal half-space, grid n = {n}", {})
             start = {"dy": hs["dy"], "slope": hs["slope"]} if infl == "fe" and "slope" in hs else None
@@ -355,6 +360,21 @@ def run_scene(name, scene, variants: dict, parts: Path, only=None, models=True, 
                   f"flank {100 * m['flank_share']:.2f} % L/V {m['LV']:.4f} ({m['wall_s']:.0f} s)"), flush=True)
             rec = _update(path, fresh, "models", label, m)
     return rec
+
+
+#: L/V: the production model's match tolerance (:func:`fe_truth_structure.match_lv`)
+LV_TOL = 2e-4
+
+
+def _kept_model(rec: dict, label: str, target_lv: float) -> dict | None:
+    """A production row of a superseded reference whose L/V target lies within the match
+    tolerance LV_TOL of the new reference's (a rerun would match no closer), marked with the
+    reference it was matched to; None where there is none."""
+    for old in reversed(rec.get("superseded", [])):
+        m = old.get("models", {}).get(label)
+        if m is not None and "FN" in m and "flank_share_spread" in m and abs(m["target_LV"] - target_lv) < LV_TOL:
+            return dict(m, matched_to=old["base_options"])
+    return None
 
 
 def _say(name, label, r):
@@ -462,7 +482,8 @@ def build(out: Path) -> dict:
                      f"{m['LV']:.4f} | "
                      f"{100 * e['FN']:+.2f} % | {100 * e['pmax']:+.2f} % | {100 * e['area']:+.2f} % | "
                      f"{100 * e['flank_share']:+.2f} / {100 * e.get('flank_share_spread', float('nan')):+.2f} | "
-                     f"{m['wall_s']:.0f} |")
+                     f"{m['wall_s']:.0f} |" + ("" if "matched_to" not in m else
+                                               f" matched to L/V {m['target_LV']:.5f} (reference {m['matched_to']})"))
     L += ["", "Truth runs:", ""]
     for rec in recs:
         for label, r in rec["truths"].items():
