@@ -507,6 +507,9 @@ def _angle_table(rows: Any) -> tuple:
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in row)):
             raise InputError(f"{key}: each row is three numbers [alpha (rad), mu_static, mu_kinetic], got {row!r}")
         a, ms, mk = (float(v) for v in row)
+        if abs(a) > math.pi:          # a contact angle lies within +-pi/2: 70 is degrees
+            raise InputError(f"{key}: the angle alpha is in rad and must lie within +-pi, got {a:g} "
+                             f"(degrees? {a:g} deg = {math.radians(a):.4g} rad)")
         if not 0.0 < mk <= ms:
             raise InputError(f"{key}: each row needs 0 < mu_kinetic <= mu_static, got {row!r}")
         out.append((a, ms, mk))
