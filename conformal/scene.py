@@ -944,6 +944,9 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: s
     if not isinstance(data, Mapping):
         raise InputError(f"a scene must be a table of sections, got {type(data).__name__}")
     unknown = sorted(set(data) - set(SECTIONS) - {"history"})
+    if "vehicle" in unknown:          # a vehicle scene (conformal.dynamics.scene) given to solve
+        raise InputError("[vehicle]: this is a vehicle scene (suspended wheelset); run it with `conformal "
+                         "simulate` or `conformal stability`, a contact scene has [geometry] and [load]")
     if unknown:
         raise InputError(f"[{unknown[0]}]: unknown section{_did_you_mean(unknown[0], SECTIONS)} "
                          f"(known: {', '.join(SECTIONS[1:])})")

@@ -246,6 +246,9 @@ def scene_from_dict(data: dict, base_dir: str | Path = ".", name: str = "scene")
     ...     print(e)
     [vehicle] mas: unknown key (did you mean 'mass'?)
     """
+    if "vehicle" not in data and any(k in data for k in ("geometry", "load", "kinematics")):
+        raise InputError("[vehicle]: missing; this is a contact scene ([geometry], [load]): solve it with "
+                         "`conformal solve`, a vehicle scene has [vehicle], [track], [wheels], [contact]")
     for k in data:
         if k not in SECTIONS:
             raise InputError(f"[{k}]: unknown section{_closest(k, SECTIONS)}")
