@@ -599,7 +599,7 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
         flange_back_pos=sec.number("flange_back_pos"),
         element_size_s=_element_size_s(sec),
         smoothing=sec.number("smoothing", d.smoothing, nonnegative=True),
-        element_size=sec.number("element_size", positive=True),
+        element_size=_element_size(sec),
         patch_combine=sec.number("patch_combine", d.patch_combine, nonnegative=True),
         wheel_z=sec.choice("wheel_z", ("down", "up", "auto"), d.wheel_z),
         rail_z=sec.choice("rail_z", ("down", "up", "auto"), d.rail_z),
@@ -617,6 +617,20 @@ def _flag(sec: "_Section", key: str) -> bool:
     if not isinstance(v, bool):
         raise sec.error(key, f"must be true or false, got {v!r}")
     return v
+
+
+#: mm, the largest [geometry] element_size: one element then covers a whole contact patch (a larger one
+#: reaches beyond the rail head: the grid's surface is not found)
+MAX_ELEMENT_SIZE = 20.0
+
+
+def _element_size(sec: "_Section") -> float | None:
+    """``[geometry] element_size`` (mm): > 0 and at most MAX_ELEMENT_SIZE."""
+    value = sec.number("element_size", positive=True)
+    if value is not None and value > MAX_ELEMENT_SIZE:
+        raise sec.error("element_size", f"must be <= {MAX_ELEMENT_SIZE:g} mm (one element then covers a whole "
+                        f"contact patch; typical 0.1-1 mm), got {value:g}")
+    return value
 
 
 def _element_size_s(sec: "_Section") -> float | None:
@@ -898,9 +912,36 @@ def scene_warnings(scene: "Scene") -> list[str]:
             out.append(f"[kinematics] {', '.join(given)}: theory {scene.model.theory!r} solves the normal problem "
                        "only; the creepages are not used (FX = FY = MZ = 0); a tangential theory (fastsim, "
                        "exact, conformal, ...) uses them")
+    out += unread_model_options(scene)
     if isinstance(geo, WheelRailGeometry) and abs(geo.rail_cant) > CANT_WARN:
         out.append(f"[geometry] rail_cant = {geo.rail_cant:g} rad is steeper than 1:15 ({CANT_WARN:.4f} rad); "
                    "rails are inclined 1:20 (0.05) or 1:40 (0.025): is this the cant in rad?")
+    return out
+
+
+def unread_model_options(scene: "Scene", models: Registry = MODELS) -> list[str]:
+    """Warnings for ``[model]`` keys the scene's theory does not read (a key of another theory, or
+    an FE key without ``influence = "fe"``): valid, but without effect on this solve.
+
+    >>> s = scene_from_dict({"geometry": {"kind": "quadratic", "A": 1e-3, "B": 1e-3},
+    ...                      "load": {"normal_force": 1e4}, "model": {"theory": "exact", "fec_n": 6}})
+    >>> unread_model_options(s)[0][:64]
+    "[model] fec_n: not read by theory 'exact' (read by fe_contact); "
+    """
+    theory = scene.model.theory
+    if theory not in models:
+        return []
+    model = models[theory]
+    own = {o.key for o in model.options} | {o.key for me in model.methods for o in models.method(me).options}
+    fe_keys = {o.key for o in models.method("fe").options} if "fe" in {me.name for me in models.methods} else set()
+    out = []
+    for key in scene.model.options:
+        if key not in own:
+            readers = ", ".join(models.readers(key)) or "no theory"
+            out.append(f"[model] {key}: not read by theory {theory!r} (read by {readers}); it has no effect here")
+        elif key in fe_keys and scene.model.influence != "fe":
+            out.append(f"[model] {key}: read only with [model] influence = \"fe\" (FE influence numbers), this "
+                       f"scene has influence = {scene.model.influence!r}; it has no effect here")
     return out
 
 
