@@ -994,8 +994,8 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: s
     for sec in SECTIONS[1:]:
         if sec in data and not isinstance(data[sec], Mapping):
             raise InputError(f"[{sec}] must be a table (a [{sec}] section), got {sec} = {data[sec]!r}")
-    if "name" in data and not isinstance(data["name"], str):
-        raise InputError(f"name: must be a string, got {data['name']!r}")
+    if "name" in data and (not isinstance(data["name"], str) or not data["name"].strip()):
+        raise InputError(f"name: must be a non-empty string (it names the outputs), got {data['name']!r}")
     if "geometry" not in data:
         raise InputError("[geometry] kind: missing (one of " + ", ".join(GEOMETRY_KINDS) + ")")
     if "load" not in data:
