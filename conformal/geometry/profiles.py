@@ -118,6 +118,9 @@ def _read_csv(path: Path) -> np.ndarray:
                 raise InputError(f"not a profile: {path} (line {lineno} is not two numbers 'y, z' in mm)") from None
             raise InputError(f"profile {path.name}: line {lineno}: need two numbers 'y, z', got "
                              f"{text[:60]!r}") from None
+        if len(parts) > 2:               # x, y, z points or a column more: which two are y, z is a guess
+            raise InputError(f"profile {path.name}: line {lineno}: {len(parts)} values; a profile file has two "
+                             f"columns 'y, z' in mm, got {text[:60]!r}")
         rows.append((y, z, lineno))
     return _as_array(rows, path)
 
