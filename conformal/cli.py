@@ -338,7 +338,10 @@ def _join_negative_ranges(argv: list[str]) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     argv = _join_negative_ranges(list(sys.argv[1:] if argv is None else argv))
     parser = build_parser(argv[0] if argv and argv[0] in CORE_COMMANDS else None)
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:       # --help, --version, or a bad command line (one line, _Parser.error)
+        return int(exc.code or 0)
     try:
         return int(args.func(args) or 0)
     except ConformalError as exc:

@@ -206,6 +206,89 @@ def _cases():
          "[friction] angle_table"),
         ("angle_table row of two", WHEEL_RAIL, {"friction.angle_table": [[0.0, 0.3]]}, "[friction] angle_table"),
     ]
+    out += _newer_cases()
+    return out
+
+
+FE_CONTACT = {**WHEEL_RAIL, "model": {"theory": "fe_contact"}}
+FE_INFLUENCE = {**WHEEL_RAIL, "model": {"theory": "conformal", "influence": "fe"}}
+
+
+def _newer_cases():
+    """Inputs of the features that came later (angle_table, fe_contact's and the FE influence
+    numbers' options, registry options), units a new user gets wrong, misspelt keys."""
+    nan, inf = math.nan, math.inf
+    out = []
+    for tag, v in (("nan angle", [[nan, .3, .3]]), ("text", "steep"), ("empty", []), ("mu negative", [[0., -.3, -.3]]),
+                   ("inf mu", [[0., inf, .3]]), ("rows of 4", [[0., .3, .3, .1]]),
+                   ("angles in degrees", [[0., .3, .3], [70., .2, .2]]), ("duplicate angles", [[0., .3, .3], [0., .2, .2]]),
+                   ("mu zero", [[0., 0., 0.]]), ("not rows", [0.1, 0.3, 0.3]), ("row text", [["a", .3, .3]]),
+                   ("bool", True)):
+        out.append((f"angle_table {tag}", WHEEL_RAIL, {"friction.angle_table": v}, "[friction] angle_table"))
+    for key, v in (("fec_n", 0), ("fec_n", "abc"), ("fec_n", 2.5), ("fec_h", -1.0), ("fec_h", 0.0), ("fec_order", 3),
+                   ("fec_body", "cube"), ("fec_body", "Disc"), ("fec_body", True), ("fec_section_size", -1.0),
+                   ("fec_section_size", 0.0), ("fec_growth", nan), ("fec_far_field", "free"), ("fec_solver", "mumps"),
+                   ("fec_estimate", "guess"), ("fec_slave", 0.5), ("fec_patch", 0.0), ("fec_body_size", -2.0),
+                   ("fec_h_max", inf), ("fec_section_h_max", -1.0)):
+        out.append((f"fe_contact {key} = {v!r}", FE_CONTACT, {f"model.{key}": v}, f"[model] {key}"))
+    out += [
+        ("fe_contact fec_colour", FE_CONTACT, {"model.fec_colour": 1}, "[model] fec_colour: unknown key"),
+        ("fe_contact fec_nn", FE_CONTACT, {"model.fec_nn": 4}, "did you mean 'fec_n'"),
+        ("fe_contact nested n 0", FE_CONTACT, {"model.fe_contact": {"n": 0}}, "[model] fec_n"),
+        ("fe_contact nested misspelt", FE_CONTACT, {"model.fe_contact": {"bodie": "disc"}}, "[model.fe_contact] bodie"),
+        ("fe_contact section body on a quadratic scene", PLANAR,
+         {"model.theory": "fe_contact", "model.fec_body": "section", "kinematics": DELETE}, "[model] fec_body"),
+    ]
+    for key, v in (("fe_closure", "open"), ("fe_order", 3), ("fe_solver", "mumps"), ("fe_h_patch", -1.0),
+                   ("fe_conform", "some"), ("fe_growth", 0.0), ("fe_body_size", 0.0), ("fe_method", "splitt"),
+                   ("fe_collocation", "corner"), ("fe_far_field", 3), ("fe_h_max", nan), ("fe_h_load", "abc")):
+        out.append((f"fe {key} = {v!r}", FE_INFLUENCE, {f"model.{key}": v}, f"[model] {key}"))
+    out += [
+        ("fe nested closure 5", FE_INFLUENCE, {"model.fe": {"closure": 5}}, "[model] fe_closure"),
+        ("blanco_variant 5", WHEEL_RAIL, {"model.theory": "conformal", "model.blanco_variant": 5},
+         "[model] blanco_variant"),
+        ("blanco_method quad", WHEEL_RAIL, {"model.theory": "conformal", "model.blanco_method": "quad"},
+         "[model] blanco_method"),
+        ("creepage capitalised", WHEEL_RAIL, {"model.theory": "conformal", "model.creepage": "Surface"},
+         "[model] creepage"),
+        ("theory capitalised", PLANAR, {"model.theory": "Exact"}, "[model] theory"),
+        ("theory with a space", PLANAR, {"model.theory": " exact"}, "[model] theory"),
+        ("tol 0", PLANAR, {"model.tol": 0.0}, "[model] tol"),
+        ("flexibilities text", PLANAR, {"model.flexibilities": "abc"}, "[model] flexibilities"),
+        ("influence fe with exact", PLANAR, {"model.theory": "exact", "model.influence": "fe"}, "[model] influence"),
+        # units: metres or degrees for mm or rad
+        ("wheel_radius in m", WHEEL_RAIL, {"geometry.wheel_radius": 0.46}, "[geometry] wheel_radius"),
+        ("gauge in m", WHEEL_RAIL, {"geometry.gauge": 1.435}, "[geometry] gauge"),
+        ("yaw in degrees", WHEEL_RAIL, {"geometry.yaw": 5.0}, "[geometry] yaw"),
+        ("element_size 1 m", WHEEL_RAIL, {"geometry.element_size": 1e3}, "[geometry] element_size"),
+        ("element_size nan", WHEEL_RAIL, {"geometry.element_size": nan}, "[geometry] element_size"),
+        ("grid n 1e9", PLANAR, {"grid.n": 10 ** 9}, "[grid] n"),
+        ("grid n 0", PLANAR, {"grid.n": 0}, "[grid] n"),
+        ("grid dx -1", PLANAR, {"grid": {"mx": 10, "my": 10, "dx": -1.0, "dy": 1.0}, "model.theory": "exact"}, "[grid] dx"),
+        ("grid dy nan", PLANAR, {"grid": {"mx": 10, "my": 10, "dx": 1.0, "dy": nan}, "model.theory": "exact"}, "[grid] dy"),
+        ("grid mx 0", PLANAR, {"grid": {"mx": 0, "my": 10, "dx": 1.0, "dy": 1.0}, "model.theory": "exact"}, "[grid] mx"),
+        ("grid xl nan", PLANAR, {"grid": {"mx": 10, "my": 10, "dx": 1.0, "dy": 1.0, "xl": nan},
+                                 "model.theory": "exact"}, "[grid] xl"),
+        ("nu below Kalker's table", PLANAR, {"material.nu": -0.99}, "[material] nu"),
+        ("lateral_shift 1 km", WHEEL_RAIL, {"geometry.lateral_shift": 1e6}, "[geometry] lateral_shift"),
+        ("lateral_shift nan", WHEEL_RAIL, {"geometry.lateral_shift": nan}, "[geometry] lateral_shift"),
+        ("wheel_load negative", WHEEL_RAIL, {"load.wheel_load": -1e4}, "[load] wheel_load"),
+        ("wheel_load nan", WHEEL_RAIL, {"load.wheel_load": nan}, "[load] wheel_load"),
+        # misspelt keys, a key in the wrong section
+        ("misspelt Nu", PLANAR, {"material.Nu": 0.3}, "did you mean 'nu'"),
+        ("misspelt Mu", PLANAR, {"friction.Mu": 0.3}, "did you mean 'mu'"),
+        ("misspelt a for A", PLANAR, {"geometry.a": 0.3}, "did you mean 'A'"),
+        ("misspelt normal_froce", PLANAR, {"load.normal_froce": 1.0}, "did you mean 'normal_force'"),
+        ("misspelt ksi", PLANAR, {"kinematics.ksi": 1e-3}, "[kinematics] ksi: unknown key"),
+        ("misspelt N", PLANAR, {"grid.N": 10}, "did you mean 'n'"),
+        ("misspelt tehory", PLANAR, {"model.tehory": "exact"}, "did you mean 'theory'"),
+        ("xi in [load]", PLANAR, {"load.xi": 1e-3}, "[load] xi: unknown key"),
+        ("misspelt lateral_shfit", WHEEL_RAIL, {"geometry.lateral_shfit": 1.0}, "did you mean 'lateral_shift'"),
+        ("misspelt wheelprofile", WHEEL_RAIL, {"geometry.wheelprofile": "S1002"}, "did you mean 'wheel_profile'"),
+        ("misspelt section materail", PLANAR, {"materail.G": 1.0}, "did you mean 'material'"),
+        ("name empty", PLANAR, {"name": ""}, "name: must be a non-empty string"),
+        ("a vehicle scene", PLANAR, {"vehicle.mass": 1000.0}, "[vehicle]: this is a vehicle scene"),
+    ]
     return out
 
 
@@ -306,6 +389,119 @@ def _write(t, name, content) -> str:
     p = t / name
     (p.write_bytes if isinstance(content, bytes) else p.write_text)(content)
     return str(p)
+
+
+# ... the commands that came later (sweep, inp, stresses, simulate, stability) and argparse's own
+_DECK = (ROOT / "tests" / "reference" / "contact_decks" / "carter2d.inp").read_text(encoding="latin-1")
+_VEHICLE = (SCENES / "seed_wheelset.toml").read_text(encoding="utf-8")
+
+
+def _wheel_rail_file(t) -> str:
+    return _write(t, "wr.toml", to_toml(WHEEL_RAIL))
+
+
+def _deck(t, old: str = "", new: str = "", name: str = "d.inp") -> str:
+    assert old in _DECK
+    return _write(t, name, _DECK.replace(old, new, 1) if old else _DECK)
+
+
+def _vehicle(t, old: str = "", new: str = "") -> str:
+    assert old in _VEHICLE
+    return _write(t, "v.toml", _VEHICLE.replace(old, new, 1) if old else _VEHICLE)
+
+
+def _stresses(t, section: str = "") -> str:
+    return _write(t, "st.toml", to_toml(edit(PLANAR, {"model.theory": "exact", "grid.n": 12})) + section)
+
+
+CLI_ARGS += [(f"sweep --shift {tag}", lambda t, v=v: ["sweep", _wheel_rail_file(t), "--shift", v, "--out", str(t / "o")],
+              "--shift") for tag, v in (("two parts", "0:10"), ("text", "a:b:c"), ("step 0", "0:10:0"),
+                                        ("reversed", "10:0:1"), ("negative step", "0:10:-1"),
+                                        ("huge count", "0:1e9:1e-3"), ("nan", "nan:1:0.5"), ("inf", "0:inf:1"),
+                                        ("empty", ""))]
+CLI_ARGS += [
+    ("sweep --out a file", lambda t: ["sweep", _wheel_rail_file(t), "--out", _planar_file(t)], "--out"),
+    ("sweep --solve --workers 0", lambda t: ["sweep", _wheel_rail_file(t), "--solve", "--workers", "0"], "--workers"),
+    ("sweep --solve huge count", lambda t: ["sweep", _wheel_rail_file(t), "--solve", "--shift", "0:1e6:0.01"],
+     "--shift"),
+    ("sweep --workers without --solve", lambda t: ["sweep", _wheel_rail_file(t), "--workers", "3"], "--workers"),
+    ("inp missing deck", lambda t: ["inp", str(t / "none.inp")], "none.inp"),
+    ("inp deck a folder", lambda t: ["inp", str(t)], "no such file"),
+    ("inp empty deck", lambda t: ["inp", _write(t, "e.inp", "")], "e.inp: no cases"),
+    ("inp bad control digits", lambda t: ["inp", _deck(t, "203100", "2x3100")], "PBTNFS"),
+    ("inp module 7", lambda t: ["inp", _deck(t, " 3  MODULE", " 7  MODULE")], "module 7"),
+    ("inp truncated", lambda t: ["inp", _write(t, "tr.inp", _DECK[:_DECK.index("   999")])], "unexpected end of file"),
+    ("inp --cases text", lambda t: ["inp", _deck(t), "--cases", "a"], "--cases"),
+    ("inp --cases 0", lambda t: ["inp", _deck(t), "--cases", "0"], "--cases"),
+    ("inp --cases beyond the deck", lambda t: ["inp", _deck(t), "--cases", "99"], "--cases"),
+    ("inp --out a file", lambda t: ["inp", _deck(t), "--out", _planar_file(t)], "--out"),
+    ("inp FN nan", lambda t: ["inp", _deck(t, "35780.   -0.00024", "nan   -0.00024")], "line 17"),
+    ("inp G negative", lambda t: ["inp", _deck(t, "82000.   82000.", "-82000.   82000.")], "G1"),
+    ("inp binary", lambda t: ["inp", _write(t, "b.inp", bytes(range(256)) * 4)], "b.inp"),
+    ("inp digit out of range", lambda t: ["inp", _deck(t, "203100", "209100")], "control digit T = 9"),
+    ("inp nu 0.5", lambda t: ["inp", _deck(t, "0.280    0.280    82000.", "0.500    0.280    82000.")], "nu1"),
+    ("inp MX 0", lambda t: ["inp", _deck(t, "  55   1   -1.0500", "  0   1   -1.0500")], "mx, my"),
+    ("inp DX 0", lambda t: ["inp", _deck(t, "0.0400   200.0", "0.0000   200.0")], "dx, dy"),
+    ("stresses --depth -1", lambda t: ["stresses", _stresses(t), "--depth", "-1"], "--depth"),
+    ("stresses --depth nan", lambda t: ["stresses", _stresses(t), "--depth", "nan"], "--depth"),
+    ("stresses --depth 0", lambda t: ["stresses", _stresses(t), "--depth", "0"], "--depth"),
+    ("stresses --k 0", lambda t: ["stresses", _stresses(t), "--k", "0"], "--k"),
+    ("stresses --k -5", lambda t: ["stresses", _stresses(t), "--k", "-5"], "--k"),
+    ("stresses --k inf", lambda t: ["stresses", _stresses(t), "--k", "inf"], "--k"),
+    ("stresses --body 3", lambda t: ["stresses", _stresses(t), "--body", "3"], "--body"),
+    ("stresses --depth text", lambda t: ["stresses", _stresses(t), "--depth", "abc"], "--depth"),
+    ("stresses --plot suffix", lambda t: ["stresses", _stresses(t), "--plot", str(t / "x.xyz")], "--plot"),
+    ("stresses --vtu under a file", lambda t: ["stresses", _stresses(t), "--vtu", _planar_file(t) + "/x.vtu"], "--vtu"),
+    ("stresses on hertz", lambda t: ["stresses", _planar_file(t, **{"model.theory": "hertz"})], "'hertz'"),
+]
+CLI_ARGS += [(f"[stresses] {text.split(' = ')[0]} = {text.split(' = ')[1]}",
+              lambda t, text=text: ["stresses", _stresses(t, f"[stresses]\n{text}\n")], key) for text, key in (
+    ("n_depths = 0", "[stresses] n_depths"), ("n_depths = 1000000000", "[stresses] n_depths"),
+    ("n_depths = 2.5", "[stresses] n_depths"), ("body = 3", "[stresses] body"), ('k = "abc"', "[stresses] k"),
+    ("dept = 2.0", "[stresses] dept: unknown key"), ("k = -300.0", "[stresses] k"), ("alpha_dv = nan", "[stresses] alpha_dv"),
+    ("tau_e = -1.0", "[stresses] tau_e"), ("depth = -2.0", "[stresses] depth"), ("fe_body = true", "[stresses] fe_body"))]
+CLI_ARGS += [
+    ("no command", lambda t: [], "command"),
+    ("unknown command", lambda t: ["solv", _planar_file(t)], "'solv'"),
+    ("unknown option", lambda t: ["solve", _planar_file(t), "--thoery", "exact"], "--thoery"),
+    ("stability --method eig", lambda t: ["stability", _vehicle(t), "--method", "eig"], "--method"),
+    ("table build without --out", lambda t: ["table", "build"], "--out"),
+    ("cache purge", lambda t: ["cache", "purge"], "'purge'"),
+    ("table info a folder", lambda t: ["table", "info", str(t)], "creep table"),
+    ("table info empty", lambda t: ["table", "info", _write(t, "em.npz", b"")], "not a creep table"),
+    ("precompute --sweep without range", lambda t: ["precompute", _wheel_rail_file(t), "--sweep", "shift",
+                                                    "--dry-run"], "--sweep"),
+    ("precompute --sweep speed", lambda t: ["precompute", _wheel_rail_file(t), "--sweep", "speed=0:1:0.5",
+                                            "--dry-run"], "--sweep"),
+    ("precompute --sweep step 0", lambda t: ["precompute", _wheel_rail_file(t), "--sweep", "shift=0:1:0",
+                                             "--dry-run"], "--sweep"),
+    ("precompute a planar scene", lambda t: ["precompute", _planar_file(t), "--sweep", "shift=0:1:0.5", "--dry-run"],
+     "[geometry] kind"),
+    ("simulate --speed -10", lambda t: ["simulate", _vehicle(t), "--speed", "-10"], "--speed"),
+    ("simulate --speed nan", lambda t: ["simulate", _vehicle(t), "--speed", "nan"], "--speed"),
+    ("simulate --speed in km/h", lambda t: ["simulate", _vehicle(t), "--speed", "5000"], "--speed"),
+    ("simulate --out a file", lambda t: ["simulate", _vehicle(t), "--out", _planar_file(t)], "--out"),
+    ("stability --v-max 0", lambda t: ["stability", _vehicle(t), "--v-max", "0"], "--v-max"),
+    ("stability --tol nan", lambda t: ["stability", _vehicle(t), "--method", "nonlinear", "--tol", "nan"], "--tol"),
+    ("a contact scene to simulate", lambda t: ["simulate", _planar_file(t)], "this is a contact scene"),
+]
+CLI_ARGS += [(f"vehicle {tag}", lambda t, cmd=cmd, old=old, new=new: [cmd, _vehicle(t, old, new)]
+              + (["--out", str(t / "o")] if cmd != "solve" else []), key) for tag, cmd, old, new, key in (
+    ("mass -1", "stability", "mass = 1568.0", "mass = -1.0", "[vehicle] mass"),
+    ("mas misspelt", "stability", "mass = 1568.0", "mas = 1568.0", "did you mean 'mass'"),
+    ("creep_model fast", "stability", 'creep_model = "fastsim"', 'creep_model = "fast"', "[contact] creep_model"),
+    ("t_end 0", "simulate", "t_end = 2.0", "t_end = 0.0", "[simulation] t_end"),
+    ("method Euler", "simulate", "t_end = 2.0", 't_end = 2.0\nmethod = "Euler"', "[simulation] method"),
+    ("wheel_radius in m", "stability", "wheel_radius = 473.8", "wheel_radius = 0.4738", "[wheels] wheel_radius"),
+    ("gauge in m", "stability", "gauge = 1435.0", "gauge = 1.435", "[track] gauge"),
+    ("fastsim_n 0", "stability", "mu = 0.5", "mu = 0.5\nfastsim_n = 0", "[contact] fastsim_n"),
+    ("wheel_load nan", "stability", "wheel_load = 49000.0", "wheel_load = nan", "[vehicle] wheel_load"),
+    ("wavelength 0", "simulate", "wavelength = 11887.2", "wavelength = 0.0", "[track.irregularity] wavelength"),
+    ("rail middle", "simulate", 'rail = "right"', 'rail = "middle"', "[track.irregularity] rail"),
+    ("rtol 0", "simulate", "t_end = 2.0", "t_end = 2.0\nrtol = 0.0", "[simulation] rtol"),
+    ("output_step -1", "simulate", "t_end = 2.0", "t_end = 2.0\noutput_step = -1.0", "[simulation] output_step"),
+    ("speed in km/h", "simulate", "speed = 65.0", "speed = 234.0e1", "[simulation] speed"),
+    ("to solve", "solve", "", "", "[vehicle]: this is a vehicle scene"))]
 
 
 @pytest.mark.parametrize("name, argv, key", CLI_ARGS, ids=[c[0] for c in CLI_ARGS])
