@@ -341,8 +341,8 @@ def _set_toml_key(data: dict, path: str, value: Any) -> None:
 
 
 def _set_material_key(table: dict, keys: list[str], value: Any, path: str) -> None:
-    """``material.G|E|nu`` (body 1, and body 2 while the bodies are alike), ``material.body2.G|E|nu``
-    and the field names ``G1, nu1, G2, nu2`` (one body each)."""
+    """``material.G|E|nu`` (body 1, and body 2 while the bodies are alike), ``material.body2.G|E|nu``,
+    ``material.body2`` (the table) and the field names ``G1, nu1, G2, nu2`` (one body each)."""
     def body2() -> dict:
         if "body2" not in table:     # alike until now: body 2 keeps the current constants
             table["body2"] = {k: v for k, v in table.items() if k != "body2"}
@@ -362,6 +362,11 @@ def _set_material_key(table: dict, keys: list[str], value: Any, path: str) -> No
         put(table, keys[0], value)
     elif len(keys) == 2 and keys[0] == "body2" and keys[1] in ("G", "E", "nu"):
         put(body2(), keys[1], value)
+    elif keys == ["body2"]:          # the whole [material.body2] table (None: the bodies alike again)
+        if value is None:
+            table.pop("body2", None)
+        else:
+            table["body2"] = dict(value) if isinstance(value, Mapping) else value   # checked on validation
     else:
         key = ".".join(keys)
         raise InputError(f"[material] {key}: unknown key"

@@ -11,6 +11,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+import re
 import subprocess
 import sys
 
@@ -512,6 +513,94 @@ def test_cli_arguments_exit_2_one_line(tmp_path, capsys, name, argv, key):
     assert code == 2 and line.startswith("conformal: error:") and key in line, (code, err)
 
 
+# ----------------------------------------------------------------------------- files as a user gives them
+_RAIL = ROOT / "conformal" / "data" / "profiles" / "uic60_head_r300w21_analytic.csv"
+
+
+def _rail_rows() -> list[str]:
+    return [ln for ln in _RAIL.read_text(encoding="utf-8").splitlines() if ln.strip() and not ln.startswith("#")]
+
+
+def _profile(t, name, rows) -> dict:
+    return edit(WHEEL_RAIL, {"geometry.rail_profile": _write(t, name, "\n".join(rows) + "\n")})
+
+
+def _scaled(rows, fy, fz) -> list[str]:
+    return [f"{float(y) * fy:.6f}, {float(z) * fz:.6f}" for y, z in (r.split(",") for r in rows)]
+
+
+EXACT = edit(PLANAR, {"model.theory": "exact", "grid.n": 10})
+FILE_CASES = [
+    ("profile with NaN", lambda t: _profile(t, "nan.csv", _rail_rows()[:50] + ["nan, 1.0"] + _rail_rows()[50:]),
+     "[geometry] rail_profile: profile nan.csv: line"),
+    ("profile of one point", lambda t: _profile(t, "one.csv", _rail_rows()[:1]), "too few points"),
+    ("profile empty", lambda t: _profile(t, "empty.csv", []), "[geometry] rail_profile"),
+    ("profile in metres", lambda t: _profile(t, "m.csv", _scaled(_rail_rows(), 1e-3, 1e-3)), "span only"),
+    ("profile in micrometres", lambda t: _profile(t, "um.csv", _scaled(_rail_rows(), 1e3, 1e3)),
+     "at most 2000 mm long"),
+    ("profile of three columns", lambda t: _profile(t, "c3.csv", [r + ", 0.0" for r in _rail_rows()]), "two columns"),
+    ("profile zigzag", lambda t: _profile(t, "zig.csv", _rail_rows()[:100] + _rail_rows()[60:80] + _rail_rows()[100:]),
+     "points out of order"),
+    ("profile header only", lambda t: _profile(t, "hdr.csv", ["y,z"]), "too few points"),
+    ("profile with decimal commas", lambda t: _profile(t, "dc.csv", [r.replace(".", ",").replace(", ", ";")
+                                                                     for r in _rail_rows()]), "two columns"),
+    ("profile shuffled", lambda t: _profile(t, "shuf.csv", _rail_rows()[::7] + _rail_rows()[3::7]),
+     "the curve intersects itself"),
+    ("profile binary", lambda t: edit(WHEEL_RAIL, {"geometry.rail_profile": _write(t, "b.csv", bytes(range(256)))}),
+     "binary file"),
+    ("profile .prr without points", lambda t: edit(WHEEL_RAIL, {"geometry.rail_profile": _write(
+        t, "x.prr", "units.len.f = 1000\n")}), "point.begin"),
+    ("mu_table empty", lambda t: edit(EXACT, {"friction.mu_table": _write(t, "mu.txt", "")}), "[friction] mu_table"),
+    ("mu_table a folder", lambda t: edit(EXACT, {"friction.mu_table": str(t)}), "[friction] mu_table"),
+    ("mu_table NaN", lambda t: edit(EXACT, {"friction.mu_table": _write(t, "mu.txt", "nan\n" * 100)}),
+     "[friction] mu_table"),
+    ("rigid_slip a folder", lambda t: edit(EXACT, {"kinematics.rigid_slip": str(t)}), "[kinematics] rigid_slip"),
+    ("rigid_slip empty", lambda t: edit(EXACT, {"kinematics.rigid_slip": _write(t, "rs.txt", "")}),
+     "[kinematics] rigid_slip"),
+    ("influence_file a folder", lambda t: edit(EXACT, {"model.influence_file": str(t)}), "[model] influence_file"),
+    ("influence_file empty", lambda t: edit(EXACT, {"model.influence_file": _write(t, "if.txt", "")}),
+     "[model] influence_file"),
+    ("influence_file text", lambda t: edit(EXACT, {"model.influence_file": _write(t, "if.txt", "hello\n")}),
+     "[model] influence_file"),
+    ("creep table empty", lambda t: edit(PLANAR, {"model.theory": "table", "model.table": _write(t, "e.npz", "")}),
+     "[model] table"),
+    ("creep table a folder", lambda t: edit(PLANAR, {"model.theory": "table", "model.table": str(t)}), "[model] table"),
+    ("creep table text", lambda t: edit(PLANAR, {"model.theory": "table", "model.table": _write(t, "t.npz", "hi")}),
+     "[model] table: creep table"),
+    ("geometry file a folder", lambda t: edit(PLANAR, {"geometry": {"kind": "table", "file": str(t)}}),
+     "[geometry] file"),
+    ("geometry file NaN", lambda t: edit(EXACT, {"geometry": {"kind": "table", "file": _write(t, "g.txt", "nan " * 100)},
+                                               "grid": {"mx": 10, "my": 10, "dx": .5, "dy": .5}}), "[geometry] file"),
+]
+SWEEP_API = [
+    ("sweep shift empty list", dict(shift=[]), "--shift"),
+    ("sweep shift nan", dict(shift=[math.nan]), "--shift"),
+    ("sweep shift text", dict(shift="x"), "--shift"),
+    ("sweep shift list of text", dict(shift=["a"]), "--shift"),
+    ("sweep shift None", dict(shift=None), "--shift"),
+    ("sweep shift bool", dict(shift=True), "--shift"),
+    ("sweep shift list too long", dict(shift=[0.0] * 10001), "too many"),
+    ("sweep workers 0", dict(shift=[0.0], workers=0), "--workers"),
+    ("sweep unknown override", dict(shift=[0.0], model__colour=1), "[model] colour"),
+]
+
+
+@pytest.mark.parametrize("name, scene, key", FILE_CASES, ids=[c[0] for c in FILE_CASES])
+def test_files_refused_naming_the_key(tmp_path, name, scene, key):
+    with pytest.raises(ConformalError) as info:
+        conformal.solve(scene(tmp_path))
+    msg = str(info.value)
+    assert key in msg and "\n" not in msg and "Traceback" not in msg
+
+
+@pytest.mark.parametrize("name, kwargs, key", SWEEP_API, ids=[c[0] for c in SWEEP_API])
+def test_sweep_api_refuses(name, kwargs, key):
+    with pytest.raises(InputError, match=re.escape(key)):
+        conformal.sweep(WHEEL_RAIL, **kwargs)
+    with pytest.raises(InputError, match=r"\[geometry\] kind"):
+        conformal.sweep(PLANAR, shift=[0.0])
+
+
 # ----------------------------------------------------------------------------- the right answers
 RIGHT = [
     ("tol at its bound", {"model.tol": 1e-2}, lambda r: r.FX < 0),
@@ -529,6 +618,157 @@ RIGHT = [
 @pytest.mark.parametrize("name, changes, check", RIGHT, ids=[c[0] for c in RIGHT])
 def test_accepted_inputs_give_the_right_answer(name, changes, check):
     assert check(conformal.solve(edit(PLANAR, changes)))
+
+
+HERTZ = edit(PLANAR, {"model.theory": "hertz", "kinematics.xi": 0.0})
+#: valid values that a new user may mean otherwise (units): the right answer, checked against an
+#: analytic scaling or a limit
+RIGHT_AGAINST_THEORY = [
+    ("xi 1e10: full slip, |FX| = mu FN", edit(PLANAR, {"kinematics.xi": 1e10}),
+     lambda r: r.FX == pytest.approx(-0.3 * r.FN, rel=5e-3)),
+    ("G 82 (GPa meant): Hertz a 10 times larger (a ~ G^(-1/3))", edit(HERTZ, {"material.G": 82.0}),
+     lambda r: r.a == pytest.approx(10.0 * conformal.solve(HERTZ).a, rel=1e-9)),
+    ("normal_force 1e12: pmax ~ FN^(1/3)", edit(HERTZ, {"load.normal_force": 1e12}),
+     lambda r: r.pmax == pytest.approx(1e8 ** (1 / 3) * conformal.solve(HERTZ).pmax, rel=1e-9)),
+    ("a key of another theory: same answer, a warning", edit(PLANAR, {"model.fec_n": 6}),
+     lambda r: r.FX == conformal.solve(PLANAR).FX and r.warnings == [
+         "[model] fec_n: not read by theory 'fastsim' (read by fe_contact); it has no effect here"]),
+    ("bound given to exact is its default: no warning", edit(PLANAR, {"model.theory": "exact", "grid.n": 10}),
+     lambda r: not any("not read" in w for w in r.warnings)),
+]
+
+
+@pytest.mark.parametrize("name, scene, check", RIGHT_AGAINST_THEORY, ids=[c[0] for c in RIGHT_AGAINST_THEORY])
+def test_valid_surprising_inputs_give_the_right_answer(name, scene, check):
+    assert check(conformal.solve(scene))
+
+
+def test_fe_keys_without_fe_influence_warn():
+    from conformal.scene import scene_from_dict, unread_model_options
+
+    s = scene_from_dict(edit(WHEEL_RAIL, {"model.theory": "conformal", "model.fe_order": 2, "model.max_mx": 50}))
+    assert unread_model_options(s) == ['[model] fe_order: read only with [model] influence = "fe" (FE influence '
+                                       "numbers), this scene has influence = 'halfspace'; it has no effect here"]
+    assert unread_model_options(s.with_("model.influence", "fe")) == []
+
+
+def test_profile_order_and_repeated_points_do_not_change_the_answer(tmp_path):
+    rows = _rail_rows()
+    ref = conformal.solve(_profile(tmp_path, "r.csv", rows))
+    for name, r in (("rev.csv", rows[::-1]), ("dup.csv", rows[:50] + rows[49:])):
+        got = conformal.solve(_profile(tmp_path, name, r))
+        assert (got.FN, got.a, got.b) == pytest.approx((ref.FN, ref.a, ref.b), rel=1e-9)
+
+
+def test_version_and_fortran_exponents(tmp_path, capsys):
+    assert main(["--version"]) == 0 and capsys.readouterr().out.strip() == f"conformal {conformal.__version__}"
+    assert main(["inp", _deck(tmp_path)]) == 0
+    ref = json.loads(capsys.readouterr().out)
+    assert main(["inp", _deck(tmp_path, "1e-5     MAXGS", "1d-5     MAXGS", name="f.inp")]) == 0   # Fortran's D
+    assert json.loads(capsys.readouterr().out) == ref
+
+
+def _documented_keys():
+    """Every scene key the reference documents (scene._KEY_DOCS and the registry's [model] keys)."""
+    from dataclasses import fields
+
+    from conformal.registry import MODELS
+    from conformal.scene import _KEY_DOCS, ModelSpec
+
+    keys = [f"{sec}.{k}" for sec, docs in _KEY_DOCS.items() if sec != "[history]" for k in docs]
+    keys += [f"model.{f.name}" for f in fields(ModelSpec) if f.name != "options"] + [f"model.{k}" for k in MODELS.options()]
+    keys += [f"model.{me.name}.{o.name}" for me in MODELS.methods for o in me.options]      # [model.fe] order
+    return keys
+
+
+#: a valid value (and the scene it is valid in, and the keys it replaces) where the generic trials fail
+_KEY_VALUES = {
+    "material.E": (210000.0, PLANAR, {"material.G": DELETE}), "material.body2": ({"G": 23000.0, "nu": 0.31}, PLANAR, {}),
+    "friction.mu_static": (0.4, PLANAR, {"friction": {"mu_static": 0.4, "mu_kinetic": 0.3}}),
+    "friction.mu_kinetic": (0.2, PLANAR, {"friction": {"mu_static": 0.3, "mu_kinetic": 0.2}}),
+    "friction.angle_table": ([[-1.0, 0.3, 0.3], [0.0, 0.2, 0.2]], WHEEL_RAIL, {}),
+    "geometry.kind": ("quadratic", PLANAR, {}), "geometry.placement": ("single", WHEEL_RAIL, {}),
+    "geometry.gauge": (1436.0, WHEEL_RAIL, {}), "geometry.flange_back": (1361.0, WHEEL_RAIL, {}),
+    "geometry.element_size_s": (0.5, edit(WHEEL_RAIL, {"geometry.element_size": 0.5}), {}),
+    "geometry.wheel_z": ("down", WHEEL_RAIL, {}), "geometry.rail_z": ("down", WHEEL_RAIL, {}),
+    "load.approach": (0.01, PLANAR, {"load.normal_force": DELETE}),
+    "load.approach_along": (0.01, WHEEL_RAIL, {"model.theory": "conformal", "load.wheel_load": DELETE}),
+    "load.load_angle": (0.1, edit(WHEEL_RAIL, {"model.theory": "conformal"}), {}),
+    **{f"grid.{k}": (v, edit(PLANAR, {"model.theory": "exact", "grid": {"mx": 10, "my": 10, "dx": 0.5, "dy": 0.5}}), {})
+       for k, v in (("mx", 12), ("my", 12), ("dx", 0.6), ("dy", 0.6), ("xl", -3.0), ("yl", -3.0))},
+    "grid.n": (12, PLANAR, {}), "grid.strips": ("coupled", WHEEL_RAIL, {}),
+    "model.bound": ("elliptic", PLANAR, {}), "model.influence": ("halfspace", PLANAR, {}),
+    "model.theory": ("exact", PLANAR, {}), "model.creep_coefficients": ("kalker", PLANAR, {}), "model.n": (12, PLANAR, {}),
+    "model.flexibilities": ([1e-5, 1e-5, 1e-5], PLANAR, {}), "model.discretisation": ("contact", PLANAR, {}),
+    "model.max_mx": (50, PLANAR, {}), "model.max_ms": (50, PLANAR, {}), "model.creepage": ("surface", PLANAR, {}),
+    "model.blanco_method": ("linear", PLANAR, {}), "model.table": ("default", PLANAR, {}),
+    "model.fe.method": ("direct", PLANAR, {}), "model.fe_method": ("direct", PLANAR, {}),
+    "model.fe.conform": ("all", PLANAR, {}), "model.fe_conform": ("all", PLANAR, {}),
+    "model.fe.solver": ("splu", PLANAR, {}), "model.fe_solver": ("splu", PLANAR, {}),
+    "model.fe.collocation": ("average", PLANAR, {}), "model.fe_collocation": ("average", PLANAR, {}),
+    "model.fe.far_field": ("clamped", PLANAR, {}), "model.fe_far_field": ("clamped", PLANAR, {}),
+    "model.fe.closure": ("cut", PLANAR, {}), "model.fe_closure": ("cut", PLANAR, {}),
+    "model.fe_contact.far_field": ("clamped", PLANAR, {}), "model.fec_far_field": ("clamped", PLANAR, {}),
+    "model.fe_contact.solver": ("splu", PLANAR, {}), "model.fec_solver": ("splu", PLANAR, {}),
+    "model.fe_contact.estimate": ("grid", PLANAR, {}), "model.fec_estimate": ("grid", PLANAR, {}),
+    "model.fe_contact.body": ("block", PLANAR, {}), "model.fec_body": ("block", PLANAR, {}),
+    # files: a missing one is refused naming the key (the spelling is taken)
+    "friction.mu_table": ("none.txt", EXACT, {}),
+    "kinematics.rigid_slip": ("none.txt", EXACT, {}),
+    "geometry.a": (5.0, edit(PLANAR, {"geometry": {"kind": "hertz", "a": 4.0, "b": 4.0}}), {}),
+    "geometry.b": (5.0, edit(PLANAR, {"geometry": {"kind": "hertz", "a": 4.0, "b": 4.0}}), {}),
+    "model.influence_file": ("none.txt", EXACT, {}),
+}
+
+
+def _outcome(make):
+    from conformal.scene import scene_from_dict  # noqa: F401 - the scene is built by make()
+
+    try:
+        return make().to_dict()
+    except InputError as exc:
+        return str(exc)
+
+
+def test_with_takes_every_documented_toml_key(tmp_path):
+    """Issue 22 item 8 for every key: ``scene.with_("section.key", v)`` (and ``section__key=v``, the
+    spelling of ``conformal.solve(path, **overrides)``) gives what editing the file gives, for every
+    key the reference documents; none is "unknown"."""
+    from conformal.scene import scene_from_dict
+
+    keys = _documented_keys()
+    assert len(keys) > 120
+    h = "\n".join(" ".join(f"{1e-3 * ((i - 4.5) ** 2 + (j - 4.5) ** 2) * 0.25:.6f}" for j in range(10)) for i in range(10))
+    table = edit(PLANAR, {"geometry": {"kind": "table", "file": _write(tmp_path, "h.txt", h)}, "model.theory": "exact",
+                          "load.normal_force": 100.0, "grid": {"mx": 10, "my": 10, "dx": 0.5, "dy": 0.5}})
+    values = {**_KEY_VALUES, "geometry.file": (str(tmp_path / "h.txt"), table, {})}
+    refused, untried = [], []
+    for path in keys:
+        value, base, extra = values.get(path, (None, None, {}))
+        tries = [(value, base)] if base is not None else [(v, b) for b in (PLANAR, WHEEL_RAIL) for v in (
+            0.5, 1, 2, 1e-5, "steady", True, "right")]
+        for v, b in tries:
+            sec, _, key = path.partition(".")
+            nested = {f"{sec}.{key.split('.')[0]}": {key.split(".")[1]: v}} if "." in key else {path: v}
+            file_scene = _outcome(lambda: scene_from_dict(edit(b, {**extra, **nested})))
+            if isinstance(file_scene, str) and base is None:
+                continue                                 # not valid here: the next value
+            base_scene = scene_from_dict(edit(b, {k: x for k, x in extra.items() if k.split(".")[0] != sec}))
+            api = _outcome(lambda: base_scene.with_(path, v)) if not extra or base is not None else file_scene
+            assert "unknown key" not in str(api) and "not a scene key" not in str(api), (path, api)
+            kw = _outcome(lambda: base_scene.with_(**{path.replace(".", "__"): v}))
+            assert kw == api, path
+            if not extra:
+                assert api == file_scene, (path, api, file_scene)
+            refused += [(path, api)] if isinstance(api, str) else []
+            break
+        else:
+            untried.append(path)
+    assert not untried, f"no valid value tried for {untried}"
+    # every key gives a scene but the files that are missing on purpose (refused naming the key; the
+    # influence file is read by the solve)
+    assert sorted(p for p, _ in refused) == ["friction.mu_table", "kinematics.rigid_slip"], refused
+    assert all(msg.startswith(f"[{p.split('.')[0]}] {p.split('.')[1]}: no such file") for p, msg in refused), refused
 
 
 def test_api_overrides_with_toml_names_match_the_file(tmp_path):
