@@ -49,8 +49,8 @@ def cmd_simulate(args) -> int:
 
 def cmd_stability(args) -> int:
     from conformal.dynamics.plots import plot_damping
-    from conformal.dynamics.scene import load_vehicle_scene
-    from conformal.dynamics.stability import (MAX_SPEED, check_bisection, damping_curve, linear_critical_speed,
+    from conformal.dynamics.scene import MAX_SPEED, load_vehicle_scene
+    from conformal.dynamics.stability import (check_bisection, damping_curve, linear_critical_speed,
                                               linear_inputs, nonlinear_critical_speed)
 
     scene = load_vehicle_scene(args.scene)

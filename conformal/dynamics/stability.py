@@ -38,7 +38,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from conformal.dynamics.contact import C, ContactGeometry, cached_table
-from conformal.dynamics.scene import MAX_SPEED, Irregularity, VehicleScene
+from conformal.dynamics.scene import Irregularity, VehicleScene
 from conformal.errors import ConvergenceError, InputError
 
 
@@ -238,8 +238,6 @@ def nonlinear_decays(scene: VehicleScene, V: float, t_end: float | None = None) 
     return bool(rate > 0), rate
 
 
-#: the largest speed (m/s) a stability scan considers (the linear scan solves one eigenproblem per m/s):
-#: conformal.dynamics.scene.MAX_SPEED, the bound of every vehicle speed
 #: most time-domain runs of the nonlinear bisection (each is a simulation of seconds)
 MAX_BISECTIONS = 20
 
