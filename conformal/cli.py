@@ -143,6 +143,8 @@ def cmd_sweep(args) -> int:
         raise InputError(f"[geometry] kind: a sweep needs a wheel_rail scene, got {scene.geometry.kind!r}")
     if args.solve:
         return _sweep_solve(scene, args)
+    if args.workers is not None:
+        raise InputError("--workers: only with --solve (the geometry sweep runs in one process)")
     check_output_path(str(Path(args.out) / "sweep.csv"), "--out")
     rows = sweep(scene.geometry, parse_range(args.shift), scene.base_dir)
     out = Path(args.out)
@@ -188,6 +190,15 @@ def _sweep_solve(scene, args) -> int:
     return code
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with one line on stderr for a bad command line (exit 2), as for every other bad
+    input: the usage text is what ``conformal COMMAND --help`` prints."""
+
+    def error(self, message: str):
+        where = self.prog.partition(" ")[2]         # the sub-command ("" for the top level)
+        self.exit(2, f"conformal: error: {where + ': ' if where else ''}{message} (see {self.prog} --help)\n")
+
+
 #: the commands defined in this module: a process running one of them builds only their parsers
 #: (the other modules' commands import numpy, scipy and more just to declare their options)
 CORE_COMMANDS = ("solve", "demo", "sweep", "precompute", "cache")
@@ -198,7 +209,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     the other modules (table, simulate, stability, inp, stresses)."""
     from conformal import __version__
 
-    p = argparse.ArgumentParser(prog="conformal", description="Conformal wheel-rail rolling contact workbench")
+    p = _Parser(prog="conformal", description="Conformal wheel-rail rolling contact workbench")
     p.add_argument("--version", action="version", version=f"conformal {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
@@ -327,7 +338,10 @@ def _join_negative_ranges(argv: list[str]) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     argv = _join_negative_ranges(list(sys.argv[1:] if argv is None else argv))
     parser = build_parser(argv[0] if argv and argv[0] in CORE_COMMANDS else None)
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:       # --help, --version, or a bad command line (one line, _Parser.error)
+        return int(exc.code or 0)
     try:
         return int(args.func(args) or 0)
     except ConformalError as exc:

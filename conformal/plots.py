@@ -429,7 +429,8 @@ def plot3d(result, plotter=None, *, scalar: str = "pn", bodies: bool = True):
         plotter = _offscreen_plotter((1000, 800))
     label = {"pn": "p_n [N/mm²]", "pt": "|p_t| [N/mm²]", "px": "p_x [N/mm²]", "ps": "p_s [N/mm²]"}.get(scalar, scalar)
     # horizontal, below the view: beside it the bar covered the wheel
-    bar = {"title": label, "color": "black", "n_labels": 3, "fmt": "%.4g", "vertical": False,
+    # two labels (0 and the maximum) at the ends: a middle label ran into the centred title
+    bar = {"title": label, "color": "black", "n_labels": 2, "fmt": "%.4g", "vertical": False,
            "position_x": 0.25, "position_y": 0.03, "width": 0.5, "height": 0.07,
            "title_font_size": 22, "label_font_size": 20}
     if _curved_field(result) is None:
@@ -487,8 +488,11 @@ def plot3d(result, plotter=None, *, scalar: str = "pn", bodies: bool = True):
     # orientation and scale (before the camera: adding actors may reset it): the frame's axes
     # (lower left) and a ruler across the strip's leading edge (x = xl, along s; the view looks
     # nearly along x, which would foreshorten a ruler along x)
-    plotter.add_axes(xlabel="x (rolling)", ylabel="y", zlabel="z (down)", color="black", line_width=4,
-                     viewport=(0.0, 0.1, 0.22, 0.36))
+    # the view looks nearly along x: the triad's x and z labels fell on each other, so the triad
+    # has no labels and a legend beside it names its colours
+    plotter.add_axes(labels_off=True, line_width=4, viewport=(0.0, 0.12, 0.18, 0.34))
+    plotter.add_text("axes: x rolling (red)\n  y lateral (green)\n  z down (blue)", position=(0.005, 0.02),
+                     viewport=True, font_size=11, color="black")
     ruler = _ruler_length(L)
     a = np.asarray(m["points"][0, 0], dtype=float) - 0.02 * L * np.r_[0.0, g.normal[0]]
     b = a + ruler * _tangents(g)[0][0]
@@ -497,8 +501,17 @@ def plot3d(result, plotter=None, *, scalar: str = "pn", bodies: bool = True):
                              shape_opacity=0.6, shape_color="white", always_visible=True, show_points=False)
     plotter.camera.focal_point = c
     # far enough that the wheel above the strip is not cut off by the picture's edge (2.2 L did)
-    plotter.camera.position = c + 3.4 * L * view / np.linalg.norm(view)
+    plotter.camera.position = c + 5.2 * L * view / np.linalg.norm(view)
     plotter.camera.up = (0.0, 0.0, -1.0)        # z is down in the rail-profile frame
+    # the scene up by a tenth of the picture: the colour bar and the legend below it keep clear of
+    # the rail (the bar lay on the rail's lower edge)
+    d = np.asarray(plotter.camera.position) - c
+    up = np.array([0.0, 0.0, -1.0]) - d * (-d[2]) / float(d @ d)
+    up /= np.linalg.norm(up)
+    height = 2.0 * np.linalg.norm(d) * np.tan(np.radians(plotter.camera.view_angle) / 2.0)
+    shift = -0.05 * height * up
+    plotter.camera.focal_point = c + shift
+    plotter.camera.position = c + d + shift
     return plotter
 
 
@@ -622,7 +635,7 @@ class Render3D:
             self._proc = None
 
 
-WINDOW_3D = (1100, 850)   # pixels of the 3-D view in plot_conformal_result
+WINDOW_3D = (1100, 1300)  # pixels of the 3-D view in plot_conformal_result (the height of its panel)
 #: about this many tangential-traction arrows in the 3-D view (more are unreadable)
 ARROWS_3D = 150
 

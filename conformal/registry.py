@@ -104,8 +104,9 @@ class Option:
     group : str, optional
         The method the key belongs to (``fe``, ``fe_contact``): set by :class:`Method`.
     checked : bool
-        The value is checked when the scene is read (else by the method that reads it, e.g. the FE
-        settings, when it runs).
+        The value is checked when the scene is read (else by the method that reads it, when it runs).
+    positive : bool
+        Numbers: the value must be > 0 (``minimum`` is inclusive).
     """
 
     name: str
@@ -119,6 +120,7 @@ class Option:
     group: str | None = None
     prefix: str = ""
     checked: bool = True
+    positive: bool = False
 
     @property
     def key(self) -> str:
@@ -150,6 +152,8 @@ class Option:
             return f"must be one of {', '.join(repr(c) for c in self.choices)}, got {v!r}"
         if self.minimum is not None and self.type in ("int", "float") and v < self.minimum:
             return f"must be >= {self.minimum:g}, got {v}"
+        if self.positive and self.type in ("int", "float") and not v > 0:
+            return f"must be > 0, got {v}"
         return None
 
 
@@ -386,59 +390,61 @@ COMMON = (
 _MAXOUT = Option("maxout", "int", 50, "", "outer (normal-tangential) iterations", minimum=1)
 
 FE = Method("fe", "fe_", "FE influence numbers of the real wheel and rail ([model] influence = \"fe\", "
-            "conformal.influence.fe); checked when the numbers are computed", options=(
-                Option("method", "str", "split", "", "\"split\" | \"direct\"", checked=False),
-                Option("order", "int", 1, "", "element order 1 | 2", checked=False),
+            "conformal.influence.fe); checked when the scene is read", options=(
+                Option("method", "str", "split", "", "\"split\" | \"direct\"", choices=("split", "direct")),
+                Option("order", "int", 1, "", "element order", choices=(1, 2)),
                 Option("h_patch", "float", 2.0, "element sizes", "element size on the patch, relative to the "
-                       "contact element size", checked=False),
-                Option("h_load", "float", 0.5, "element sizes", "element size of the loaded column", checked=False),
-                Option("growth", "float", 0.35, "", "element growth rate", checked=False),
+                       "contact element size", positive=True),
+                Option("h_load", "float", 0.5, "element sizes", "element size of the loaded column", positive=True),
+                Option("growth", "float", 0.35, "", "element growth rate", positive=True),
                 Option("h_max", "float", 0.2, "body depths", "largest element, relative to the body margin",
-                       checked=False),
+                       positive=True),
                 Option("conform", "str", "column", "", "conforming mesh: \"all\" | \"column\" | \"none\"",
-                       checked=False),
-                Option("body_size", "float", 16.0, "patch sizes", "body margin around the patch", checked=False),
+                       choices=("all", "column", "none")),
+                Option("body_size", "float", 16.0, "patch sizes", "body margin around the patch", positive=True),
                 Option("solver", "str", "auto", "", "linear solver: \"auto\" | \"pardiso\" | \"splu\" | \"amg\"",
-                       checked=False),
+                       choices=("auto", "pardiso", "splu", "amg")),
                 Option("collocation", "str", "centre", "", "collocation rule: \"centre\" | \"average\"",
-                       checked=False),
+                       choices=("centre", "average")),
                 Option("far_field", "str", "halfspace", "", "far-field boundary condition: \"halfspace\" | "
-                       "\"clamped\"", checked=False),
+                       "\"clamped\"", choices=("halfspace", "clamped")),
                 Option("closure", "str", "extend", "", "a profile ending inside the body: \"extend\" (straight, "
                        "slabs limited) | \"straight\" | \"cut\" | \"section\" (the real rail and wheel sections)",
-                       checked=False),
+                       choices=("extend", "straight", "cut", "section")),
             ))
 
 FE_CONTACT = Method("fe_contact", "fec_", "meshed bodies of the direct FE contact (theory fe_contact, "
-                    "conformal.fe_contact.problems); checked when the bodies are meshed", options=(
+                    "conformal.fe_contact.problems); checked when the scene is read (the largest fec_n when the "
+                    "bodies are meshed)", options=(
                         Option("n", "int", 4, "", "elements per (smaller) contact semi-axis on the contact surface",
-                               checked=False),
+                               minimum=1),
                         Option("h", "float", None, "mm", "element size on the contact surface (overrides n)",
-                               checked=False),
-                        Option("order", "int", 2, "", "1 (linear) or 2 (quadratic) tetrahedra", checked=False),
+                               positive=True),
+                        Option("order", "int", 2, "", "1 (linear) or 2 (quadratic) tetrahedra", choices=(1, 2)),
                         Option("growth", "float", 0.3, "1/mm", "increase of the element size per mm away from the "
-                               "contact", checked=False),
+                               "contact", positive=True),
                         Option("h_max", "float", 0.25, "body depths", "largest element, relative to the body depth",
-                               checked=False),
+                               positive=True),
                         # 1: size-converged with the half-space far field (studies/fe_contact_body_size.py:
                         # the deep pair's FN within 0.4 % of its large-body limit, inside the mesh scatter)
                         Option("body_size", "float", 1.0, "patch sizes", "margin of the bodies beyond the contact "
                                "patch (1: FN within 0.4 % of the large-body limit with the half-space far field)",
-                               checked=False),
+                               positive=True),
                         Option("patch", "float", 1.3, "semi-axes", "fine patch extent in contact semi-axes",
-                               checked=False),
+                               positive=True),
                         Option("far_field", "str", "halfspace", "", "cut faces: \"halfspace\" | \"clamped\"",
-                               checked=False),
-                        Option("solver", "str", "auto", "", "\"auto\" | \"splu\" | \"pardiso\"", checked=False),
+                               choices=("halfspace", "clamped")),
+                        Option("solver", "str", "auto", "", "\"auto\" | \"splu\" | \"pardiso\"",
+                               choices=("auto", "splu", "pardiso")),
                         Option("estimate", "str", "halfspace", "", "wheel-rail: contact size from a half-space "
-                               "solve (\"halfspace\") or the grid (\"grid\")", checked=False),
+                               "solve (\"halfspace\") or the grid (\"grid\")", choices=("halfspace", "grid")),
                         Option("body", "str", "disc", "", "wheel-rail bodies: \"disc\" | \"section\" (ground "
-                               "truth) | \"block\"", checked=False),
+                               "truth) | \"block\"", choices=("disc", "section", "block")),
                         Option("section_size", "float", 20.0, "patch sizes", "\"section\": rail ends and wheel "
-                               "sector cuts beyond the patch", checked=False),
-                        Option("section_h_max", "float", 12.0, "mm", "\"section\": largest element", checked=False),
+                               "sector cuts beyond the patch", positive=True),
+                        Option("section_h_max", "float", 12.0, "mm", "\"section\": largest element", positive=True),
                         Option("slave", "float", 1.6, "", "wheel-rail (\"disc\" and \"section\"): contact candidates "
-                               "= the patch enlarged by this factor", checked=False),
+                               "= the patch enlarged by this factor", minimum=1.0),
                     ))
 
 _PLANAR = frozenset({TANGENTIAL})

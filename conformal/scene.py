@@ -341,8 +341,8 @@ def _set_toml_key(data: dict, path: str, value: Any) -> None:
 
 
 def _set_material_key(table: dict, keys: list[str], value: Any, path: str) -> None:
-    """``material.G|E|nu`` (body 1, and body 2 while the bodies are alike), ``material.body2.G|E|nu``
-    and the field names ``G1, nu1, G2, nu2`` (one body each)."""
+    """``material.G|E|nu`` (body 1, and body 2 while the bodies are alike), ``material.body2.G|E|nu``,
+    ``material.body2`` (the table) and the field names ``G1, nu1, G2, nu2`` (one body each)."""
     def body2() -> dict:
         if "body2" not in table:     # alike until now: body 2 keeps the current constants
             table["body2"] = {k: v for k, v in table.items() if k != "body2"}
@@ -362,6 +362,11 @@ def _set_material_key(table: dict, keys: list[str], value: Any, path: str) -> No
         put(table, keys[0], value)
     elif len(keys) == 2 and keys[0] == "body2" and keys[1] in ("G", "E", "nu"):
         put(body2(), keys[1], value)
+    elif keys == ["body2"]:          # the whole [material.body2] table (None: the bodies alike again)
+        if value is None:
+            table.pop("body2", None)
+        else:
+            table["body2"] = dict(value) if isinstance(value, Mapping) else value   # checked on validation
     else:
         key = ".".join(keys)
         raise InputError(f"[material] {key}: unknown key"
@@ -507,6 +512,9 @@ def _angle_table(rows: Any) -> tuple:
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in row)):
             raise InputError(f"{key}: each row is three numbers [alpha (rad), mu_static, mu_kinetic], got {row!r}")
         a, ms, mk = (float(v) for v in row)
+        if abs(a) > math.pi:          # a contact angle lies within +-pi/2: 70 is degrees
+            raise InputError(f"{key}: the angle alpha is in rad and must lie within +-pi, got {a:g} "
+                             f"(degrees? {a:g} deg = {math.radians(a):.4g} rad)")
         if not 0.0 < mk <= ms:
             raise InputError(f"{key}: each row needs 0 < mu_kinetic <= mu_static, got {row!r}")
         out.append((a, ms, mk))
@@ -596,7 +604,7 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
         flange_back_pos=sec.number("flange_back_pos"),
         element_size_s=_element_size_s(sec),
         smoothing=sec.number("smoothing", d.smoothing, nonnegative=True),
-        element_size=sec.number("element_size", positive=True),
+        element_size=_element_size(sec),
         patch_combine=sec.number("patch_combine", d.patch_combine, nonnegative=True),
         wheel_z=sec.choice("wheel_z", ("down", "up", "auto"), d.wheel_z),
         rail_z=sec.choice("rail_z", ("down", "up", "auto"), d.rail_z),
@@ -614,6 +622,20 @@ def _flag(sec: "_Section", key: str) -> bool:
     if not isinstance(v, bool):
         raise sec.error(key, f"must be true or false, got {v!r}")
     return v
+
+
+#: mm, the largest [geometry] element_size: one element then covers a whole contact patch (a larger one
+#: reaches beyond the rail head: the grid's surface is not found)
+MAX_ELEMENT_SIZE = 20.0
+
+
+def _element_size(sec: "_Section") -> float | None:
+    """``[geometry] element_size`` (mm): > 0 and at most MAX_ELEMENT_SIZE."""
+    value = sec.number("element_size", positive=True)
+    if value is not None and value > MAX_ELEMENT_SIZE:
+        raise sec.error("element_size", f"must be <= {MAX_ELEMENT_SIZE:g} mm (one element then covers a whole "
+                        f"contact patch; typical 0.1-1 mm), got {value:g}")
+    return value
 
 
 def _element_size_s(sec: "_Section") -> float | None:
@@ -895,9 +917,36 @@ def scene_warnings(scene: "Scene") -> list[str]:
             out.append(f"[kinematics] {', '.join(given)}: theory {scene.model.theory!r} solves the normal problem "
                        "only; the creepages are not used (FX = FY = MZ = 0); a tangential theory (fastsim, "
                        "exact, conformal, ...) uses them")
+    out += unread_model_options(scene)
     if isinstance(geo, WheelRailGeometry) and abs(geo.rail_cant) > CANT_WARN:
         out.append(f"[geometry] rail_cant = {geo.rail_cant:g} rad is steeper than 1:15 ({CANT_WARN:.4f} rad); "
                    "rails are inclined 1:20 (0.05) or 1:40 (0.025): is this the cant in rad?")
+    return out
+
+
+def unread_model_options(scene: "Scene", models: Registry = MODELS) -> list[str]:
+    """Warnings for ``[model]`` keys the scene's theory does not read (a key of another theory, or
+    an FE key without ``influence = "fe"``): valid, but without effect on this solve.
+
+    >>> s = scene_from_dict({"geometry": {"kind": "quadratic", "A": 1e-3, "B": 1e-3},
+    ...                      "load": {"normal_force": 1e4}, "model": {"theory": "exact", "fec_n": 6}})
+    >>> unread_model_options(s)[0][:64]
+    "[model] fec_n: not read by theory 'exact' (read by fe_contact); "
+    """
+    theory = scene.model.theory
+    if theory not in models:
+        return []
+    model = models[theory]
+    own = {o.key for o in model.options} | {o.key for me in model.methods for o in models.method(me).options}
+    fe_keys = {o.key for o in models.method("fe").options} if "fe" in {me.name for me in models.methods} else set()
+    out = []
+    for key in scene.model.options:
+        if key not in own:
+            readers = ", ".join(models.readers(key)) or "no theory"
+            out.append(f"[model] {key}: not read by theory {theory!r} (read by {readers}); it has no effect here")
+        elif key in fe_keys and scene.model.influence != "fe":
+            out.append(f"[model] {key}: read only with [model] influence = \"fe\" (FE influence numbers), this "
+                       f"scene has influence = {scene.model.influence!r}; it has no effect here")
     return out
 
 
@@ -941,14 +990,17 @@ def scene_from_dict(data: Mapping[str, Any], base_dir: Path | str = ".", name: s
     if not isinstance(data, Mapping):
         raise InputError(f"a scene must be a table of sections, got {type(data).__name__}")
     unknown = sorted(set(data) - set(SECTIONS) - {"history"})
+    if "vehicle" in unknown:          # a vehicle scene (conformal.dynamics.scene) given to solve
+        raise InputError("[vehicle]: this is a vehicle scene (suspended wheelset); run it with `conformal "
+                         "simulate` or `conformal stability`, a contact scene has [geometry] and [load]")
     if unknown:
         raise InputError(f"[{unknown[0]}]: unknown section{_did_you_mean(unknown[0], SECTIONS)} "
                          f"(known: {', '.join(SECTIONS[1:])})")
     for sec in SECTIONS[1:]:
         if sec in data and not isinstance(data[sec], Mapping):
             raise InputError(f"[{sec}] must be a table (a [{sec}] section), got {sec} = {data[sec]!r}")
-    if "name" in data and not isinstance(data["name"], str):
-        raise InputError(f"name: must be a string, got {data['name']!r}")
+    if "name" in data and (not isinstance(data["name"], str) or not data["name"].strip()):
+        raise InputError(f"name: must be a non-empty string (it names the outputs), got {data['name']!r}")
     if "geometry" not in data:
         raise InputError("[geometry] kind: missing (one of " + ", ".join(GEOMETRY_KINDS) + ")")
     if "load" not in data:

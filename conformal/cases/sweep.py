@@ -194,15 +194,25 @@ class SweepTable:
 
 def parse_shifts(shift: str | float | Sequence[float]) -> list[float]:
     """Shifts (mm) from "start:stop:step" (stop included), one number or a sequence."""
-    from conformal.geometry.sweep import parse_range
+    from conformal.geometry.sweep import MAX_SHIFTS, parse_range
 
     if isinstance(shift, str):
         return parse_range(shift)
-    if isinstance(shift, (int, float)):
-        return [float(shift)]
-    values = [float(v) for v in shift]
+    if isinstance(shift, (int, float)) and not isinstance(shift, bool):
+        values = [float(shift)]
+    else:
+        try:
+            values = [float(v) for v in shift]
+            ok = not any(isinstance(v, (bool, str, bytes)) for v in shift)
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise InputError(f"--shift: give lateral shifts in mm as \"start:stop:step\", a number or a list of "
+                             f"numbers, got {shift!r}")
     if not values or not all(math.isfinite(v) for v in values):
         raise InputError("--shift: give finite lateral shifts (mm)")
+    if len(values) > MAX_SHIFTS:
+        raise InputError(f"--shift: {len(values)} shifts is too many (at most {MAX_SHIFTS})")
     return values
 
 
@@ -261,6 +271,8 @@ def solve_sweep(scene, shifts: Sequence[float], *, workers: int | None = None, c
     shifts = [float(v) for v in shifts]
     if not shifts:
         raise InputError("--shift: no lateral shifts")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise InputError(f"--workers: must be a whole number >= 1, got {workers!r}")
     influence = getattr(scene.model, "influence", "halfspace") or "halfspace"
     if MODELS.accepts(scene.model.theory, FE_INFLUENCE) and influence == "fe":
         from conformal.cases.precompute import precompute

@@ -23,13 +23,14 @@ def cmd_simulate(args) -> int:
     from conformal.dynamics.contact import interpolation_error
     from conformal.dynamics.model import build_model
     from conformal.dynamics.plots import plot_history
-    from conformal.dynamics.scene import load_vehicle_scene
+    from conformal.dynamics.scene import check_speed, load_vehicle_scene
     from conformal.dynamics.simulate import check_history_memory, simulate, write_outputs
 
     scene = load_vehicle_scene(args.scene)
     if args.speed is not None:
         if not args.speed > 0:
             raise InputError(f"--speed: must be > 0 m/s, got {args.speed}")
+        check_speed("--speed", args.speed)
         scene = scene.with_speed(args.speed)
     out = Path(args.out) if args.out else _default_out(args.scene)
     check_output_path(str(out / "history.csv"), "--out")       # before the run, not after it
@@ -48,8 +49,8 @@ def cmd_simulate(args) -> int:
 
 def cmd_stability(args) -> int:
     from conformal.dynamics.plots import plot_damping
-    from conformal.dynamics.scene import load_vehicle_scene
-    from conformal.dynamics.stability import (MAX_SPEED, check_bisection, damping_curve, linear_critical_speed,
+    from conformal.dynamics.scene import MAX_SPEED, load_vehicle_scene
+    from conformal.dynamics.stability import (check_bisection, damping_curve, linear_critical_speed,
                                               linear_inputs, nonlinear_critical_speed)
 
     scene = load_vehicle_scene(args.scene)

@@ -134,8 +134,19 @@ def normal_force(Kh, p, pdot, damping):
 
 
 def _curves(g: ContactGeometry):
+    from conformal.scene import FLANGEWAY
+
+    play = g.gauge - g.flange_back
+    if not FLANGEWAY[0] <= play <= FLANGEWAY[1]:     # as the contact scene's [geometry] gauge check
+        raise InputError(f"[track] gauge: gauge - flange_back = {g.gauge:g} - {g.flange_back:g} = {play:g} mm must "
+                         f"lie within {FLANGEWAY[0]:g} to {FLANGEWAY[1]:g} mm ([wheels] flange_back; both in mm): "
+                         "otherwise the wheels do not lie over their rails")
     w = load_profile(g.wheel_profile, "wheel", g.base_dir)
     r = load_profile(g.rail_profile, "rail", g.base_dir)
+    rho_min = float(g.wheel_radius) + float(w.points[:, 1].min())
+    if rho_min <= 0.0:
+        raise InputError(f"[wheels] wheel_radius: {g.wheel_radius:g} mm leaves the wheel profile {w.name} a radius of "
+                         f"{rho_min:.3g} mm at its highest point; the radius at the profile origin is in mm")
     fbp = g.flange_back_pos if g.flange_back_pos is not None else builtin_flange_back(g.wheel_profile)
     return fit_curve(w.points, name=w.name), fit_curve(r.points, name=r.name), fbp
 

@@ -168,6 +168,7 @@ class VehicleScene:
 
     def with_speed(self, speed: float) -> "VehicleScene":
         _positive_or_zero("simulation", "speed", speed)
+        check_speed("[simulation] speed", float(speed))
         return replace(self, simulation=replace(self.simulation, speed=float(speed)))
 
 
@@ -232,6 +233,17 @@ def _positive_or_zero(sec: str, key: str, v) -> None:
         raise InputError(f"[{sec}] {key}: must be a number >= 0, got {v!r}")
 
 
+#: m/s, the largest vehicle speed (simulation and stability scans): the integrator's steps grow with it
+MAX_SPEED = 1000.0
+
+
+def check_speed(key: str, v: float) -> float:
+    """A vehicle speed in m/s: finite, >= 0 and at most MAX_SPEED (a value in km/h or mm/s is refused)."""
+    if v > MAX_SPEED:
+        raise InputError(f"{key}: must be <= {MAX_SPEED:g} m/s, got {v:g} (the speed is in m/s, not km/h or mm/s)")
+    return v
+
+
 SECTIONS = ("vehicle", "track", "wheels", "contact", "material", "simulation", "friction", "name")
 
 
@@ -246,6 +258,9 @@ def scene_from_dict(data: dict, base_dir: str | Path = ".", name: str = "scene")
     ...     print(e)
     [vehicle] mas: unknown key (did you mean 'mass'?)
     """
+    if "vehicle" not in data and any(k in data for k in ("geometry", "load", "kinematics")):
+        raise InputError("[vehicle]: missing; this is a contact scene ([geometry], [load]): solve it with "
+                         "`conformal solve`, a vehicle scene has [vehicle], [track], [wheels], [contact]")
     for k in data:
         if k not in SECTIONS:
             raise InputError(f"[{k}]: unknown section{_closest(k, SECTIONS)}")
@@ -315,7 +330,7 @@ def scene_from_dict(data: dict, base_dir: str | Path = ".", name: str = "scene")
 
     s = _Sec("simulation", data["simulation"], {"speed", "t_end", "initial_lateral", "initial_yaw", "method",
                                                 "rtol", "atol", "output_step"})
-    sim = Simulation(speed=s.number("speed", nonneg=True), t_end=s.number("t_end", positive=True),
+    sim = Simulation(speed=check_speed("[simulation] speed", s.number("speed", nonneg=True)), t_end=s.number("t_end", positive=True),
                      initial_lateral=s.number("initial_lateral", 0.0), initial_yaw=s.number("initial_yaw", 0.0),
                      method=s.string("method", "RK45", choices=("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")),
                      rtol=s.number("rtol", 1e-3, positive=True), atol=s.number("atol", 1e-7, positive=True),

@@ -238,8 +238,6 @@ def nonlinear_decays(scene: VehicleScene, V: float, t_end: float | None = None) 
     return bool(rate > 0), rate
 
 
-#: the largest speed (m/s) a stability scan considers (the linear scan solves one eigenproblem per m/s)
-MAX_SPEED = 1000.0
 #: most time-domain runs of the nonlinear bisection (each is a simulation of seconds)
 MAX_BISECTIONS = 20
 

@@ -34,6 +34,10 @@ from conformal.meshing.gmsh_body import MeshSpec, mesh_body
 STEEL = Material(82000.0, 0.28, 82000.0, 0.28)
 
 
+#: the largest [model] fec_n (elements per contact semi-axis): 50 already meshes millions of elements
+MAX_N = 50
+
+
 @dataclass(frozen=True)
 class ContactMesh:
     """Mesh refinement of the FE contact bodies.
@@ -78,13 +82,17 @@ class ContactMesh:
             raise InputError(f"[model] fec_body: must be \"disc\", \"section\" or \"block\", got {self.body!r}")
         if self.estimate not in ("halfspace", "grid"):
             raise InputError(f"[model] fec_estimate: must be \"halfspace\" or \"grid\", got {self.estimate!r}")
-        if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
-            raise InputError(f"[model] fec_n: must be a whole number >= 1, got {self.n!r}")
+        if isinstance(self.n, bool) or not isinstance(self.n, int) or not 1 <= self.n <= MAX_N:
+            raise InputError(f"[model] fec_n: must be a whole number from 1 to {MAX_N} (elements per contact "
+                             f"semi-axis; 4-8 are usual), got {self.n!r}")
         for name in ("growth", "h_max", "body_size", "patch", "section_size", "section_h_max", "slave") + (
                 ("h",) if self.h is not None else ()):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v > 0):
                 raise InputError(f"[model] fec_{name}: must be a number > 0, got {v!r}")
+        if self.slave < 1.0:
+            raise InputError(f"[model] fec_slave: must be >= 1 (the contact candidates cover the patch enlarged by "
+                             f"this factor), got {self.slave!r}")
 
     def size(self, semi_axis: float) -> float:
         """Element size on the contact patch for a contact of this (smaller) semi-axis."""

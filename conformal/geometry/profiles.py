@@ -90,6 +90,10 @@ class Profile:
     source: str = ""
 
 
+#: mm, the longest profile (arc length of its points): a whole rail section is about 600 mm round
+MAX_PROFILE_LENGTH = 2000.0
+
+
 def builtin_dir() -> Path:
     return Path(str(resources.files("conformal") / "data" / "profiles"))
 
@@ -118,6 +122,9 @@ def _read_csv(path: Path) -> np.ndarray:
                 raise InputError(f"not a profile: {path} (line {lineno} is not two numbers 'y, z' in mm)") from None
             raise InputError(f"profile {path.name}: line {lineno}: need two numbers 'y, z', got "
                              f"{text[:60]!r}") from None
+        if len(parts) > 2:               # x, y, z points or a column more: which two are y, z is a guess
+            raise InputError(f"profile {path.name}: line {lineno}: {len(parts)} values; a profile file has two "
+                             f"columns 'y, z' in mm, got {text[:60]!r}")
         rows.append((y, z, lineno))
     return _as_array(rows, path)
 
@@ -249,6 +256,9 @@ def check_points(points: np.ndarray, kind: str, name: str) -> np.ndarray:
     length = np.hypot(*seg.T)
     if length.sum() < 1.0:
         raise InputError(f"profile {name}: the points span only {length.sum():.3g} mm")
+    if length.sum() > MAX_PROFILE_LENGTH:    # the fitted curve is sampled along its length: bounded work
+        raise InputError(f"profile {name}: the points span {length.sum():.4g} mm along the curve; a wheel or rail "
+                         f"profile is at most {MAX_PROFILE_LENGTH:g} mm long (coordinates in mm?)")
     # a curve that doubles back on itself (turn of more than 150 degrees between segments)
     cosang = np.einsum("ij,ij->i", seg[:-1], seg[1:]) / (length[:-1] * length[1:])
     bad = np.nonzero(cosang < math.cos(math.radians(150.0)))[0]

@@ -34,6 +34,8 @@ from conformal.geometry.wheelrail import build_pair, wheelset_roll
 from conformal.scene import WheelRailGeometry
 
 TOUCH_WINDOW = 0.01   # mm: candidate contacts within this gap count as touching
+#: the most lateral shifts one sweep takes (a bound on its loop)
+MAX_SHIFTS = 10000
 
 
 def parse_range(text: str) -> list[float]:
@@ -50,8 +52,8 @@ def parse_range(text: str) -> list[float]:
         raise InputError(f"--shift: expected start:stop:step with step > 0 and stop >= start, got {text!r}")
     start, stop, step = parts
     n = int(math.floor((stop - start) / step + 1e-9)) + 1
-    if n > 10000:
-        raise InputError(f"--shift: {n} shifts is too many (at most 10000)")
+    if n > MAX_SHIFTS:
+        raise InputError(f"--shift: {n} shifts is too many (at most {MAX_SHIFTS})")
     return [round(start + i * step, 12) for i in range(n)]
 
 

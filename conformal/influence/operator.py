@@ -147,8 +147,13 @@ def build_operator(grid: PlanarGrid | CurvedGrid, material: Material, *, influen
         if influence_file is not None:
             from conformal.influence.contact_file import influence_operator
 
-            op = influence_operator(influence_file, mx=grid.mx, ms=grid.my, dx=grid.dx, ds=grid.dy,
-                                    K=material.K, G=material.G)
+            try:
+                op = influence_operator(influence_file, mx=grid.mx, ms=grid.my, dx=grid.dx, ds=grid.dy,
+                                        K=material.K, G=material.G)
+            except InputError as exc:   # the file's problem, named by the key that gave it
+                msg = str(exc)
+                raise InputError(msg if msg.startswith("[model] influence_file") else
+                                 f"[model] influence_file: {msg}") from None
             info = {"influence": "file"}
         elif line:
             from conformal.influence.halfplane import LineInfluence

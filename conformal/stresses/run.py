@@ -46,7 +46,29 @@ def read_scene_with_stresses(path: str | Path):
     bad = sorted(set(opts) - _KEYS)
     if bad:
         raise InputError(f"[stresses] {bad[0]}: unknown key (known: {', '.join(sorted(_KEYS))})")
+    check_options(opts)
     return scene_from_dict(data, base_dir=path.parent, name=path.stem), dict(opts)
+
+
+def check_options(opts: dict) -> None:
+    """Check the ``[stresses]`` values before anything is solved (InputError naming the key)."""
+    FatigueParameters(k=_number(opts, "k", K_SHEAR), alpha_dv=_number(opts, "alpha_dv", ALPHA_DV),
+                      tau_e=_number(opts, "tau_e", TAU_E))
+    depth = _number(opts, "depth", None)
+    if depth is not None and not depth > 0:
+        raise InputError(f"[stresses] depth: must be a positive number of mm, got {depth!r}")
+    if opts.get("body", 1) not in (1, 2) or isinstance(opts.get("body"), bool):
+        raise InputError(f"[stresses] body: must be 1 or 2, got {opts.get('body')!r}")
+    n = opts.get("n_depths", N_DEPTHS)
+    if isinstance(n, bool) or not isinstance(n, int) or not 2 <= n <= 2000:
+        raise InputError(f"[stresses] n_depths: must be an integer in [2, 2000], got {n!r}")
+
+
+def _positive_option(value, option: str, unit: str):
+    """A command-line number that must be finite and > 0 (InputError naming the option)."""
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise InputError(f"{option}: must be a positive number of {unit}, got {value!r}")
+    return value
 
 
 def _number(opts: dict, key: str, default):
@@ -300,6 +322,8 @@ def cmd_stresses(args) -> int:
     args.check_output(args.json, "--json", (".json",))
     args.check_output(args.plot, "--plot", args.plot_suffixes)
     args.check_output(args.vtu, "--vtu", (".vtu",))
+    _positive_option(args.depth, "--depth", "mm")
+    _positive_option(args.k, "--k", "N/mm²")
     scene, opts = read_scene_with_stresses(args.scene)
     if args.depth is not None:
         opts["depth"] = args.depth

@@ -42,7 +42,11 @@ def solve(problem) -> Result:
     path = opts.get("table")
     if path is not None and not isinstance(path, str):
         raise InputError(f"[model] table: must be a file name, got {path!r}")
-    table = load_table(path)
+    try:
+        table = load_table(path)
+    except InputError as exc:        # the file's problem, named by the key that gave it
+        msg = str(exc)
+        raise InputError(msg if msg.startswith("[model] table") else f"[model] table: {msg}") from None
     FX, FY, MZ = evaluate(table, hz.a, hz.b, hz.FN, fr.mu, mat.G, mat.nu, kin.xi, kin.eta, kin.phi)
     extra = {"table": table.path, "table_hash": table.content_hash[:16], **material_notes(problem)}
     FX, FY, MZ = float(FX), float(FY), float(MZ)

@@ -246,7 +246,8 @@ def _check(a_over_b: np.ndarray, nu: np.ndarray) -> None:
     if not np.all(np.isfinite(a_over_b) & (a_over_b > 0)):
         raise InputError(f"Kalker coefficients: a/b must be finite and > 0, got {a_over_b}")
     if not np.all(np.isfinite(nu) & (nu >= 0.0) & (nu <= 0.5)):
-        raise InputError(f"Kalker coefficients: the table covers 0 <= nu <= 0.5, got nu = {nu}")
+        raise InputError(f"[material] nu: Kalker's creep coefficients (theories linear, empirical, fastsim, table) "
+                         f"are tabulated for 0 <= nu <= 0.5, got nu = {nu}")
 
 
 def coefficient_arrays(a_over_b, nu) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

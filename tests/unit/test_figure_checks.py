@@ -88,6 +88,10 @@ def test_3d_view_has_orientation_scale_and_a_readable_number_of_arrows():
     assert pl.renderer.axes_widget is not None                       # the x, y, z triad
     bars = list(pl.scalar_bars.values())
     assert bars and bars[0].GetOrientation() == 0                    # horizontal, below the view
+    assert bars[0].GetNumberOfLabels() == 2                           # 0 and the maximum: clear of the title
+    texts = [a.GetInput() for a in pl.renderer.actors.values() if hasattr(a, "GetInput")
+             and isinstance(a.GetInput(), str)]
+    assert any("x rolling (red)" in t for t in texts)                # the triad's legend (no colliding labels)
     assert any(name.endswith("-labels") for name in pl.renderer.actors)   # the ruler's "N mm" label
     n_contact = r.n_contact
     arrows = [m for m in pl.meshes if getattr(m, "n_points", 0) and m.n_cells and "GlyphScale" in m.point_data]

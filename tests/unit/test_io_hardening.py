@@ -69,7 +69,7 @@ BAD = [  # (change to the good scene, text the one-line error must contain)
      "[material] must be a table"),
     (("n = 30", "mx = 20000\nmy = 20000\ndx = 0.01\ndy = 0.01"), "[grid] mx: a 20000 x 20000 grid needs about"),
     (("n = 30", "n = 20000"), "[grid] n: a 20000 x 20000 grid needs about"),
-    (("name = \"circle\"", "name = 5"), "name: must be a string"),
+    (("name = \"circle\"", "name = 5"), "name: must be a non-empty string"),
 ]
 
 

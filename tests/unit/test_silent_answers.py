@@ -152,9 +152,11 @@ def test_prescribed_force_near_frictionless_dissimilar_rollers():
     """Bentall & Johnson's rollers (aluminium G 23000, nu 0.31 on steel, R 50/50 mm, 16.2 N/mm, line
     contact) at mu = 1e-4 with FX = 0: every creepage outside a narrow band gives full slip, the
     bordered Newton system stalls and the fallback root search on xi went the wrong way (xi = 0,
-    converged false).  Now xi = -5.272e-4 (CONTACT: 5.260e-4 with body 1 steel, the sign following
-    the body order): checked independently by two prescribed-xi solves 0.2 % either side, whose
-    forces have opposite signs."""
+    converged false).  Now xi = -5.272e-4 rolling along +x; CONTACT's deck (examples/bentall.inp,
+    aluminium body 1 as here) rolls along -x (CHI = 180 degrees) and reports +5.260e-4: the same
+    scene with ``direction = -1`` gives +5.272e-4 (92 contact elements; 200 as in CONTACT's grid
+    give 5.2606e-4).  Checked independently by two prescribed-xi solves either side of the root,
+    whose forces have opposite signs."""
     mu = 1e-4
     d = {"material": {"G": 23000.0, "nu": 0.31, "body2": {"G": 82000.0, "nu": 0.28}}, "friction": {"mu": mu},
          "geometry": {"kind": "quadratic", "A": 0.02, "B": 0.0}, "load": {"normal_force": 16.2},
@@ -166,6 +168,8 @@ def test_prescribed_force_near_frictionless_dissimilar_rollers():
     # the force decreases with the creepage: positive below the root, negative above it
     below, above = (conformal.solve({**d, "kinematics": {"xi": r.xi + dxi}}).FX for dxi in (-1e-6, 1e-6))
     assert below > 0 > above
+    chi180 = conformal.solve({**d, "kinematics": {"fx_rel": 0.0, "direction": -1}})   # CONTACT's CHI = 180 deg
+    assert chi180.converged and chi180.xi == pytest.approx(-r.xi, rel=1e-6)
 
 
 # ----------------------------------------------------------------------------- item 10
