@@ -82,6 +82,7 @@ SERIES = {"halfspace": ("halfspace", "default"), "clamped": ("clamped", "default
           "straight": ("halfspace", "straight"), "p2": ("halfspace", "p2"), "section": ("halfspace", "section"),
           "section_clamped": ("clamped", "section"), "section_fine": ("halfspace", "section_fine")}
 SECTION_SIZES = (1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
+SECTION_FINE_SIZES = (16.0, 32.0)
 QUICK_SIZES = (4.0, 8.0, 16.0)
 GRID_N = 16          # elements across the overlap (the scenes' 30-40 cost 2-3 min per pair here)
 
@@ -285,11 +286,15 @@ def _identical_steel():
 # ----------------------------------------------------------------------------- settings
 def fe_settings(size: float, far: str = "halfspace", refine: float = 1.0, **mesh):
     """FE settings of the series: the production defaults, the body size and far field given,
-    every element size (h_patch, h_load, h_max) times ``refine``."""
+    every element size (h_patch, h_load, h_max, and h_wall, which only the closure "section"
+    uses) times ``refine``."""
     from conformal.influence.fe import FESettings
     from conformal.meshing.gmsh_body import MeshSpec
 
     base = MeshSpec()
+    # every element size: with the closure "section" also the walls' cap (a fraction of the local
+    # wall thickness, conformal.meshing.wall)
+    mesh.setdefault("h_wall", base.h_wall * refine)
     spec = replace(base, body_size=size, h_patch=base.h_patch * refine, h_load=base.h_load * refine,
                    h_max=base.h_max * refine, **mesh)
     return FESettings(far_field=far, mesh=spec)
@@ -312,8 +317,9 @@ def run_case(case, sizes, far: str, refine: float, cache, grading: str, **mesh) 
     rows = []
     for s in sizes:
         t0 = time.perf_counter()
+        settings = fe_settings(s, far, refine, **mesh)
         try:
-            kr, kw, st = case.kernels(fe_settings(s, far, refine, **mesh), cache)
+            kr, kw, st = case.kernels(settings, cache)
         except ConformalError as exc:      # e.g. gmsh leaving flat tetrahedra in a small body
             print(f"{case.label}: {far} {grading} size {s:g}: not possible: {exc}", flush=True)
             rows.append({"case": case.key, "far_field": far, "grading": grading, "size": s, "error": str(exc)})
@@ -326,7 +332,10 @@ def run_case(case, sizes, far: str, refine: float, cache, grading: str, **mesh) 
                "FN_wheel_only": case.fn_ratio(case.hs_body["rail"] + kw), **case.at_load(kr + kw),
                "time_s": time.perf_counter() - t0,
                "fe_s": sum(float(v.get("total_s", 0.0)) for v in st.values()),
+               "fe_body_s": [v.get("total_s") for v in st.values()],
+               "peak_rss_gib": max(float(v.get("peak_rss_gib", 0.0)) for v in st.values()),
                "dofs": [v.get("dofs") for v in st.values()],
+               "h_wall": settings.mesh.h_wall if settings.mesh.closure == "section" else None,
                "body": {b: v.get("body") for b, v in st.items()}}
         rows.append(row)
         print(f"{case.label}: {far:9s} {grading:7s} size {s:4g}: C_rail {row['C_rail']:.5f} C_wheel "
@@ -353,6 +362,9 @@ def main(argv=None) -> int:
                          "limited), p2 (quadratic tetrahedra, default grading, sizes 4-16), section, "
                          "section_clamped, section_fine (real rail and wheel sections, closure \"section\"; "
                          "fine: every element size halved, sizes 16 and 32)")
+    ap.add_argument("--section-sizes", default=None,
+                    help="comma-separated body sizes of the section series (default 1-64; clamped 2-64) "
+                         "and of section_fine (default 16,32), e.g. 16,32")
     ap.add_argument("--report", action="store_true",
                     help="only rebuild the report (md, png) from the existing JSON")
     ap.add_argument("--append", action="store_true",
@@ -377,8 +389,14 @@ def main(argv=None) -> int:
     if args.append and (out / "fe_far_field_limit.json").exists():
         old = json.loads((out / "fe_far_field_limit.json").read_text())["rows"]
         rerun = {SERIES[s] for s in series if s in SERIES}
-        rows = [r for r in old if (r["case"] not in keys or (r["far_field"], r["grading"]) not in rerun)
-                and (r["case"] != "flat" or args.quick)]
+        only = None if args.section_sizes is None else {float(v) for v in args.section_sizes.split(",")}
+
+        def kept(r):        # with --section-sizes only those sizes of the section series are rerun
+            if r["case"] not in keys or (r["far_field"], r["grading"]) not in rerun:
+                return True
+            return only is not None and r["grading"].startswith("section") and r["size"] not in only
+
+        rows = [r for r in old if kept(r) and (r["case"] != "flat" or args.quick)]
     if args.quick:
         rows += run_flat(QUICK_SIZES, "clamped", cache)
     else:
@@ -399,14 +417,18 @@ def main(argv=None) -> int:
             if "straight" in series and case.slab():
                 rows += run_case(case, STRAIGHT_SIZES, "halfspace", 1.0, cache, "straight", closure="straight")
                 _dump(out, rows)
+            sec_sizes = SECTION_SIZES if args.section_sizes is None else tuple(
+                float(v) for v in args.section_sizes.split(","))
             if "section" in series and case.sections() is not None:
-                rows += run_case(case, SECTION_SIZES, "halfspace", 1.0, cache, "section", closure="section")
+                rows += run_case(case, sec_sizes, "halfspace", 1.0, cache, "section", closure="section")
                 _dump(out, rows)
             if "section_clamped" in series and case.sections() is not None:
-                rows += run_case(case, SECTION_SIZES[1:], "clamped", 1.0, cache, "section", closure="section")
+                rows += run_case(case, tuple(v for v in sec_sizes if v >= 2.0), "clamped", 1.0, cache, "section",
+                                 closure="section")
                 _dump(out, rows)
             if "section_fine" in series and case.sections() is not None:
-                rows += run_case(case, (16.0, 32.0), "halfspace", 0.5, cache, "section_fine", closure="section")
+                rows += run_case(case, SECTION_FINE_SIZES if args.section_sizes is None else sec_sizes, "halfspace",
+                                 0.5, cache, "section_fine", closure="section")
                 _dump(out, rows)
             if "p2" in series:
                 rows += run_case(case, P2_SIZES, "halfspace", 1.0, cache, "p2", order=2)

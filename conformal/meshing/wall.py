@@ -6,19 +6,20 @@ head and rim bend and turn on the web, and linear tetrahedra several wall thickn
 far too stiff in bending (shear locking), whatever the grading at the contact does.  This module
 gives the cap that keeps every element in a wall at a fraction of that wall's thickness:
 
-* the *local thickness* t(p) of a point p of the section is the diameter of the largest disc
-  inside the section that contains p (Hildebrand and Rüegsegger, J. Microscopy 185 (1997) 67-75,
-  Eq. 1): in a straight wall between parallel faces it is the wall's thickness, in the rail head
-  its height or width, whichever is smaller;
+* the *local thickness* t(p) at a point p of the section is the thickness across the wall at the
+  nearest point of the section's wall mid-lines (its medial axis, pruned to the points whose
+  nearest boundary points lie on opposite faces): in a straight wall between parallel or
+  slightly tapered faces it is the wall's thickness, in the rail head its height or width,
+  whichever is smaller.  Unlike the diameter of the largest disc that contains p (Hildebrand and
+  Rüegsegger, J. Microscopy 185 (1997) 67-75), it does not vanish at a convex corner;
 * the cap is h(p) = min over q of (f t(q) + g |p - q|) (f: the fraction, g: the growth rate of the
   body's grading), so that it varies gradually from a thin wall to a thicker part.
 
-Both are computed on a raster of the cross-section (at most :data:`MAX_CELLS` cells along the
-larger side): the distance to the boundary by scipy's exact Euclidean distance transform, the
-largest discs from its ridge (the cells whose distance no neighbour exceeds, the discrete medial
-axis), the graded cap by repeated 8-neighbour minimum passes (a chamfer metric, at most 8 %
-longer than the Euclidean distance).  The raster's error (a cell, 0.43 mm on the 172 mm rail
-section) is a small fraction of any wall thickness it resolves.
+Both are computed on a raster of the cross-section (:data:`MAX_CELLS` cells along its larger
+side: 0.43 mm on the 172 mm rail section): the distance to the boundary and the nearest
+mid-line cell by scipy's exact Euclidean distance transform, the mid-lines' thickness exactly
+from the polygon's edges, the graded cap by repeated 8-neighbour minimum passes (a chamfer
+metric, at most 8 % longer than the Euclidean distance).
 """
 from __future__ import annotations
 
@@ -110,15 +111,15 @@ def _across(q: np.ndarray, P: np.ndarray) -> np.ndarray:
 
 
 def _local_thickness(P: np.ndarray, inside: np.ndarray, y0: float, z0: float, h: float) -> np.ndarray:
-    """Local wall thickness of every inside cell (mm; NaN outside): twice the distance from the
-    boundary of the nearest cell of the section's wall mid-lines.
+    """Local wall thickness of every inside cell (mm; NaN outside): the thickness across the wall
+    (:func:`_across`) at the nearest cell of the section's wall mid-lines.
 
     The mid-lines are the ridge of the distance to the boundary (cells whose distance no
     neighbour exceeds) where the nearest boundary points of the cell's neighbourhood lie on
     opposite faces: at least :data:`OPPOSITE` times the distance across (a wall between nearly
     parallel faces gives 1, the bisector of a 90-degree corner 0.71).  Without that pruning a
     convex corner, where the largest disc shrinks to nothing, would look like a vanishing wall.
-    The distance of the mid-line cells is computed exactly from the polygon's edges."""
+    The thickness at the mid-line cells is computed exactly from the polygon's edges."""
     from scipy import ndimage
 
     d, (fi, fj) = ndimage.distance_transform_edt(np.pad(inside, 1), return_indices=True)
