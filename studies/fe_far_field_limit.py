@@ -80,7 +80,8 @@ P2_SIZES = (4.0, 8.0, 16.0, 32.0)
 #: series name -> (far field, grading label) of its rows
 SERIES = {"halfspace": ("halfspace", "default"), "clamped": ("clamped", "default"), "fine": ("halfspace", "fine"),
           "straight": ("halfspace", "straight"), "p2": ("halfspace", "p2"), "section": ("halfspace", "section"),
-          "section_clamped": ("clamped", "section"), "section_fine": ("halfspace", "section_fine")}
+          "section_clamped": ("clamped", "section"), "section_fine": ("halfspace", "section_fine"),
+          "section_coarse": ("halfspace", "section_coarse")}
 SECTION_SIZES = (1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
 SECTION_FINE_SIZES = (16.0, 32.0)
 QUICK_SIZES = (4.0, 8.0, 16.0)
@@ -360,8 +361,8 @@ def main(argv=None) -> int:
     ap.add_argument("--series", default="halfspace,clamped,fine,straight,p2,section,section_clamped",
                     help="comma-separated: halfspace, clamped, fine (refined grading), straight (slabs not "
                          "limited), p2 (quadratic tetrahedra, default grading, sizes 4-16), section, "
-                         "section_clamped, section_fine (real rail and wheel sections, closure \"section\"; "
-                         "fine: every element size halved, sizes 16 and 32)")
+                         "section_clamped, section_fine, section_coarse (real rail and wheel sections, closure "
+                         "\"section\"; fine / coarse: every element size halved / doubled, sizes 16 and 32)")
     ap.add_argument("--section-sizes", default=None,
                     help="comma-separated body sizes of the section series (default 1-64; clamped 2-64) "
                          "and of section_fine (default 16,32), e.g. 16,32")
@@ -392,6 +393,8 @@ def main(argv=None) -> int:
         only = None if args.section_sizes is None else {float(v) for v in args.section_sizes.split(",")}
 
         def kept(r):        # with --section-sizes only those sizes of the section series are rerun
+            if r["case"] in keys and r["grading"].startswith("section") and r.get("h_wall") is None:
+                return False    # a section row from before the walls' cap (conformal.meshing.wall)
             if r["case"] not in keys or (r["far_field"], r["grading"]) not in rerun:
                 return True
             return only is not None and r["grading"].startswith("section") and r["size"] not in only
@@ -425,6 +428,10 @@ def main(argv=None) -> int:
             if "section_clamped" in series and case.sections() is not None:
                 rows += run_case(case, tuple(v for v in sec_sizes if v >= 2.0), "clamped", 1.0, cache, "section",
                                  closure="section")
+                _dump(out, rows)
+            if "section_coarse" in series and case.sections() is not None:
+                rows += run_case(case, SECTION_FINE_SIZES if args.section_sizes is None else sec_sizes, "halfspace",
+                                 2.0, cache, "section_coarse", closure="section")
                 _dump(out, rows)
             if "section_fine" in series and case.sections() is not None:
                 rows += run_case(case, SECTION_FINE_SIZES if args.section_sizes is None else sec_sizes, "halfspace",
@@ -507,6 +514,8 @@ def section_limits(rows, summary) -> list[dict]:
                         and r["far_field"] == "clamped" and k in r)
             fine = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section_fine"
                           and k in r)
+            coarse = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section_coarse"
+                            and k in r)
             at = [r[k] for r in rows if r["case"] == case and r["far_field"] == "halfspace"
                   and r["grading"] == "default" and r["size"] == size and k in r]
             lim = sel[-1][1]
@@ -514,7 +523,8 @@ def section_limits(rows, summary) -> list[dict]:
                    "values": " / ".join(f"{v:.4f}" for _, v in sel[-3:]),
                    "sizes": " / ".join(f"{s:g}" for s, _ in sel[-3:]),
                    "clamped_last": cl[-1][1] if cl else None,
-                   "fine": " / ".join(f"{v:.4f} ({s:g})" for s, v in fine) or "-"}
+                   "fine": " / ".join(f"{v:.4f} ({s:g})" for s, v in fine) or "-",
+                   "coarse": " / ".join(f"{v:.4f} ({s:g})" for s, v in coarse) or "-"}
             if at:
                 row.update(default=at[0], default_off=at[0] / lim - 1.0)
             out.append(row)
@@ -561,11 +571,12 @@ def report(rows, summary) -> str:
                  "conformal.geometry.sections): the value at the largest size as the limit, with the change "
                  "from the size before, and the production default's (closure \"extend\") distance from it.",
                  "", "| case | quantity | sizes | section series | limit (largest size) | clamped section, "
-                 "largest size | every element halved | default (extend) | default - limit |",
-                 "|---|---|---|---|---|---|---|---|---|"]
+                 "largest size | every element doubled | every element halved | default (extend) | default - limit |",
+                 "|---|---|---|---|---|---|---|---|---|---|"]
         for c in sec:
             head.append(f"| {c['case']} | {c['quantity']} | {c['sizes']} | {c['values']} | {c['limit']:.4f} +- "
-                        f"{c['err']:.4f} | {f(c.get('clamped_last'))} | {c['fine']} | {f(c.get('default'))} | "
+                        f"{c['err']:.4f} | {f(c.get('clamped_last'))} | {c['coarse']} | {c['fine']} | "
+                        f"{f(c.get('default'))} | "
                         f"{f(c.get('default_off'), '{:+.2%}')} |")
     sizes = sorted({r["size"] for r in rows if "size" in r and r["case"] != "flat"} | set(SIZES))
     lines = head + ["", "| case | quantity | far field / grading | value at size " + " / ".join(f"{s:g}" for s in sizes)
@@ -596,7 +607,8 @@ def _plot(rows, summary, path: Path) -> None:
             for far, grading, style in (("halfspace", "default", "-o"), ("clamped", "default", "--s"),
                                         ("halfspace", "fine", ":^"), ("halfspace", "straight", "-.x"),
                                         ("halfspace", "p2", ":D"), ("halfspace", "section", "-P"),
-                                        ("clamped", "section", "--P"), ("halfspace", "section_fine", ":P")):
+                                        ("clamped", "section", "--P"), ("halfspace", "section_fine", ":P"),
+                                        ("halfspace", "section_coarse", "-.P")):
                 sel = sorted((r for r in rows if r["case"] == case and r["far_field"] == far
                               and r["grading"] == grading and key in r), key=lambda r: r["size"])
                 if sel:

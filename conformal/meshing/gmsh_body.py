@@ -32,6 +32,10 @@ from conformal.meshing.bodies import (BodyExtent, BodyModel, StripPatch, body_ex
 SAMPLING = 0
 CONFORM = ("all", "column", "none")
 CLOSURES = ("extend", "straight", "cut", "section")
+#: closure "section": at the section's re-entrant corners (a web meeting a head, foot or rim
+#: without a fillet: a singular stress) the walls' cap falls to this fraction of its value
+#: (conformal.meshing.wall.wall_cap); halving it with every element keeps the corners graded
+WALL_CORNER = 0.25
 
 
 class MeshingError(ConformalError):
@@ -91,7 +95,7 @@ class MeshSpec:
                "h_max": self.h_max, "conform": self.conform, "body_size": self.body_size,
                "optimize": self.optimize, "closure": self.closure}
         if self.closure == "section":          # the other closures' meshes (and keys) do not use it
-            key["h_wall"] = self.h_wall
+            key.update(h_wall=self.h_wall, wall_corner=WALL_CORNER)
         return key
 
 
@@ -617,7 +621,7 @@ def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
         from conformal.meshing.wall import wall_cap
 
         # the section is the profile closed by its straight support edge (bodies.section_profile)
-        wall = wall_cap(np.column_stack([original.y, original.z]), spec.h_wall, spec.growth)
+        wall = wall_cap(np.column_stack([original.y, original.z]), spec.h_wall, spec.growth, corner=WALL_CORNER)
     if extent is None:
         if spec.closure == "section":
             ext = closed_section_extent(body, patch, spec.body_size)

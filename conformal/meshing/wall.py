@@ -32,6 +32,8 @@ from conformal.errors import InputError
 
 #: raster cells along the section's larger side
 MAX_CELLS = 400
+#: a re-entrant corner: the boundary turns into the material by more than this at one vertex (rad)
+REENTRANT_TURN = math.radians(20.0)
 #: mid-line cells: their neighbourhood's nearest boundary points at least this fraction of the
 #: distance across apart (see _local_thickness)
 OPPOSITE = 0.8
@@ -163,7 +165,8 @@ def _graded(cap: np.ndarray, h: float, growth: float) -> np.ndarray:
     return c
 
 
-def wall_cap(points: np.ndarray, fraction: float, growth: float, *, cells: int = MAX_CELLS) -> WallCap:
+def wall_cap(points: np.ndarray, fraction: float, growth: float, *, corner: float | None = None,
+             cells: int = MAX_CELLS) -> WallCap:
     """The element-size cap of a closed cross-section: ``fraction`` of the local wall thickness,
     graded at ``growth`` (mm per mm) towards thicker parts.
 
@@ -175,6 +178,10 @@ def wall_cap(points: np.ndarray, fraction: float, growth: float, *, cells: int =
         The cap as a fraction of the local wall thickness (> 0; 1/3: three elements across a wall).
     growth : float
         Largest increase of the cap per mm (> 0), as the body's grading (``MeshSpec.growth``).
+    corner : float, optional
+        At the re-entrant corners (:func:`reentrant_corners`: where a web meets a head, foot or
+        rim without a fillet, and the stress is singular) the cap falls to ``corner`` times the
+        wall's cap there, graded at ``growth`` away from it; None: no corner refinement.
     cells : int
         Raster cells along the section's larger side.
 
@@ -205,5 +212,26 @@ def wall_cap(points: np.ndarray, fraction: float, growth: float, *, cells: int =
     if not inside.any():
         raise InputError("wall_cap: the section holds no raster cell (degenerate polygon)")
     t = _local_thickness(P, inside, y0, z0, h)
-    cap = _graded(np.where(inside, fraction * t, np.inf), h, growth)
+    cap = np.where(inside, fraction * t, np.inf)
+    if corner is not None:
+        for v in reentrant_corners(P):
+            i, j = (int(round(c)) for c in ((v - (y0, z0)) / h))
+            blk = (slice(max(i - 1, 0), i + 2), slice(max(j - 1, 0), j + 2))
+            tv = np.nanmax(np.where(inside[blk], t[blk], np.nan)) if inside[blk].any() else np.nan
+            if np.isfinite(tv):
+                cap[blk] = np.minimum(cap[blk], corner * fraction * tv)
+    cap = _graded(cap, h, growth)
     return WallCap(y0, z0, h, inside, t, cap)
+
+
+def reentrant_corners(points: np.ndarray, min_turn: float = REENTRANT_TURN) -> np.ndarray:
+    """The re-entrant (concave) corners of a closed polygon (y, z): vertices where the boundary
+    turns into the material by more than ``min_turn`` (rad) at once (a sampled smooth concave
+    curve, such as a flange root, turns by a fraction of a degree per point and is no corner)."""
+    P = np.asarray(points, dtype=float)
+    e1 = P - np.roll(P, 1, axis=0)
+    e2 = np.roll(P, -1, axis=0) - P
+    cross = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    turn = np.arctan2(cross, np.einsum("ij,ij->i", e1, e2))
+    area = 0.5 * np.sum(P[:, 0] * np.roll(P[:, 1], -1) - np.roll(P[:, 0], -1) * P[:, 1])
+    return P[np.sign(area) * turn < -min_turn]

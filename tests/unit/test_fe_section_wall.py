@@ -11,8 +11,8 @@ import pytest
 
 from conformal.errors import InputError
 from conformal.meshing.bodies import BodyModel, StripPatch, section_profile
-from conformal.meshing.gmsh_body import MeshSpec, mesh_body
-from conformal.meshing.wall import wall_cap
+from conformal.meshing.gmsh_body import WALL_CORNER, MeshSpec, mesh_body
+from conformal.meshing.wall import reentrant_corners, wall_cap
 
 #: a T-shaped "rail": head 30 mm wide and 10 mm deep (its top the contact profile, sampled at
 #: 0.5 mm), a web 8 mm thick down to z = 40 mm, whose lower end is the support edge
@@ -47,6 +47,22 @@ def test_local_thickness_of_a_t_section_and_of_a_tapered_plate():
     np.testing.assert_allclose(c2.thickness_at(x, 0.5 * across), across, rtol=0.02)
     with pytest.raises(InputError):
         wall_cap(P, 0.0, 0.35)
+
+
+def test_reentrant_corners_are_refined():
+    """The T section's two re-entrant corners (web into head, no fillet: a singular stress) and
+    no others (the head's top is sampled, its convex corners are not re-entrant); the cap there
+    falls to ``corner`` x the web's cap and grows at the growth rate away from them."""
+    P, _, _ = _t_section()
+    np.testing.assert_allclose(reentrant_corners(P), [[0.5 * WEB_T, HEAD_D], [-0.5 * WEB_T, HEAD_D]])
+    np.testing.assert_allclose(reentrant_corners(P[::-1]), [[-0.5 * WEB_T, HEAD_D], [0.5 * WEB_T, HEAD_D]])
+    cap = wall_cap(P, 0.25, 0.35, corner=0.25)
+    at = float(cap.at(0.5 * WEB_T - 0.2, HEAD_D + 0.2))
+    assert at == pytest.approx(0.25 * 0.25 * WEB_T, abs=0.35 * 1.5 * cap.spacing)
+    # 5 mm down the web, away from the corner: the growth (chamfer metric, at most 8 % longer)
+    far = float(cap.at(0.0, HEAD_D + 5.0))
+    r = float(np.hypot(0.5 * WEB_T, 5.0))
+    assert min(0.25 * WEB_T, 0.25 * 0.25 * WEB_T + 0.35 * r) <= far + 0.02 <= 0.25 * WEB_T + 0.02
 
 
 def _web_edges(bm) -> np.ndarray:
@@ -90,7 +106,7 @@ def test_wall_cap_enters_the_key_of_section_bodies_only():
         assert MeshSpec(closure=closure).key() == {**old, "closure": closure}
         assert MeshSpec(closure=closure).key() == replace(MeshSpec(closure=closure), h_wall=0.1).key()
     sec = MeshSpec(closure="section")
-    assert sec.key() == {**old, "closure": "section", "h_wall": sec.h_wall}
+    assert sec.key() == {**old, "closure": "section", "h_wall": sec.h_wall, "wall_corner": WALL_CORNER}
     assert replace(sec, h_wall=0.1).key() != sec.key()
     with pytest.raises(InputError, match="fe_h_wall"):
         MeshSpec(h_wall=0.0)
