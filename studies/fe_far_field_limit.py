@@ -33,8 +33,10 @@ section is a slab (the UIC60 head) the unlimited straight continuation at 4-16
 (``fe_closure = "straight"``: its compliance grows without bound, the default limits it); with
 quadratic tetrahedra (``p2``: the default grading, sizes 4-32); and for the real S1002/UIC60 pair
 the whole sections (``section``, ``section_clamped``: ``fe_closure = "section"``, the 60E1 rail's
-head, web and foot and the wheel's rim and web cut by the body's disc, sizes 1-64 and 2-16;
-``section_fine``: every element size halved, sizes 16 and 32).
+head, web and foot and the wheel's rim and web cut by the body's disc, sizes 1-64 and 2-64, their
+meshes capped at ``fe_h_wall`` of the local wall thickness, conformal.meshing.wall;
+``section_fine`` / ``section_coarse``: every element size, the walls' cap included, halved /
+doubled, sizes 16 and 32; ``--section-sizes`` picks other sizes for all three).
 Besides the quantities at the prescribed approach, each row has pmax, the contact area and the
 approach at a prescribed load (the half-space solution's FN along the load direction) over those
 of the half-space numbers at that load (``pmax_load``, ``area_load``, ``approach_load``).  The
