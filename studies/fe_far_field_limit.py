@@ -36,7 +36,8 @@ the whole sections (``section``, ``section_clamped``: ``fe_closure = "section"``
 head, web and foot and the wheel's rim and web cut by the body's disc, sizes 1-64 and 2-64, their
 meshes capped at ``fe_h_wall`` of the local wall thickness, conformal.meshing.wall;
 ``section_fine`` / ``section_coarse``: every element size, the walls' cap included, halved /
-doubled, sizes 16 and 32; ``--section-sizes`` picks other sizes for all three).
+doubled, sizes 16 and 32; ``section_p2``: quadratic tetrahedra on the doubled mesh;
+``--section-sizes`` picks other sizes for all of them).
 Besides the quantities at the prescribed approach, each row has pmax, the contact area and the
 approach at a prescribed load (the half-space solution's FN along the load direction) over those
 of the half-space numbers at that load (``pmax_load``, ``area_load``, ``approach_load``).  The
@@ -83,7 +84,7 @@ P2_SIZES = (4.0, 8.0, 16.0, 32.0)
 SERIES = {"halfspace": ("halfspace", "default"), "clamped": ("clamped", "default"), "fine": ("halfspace", "fine"),
           "straight": ("halfspace", "straight"), "p2": ("halfspace", "p2"), "section": ("halfspace", "section"),
           "section_clamped": ("clamped", "section"), "section_fine": ("halfspace", "section_fine"),
-          "section_coarse": ("halfspace", "section_coarse")}
+          "section_coarse": ("halfspace", "section_coarse"), "section_p2": ("halfspace", "section_p2")}
 SECTION_SIZES = (1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
 SECTION_FINE_SIZES = (16.0, 32.0)
 QUICK_SIZES = (4.0, 8.0, 16.0)
@@ -364,7 +365,8 @@ def main(argv=None) -> int:
                     help="comma-separated: halfspace, clamped, fine (refined grading), straight (slabs not "
                          "limited), p2 (quadratic tetrahedra, default grading, sizes 4-16), section, "
                          "section_clamped, section_fine, section_coarse (real rail and wheel sections, closure "
-                         "\"section\"; fine / coarse: every element size halved / doubled, sizes 16 and 32)")
+                         "\"section\"; fine / coarse: every element size halved / doubled, sizes 16 and 32), "
+                         "section_p2 (quadratic tetrahedra, every element size doubled)")
     ap.add_argument("--section-sizes", default=None,
                     help="comma-separated body sizes of the section series (default 1-64; clamped 2-64) "
                          "and of section_fine (default 16,32), e.g. 16,32")
@@ -434,6 +436,10 @@ def main(argv=None) -> int:
             if "section_coarse" in series and case.sections() is not None:
                 rows += run_case(case, SECTION_FINE_SIZES if args.section_sizes is None else sec_sizes, "halfspace",
                                  2.0, cache, "section_coarse", closure="section")
+                _dump(out, rows)
+            if "section_p2" in series and case.sections() is not None:
+                rows += run_case(case, SECTION_FINE_SIZES if args.section_sizes is None else sec_sizes, "halfspace",
+                                 2.0, cache, "section_p2", closure="section", order=2)
                 _dump(out, rows)
             if "section_fine" in series and case.sections() is not None:
                 rows += run_case(case, SECTION_FINE_SIZES if args.section_sizes is None else sec_sizes, "halfspace",
@@ -518,6 +524,8 @@ def section_limits(rows, summary) -> list[dict]:
                           and k in r)
             coarse = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section_coarse"
                             and k in r)
+            p2 = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section_p2"
+                        and k in r)
             at = [r[k] for r in rows if r["case"] == case and r["far_field"] == "halfspace"
                   and r["grading"] == "default" and r["size"] == size and k in r]
             lim = sel[-1][1]
@@ -526,7 +534,8 @@ def section_limits(rows, summary) -> list[dict]:
                    "sizes": " / ".join(f"{s:g}" for s, _ in sel[-3:]),
                    "clamped_last": cl[-1][1] if cl else None,
                    "fine": " / ".join(f"{v:.4f} ({s:g})" for s, v in fine) or "-",
-                   "coarse": " / ".join(f"{v:.4f} ({s:g})" for s, v in coarse) or "-"}
+                   "coarse": " / ".join(f"{v:.4f} ({s:g})" for s, v in coarse) or "-",
+                   "p2": " / ".join(f"{v:.4f} ({s:g})" for s, v in p2) or "-"}
             if at:
                 row.update(default=at[0], default_off=at[0] / lim - 1.0)
             out.append(row)
@@ -573,11 +582,12 @@ def report(rows, summary) -> str:
                  "conformal.geometry.sections): the value at the largest size as the limit, with the change "
                  "from the size before, and the production default's (closure \"extend\") distance from it.",
                  "", "| case | quantity | sizes | section series | limit (largest size) | clamped section, "
-                 "largest size | every element doubled | every element halved | default (extend) | default - limit |",
-                 "|---|---|---|---|---|---|---|---|---|---|"]
+                 "largest size | every element doubled | every element halved | P2, every element doubled | "
+                 "default (extend) | default - limit |",
+                 "|---|---|---|---|---|---|---|---|---|---|---|"]
         for c in sec:
             head.append(f"| {c['case']} | {c['quantity']} | {c['sizes']} | {c['values']} | {c['limit']:.4f} +- "
-                        f"{c['err']:.4f} | {f(c.get('clamped_last'))} | {c['coarse']} | {c['fine']} | "
+                        f"{c['err']:.4f} | {f(c.get('clamped_last'))} | {c['coarse']} | {c['fine']} | {c['p2']} | "
                         f"{f(c.get('default'))} | "
                         f"{f(c.get('default_off'), '{:+.2%}')} |")
     sizes = sorted({r["size"] for r in rows if "size" in r and r["case"] != "flat"} | set(SIZES))
@@ -610,7 +620,7 @@ def _plot(rows, summary, path: Path) -> None:
                                         ("halfspace", "fine", ":^"), ("halfspace", "straight", "-.x"),
                                         ("halfspace", "p2", ":D"), ("halfspace", "section", "-P"),
                                         ("clamped", "section", "--P"), ("halfspace", "section_fine", ":P"),
-                                        ("halfspace", "section_coarse", "-.P")):
+                                        ("halfspace", "section_coarse", "-.P"), ("halfspace", "section_p2", ":X")):
                 sel = sorted((r for r in rows if r["case"] == case and r["far_field"] == far
                               and r["grading"] == grading and key in r), key=lambda r: r["size"])
                 if sel:
