@@ -411,6 +411,8 @@ FE = Method("fe", "fe_", "FE influence numbers of the real wheel and rail ([mode
                 Option("closure", "str", "extend", "", "a profile ending inside the body: \"extend\" (straight, "
                        "slabs limited) | \"straight\" | \"cut\" | \"section\" (the real rail and wheel sections)",
                        choices=("extend", "straight", "cut", "section")),
+                Option("h_wall", "float", 0.25, "wall thicknesses", "closure \"section\": largest element in a "
+                       "wall of the section (web, foot, rim), relative to its local thickness", positive=True),
             ))
 
 FE_CONTACT = Method("fe_contact", "fec_", "meshed bodies of the direct FE contact (theory fe_contact, "

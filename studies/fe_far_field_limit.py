@@ -33,8 +33,11 @@ section is a slab (the UIC60 head) the unlimited straight continuation at 4-16
 (``fe_closure = "straight"``: its compliance grows without bound, the default limits it); with
 quadratic tetrahedra (``p2``: the default grading, sizes 4-32); and for the real S1002/UIC60 pair
 the whole sections (``section``, ``section_clamped``: ``fe_closure = "section"``, the 60E1 rail's
-head, web and foot and the wheel's rim and web cut by the body's disc, sizes 1-64 and 2-16;
-``section_fine``: every element size halved, sizes 16 and 32).
+head, web and foot and the wheel's rim and web cut by the body's disc, sizes 1-64 and 2-64, their
+meshes capped at ``fe_h_wall`` of the local wall thickness, conformal.meshing.wall;
+``section_fine`` / ``section_coarse``: every element size, the walls' cap included, halved /
+doubled, sizes 16 and 32; ``section_p2``: quadratic tetrahedra on the doubled mesh;
+``--section-sizes`` picks other sizes for all of them).
 Besides the quantities at the prescribed approach, each row has pmax, the contact area and the
 approach at a prescribed load (the half-space solution's FN along the load direction) over those
 of the half-space numbers at that load (``pmax_load``, ``area_load``, ``approach_load``).  The
@@ -80,8 +83,10 @@ P2_SIZES = (4.0, 8.0, 16.0, 32.0)
 #: series name -> (far field, grading label) of its rows
 SERIES = {"halfspace": ("halfspace", "default"), "clamped": ("clamped", "default"), "fine": ("halfspace", "fine"),
           "straight": ("halfspace", "straight"), "p2": ("halfspace", "p2"), "section": ("halfspace", "section"),
-          "section_clamped": ("clamped", "section"), "section_fine": ("halfspace", "section_fine")}
+          "section_clamped": ("clamped", "section"), "section_fine": ("halfspace", "section_fine"),
+          "section_coarse": ("halfspace", "section_coarse"), "section_p2": ("halfspace", "section_p2")}
 SECTION_SIZES = (1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
+SECTION_FINE_SIZES = (16.0, 32.0)
 QUICK_SIZES = (4.0, 8.0, 16.0)
 GRID_N = 16          # elements across the overlap (the scenes' 30-40 cost 2-3 min per pair here)
 
@@ -285,11 +290,15 @@ def _identical_steel():
 # ----------------------------------------------------------------------------- settings
 def fe_settings(size: float, far: str = "halfspace", refine: float = 1.0, **mesh):
     """FE settings of the series: the production defaults, the body size and far field given,
-    every element size (h_patch, h_load, h_max) times ``refine``."""
+    every element size (h_patch, h_load, h_max, and h_wall, which only the closure "section"
+    uses) times ``refine``."""
     from conformal.influence.fe import FESettings
     from conformal.meshing.gmsh_body import MeshSpec
 
     base = MeshSpec()
+    # every element size: with the closure "section" also the walls' cap (a fraction of the local
+    # wall thickness, conformal.meshing.wall)
+    mesh.setdefault("h_wall", base.h_wall * refine)
     spec = replace(base, body_size=size, h_patch=base.h_patch * refine, h_load=base.h_load * refine,
                    h_max=base.h_max * refine, **mesh)
     return FESettings(far_field=far, mesh=spec)
@@ -312,8 +321,9 @@ def run_case(case, sizes, far: str, refine: float, cache, grading: str, **mesh) 
     rows = []
     for s in sizes:
         t0 = time.perf_counter()
+        settings = fe_settings(s, far, refine, **mesh)
         try:
-            kr, kw, st = case.kernels(fe_settings(s, far, refine, **mesh), cache)
+            kr, kw, st = case.kernels(settings, cache)
         except ConformalError as exc:      # e.g. gmsh leaving flat tetrahedra in a small body
             print(f"{case.label}: {far} {grading} size {s:g}: not possible: {exc}", flush=True)
             rows.append({"case": case.key, "far_field": far, "grading": grading, "size": s, "error": str(exc)})
@@ -326,7 +336,10 @@ def run_case(case, sizes, far: str, refine: float, cache, grading: str, **mesh) 
                "FN_wheel_only": case.fn_ratio(case.hs_body["rail"] + kw), **case.at_load(kr + kw),
                "time_s": time.perf_counter() - t0,
                "fe_s": sum(float(v.get("total_s", 0.0)) for v in st.values()),
+               "fe_body_s": [v.get("total_s") for v in st.values()],
+               "peak_rss_gib": max(float(v.get("peak_rss_gib", 0.0)) for v in st.values()),
                "dofs": [v.get("dofs") for v in st.values()],
+               "h_wall": settings.mesh.h_wall if settings.mesh.closure == "section" else None,
                "body": {b: v.get("body") for b, v in st.items()}}
         rows.append(row)
         print(f"{case.label}: {far:9s} {grading:7s} size {s:4g}: C_rail {row['C_rail']:.5f} C_wheel "
@@ -351,8 +364,12 @@ def main(argv=None) -> int:
     ap.add_argument("--series", default="halfspace,clamped,fine,straight,p2,section,section_clamped",
                     help="comma-separated: halfspace, clamped, fine (refined grading), straight (slabs not "
                          "limited), p2 (quadratic tetrahedra, default grading, sizes 4-16), section, "
-                         "section_clamped, section_fine (real rail and wheel sections, closure \"section\"; "
-                         "fine: every element size halved, sizes 16 and 32)")
+                         "section_clamped, section_fine, section_coarse (real rail and wheel sections, closure "
+                         "\"section\"; fine / coarse: every element size halved / doubled, sizes 16 and 32), "
+                         "section_p2 (quadratic tetrahedra, every element size doubled)")
+    ap.add_argument("--section-sizes", default=None,
+                    help="comma-separated body sizes of the section series (default 1-64; clamped 2-64) "
+                         "and of section_fine (default 16,32), e.g. 16,32")
     ap.add_argument("--report", action="store_true",
                     help="only rebuild the report (md, png) from the existing JSON")
     ap.add_argument("--append", action="store_true",
@@ -377,8 +394,16 @@ def main(argv=None) -> int:
     if args.append and (out / "fe_far_field_limit.json").exists():
         old = json.loads((out / "fe_far_field_limit.json").read_text())["rows"]
         rerun = {SERIES[s] for s in series if s in SERIES}
-        rows = [r for r in old if (r["case"] not in keys or (r["far_field"], r["grading"]) not in rerun)
-                and (r["case"] != "flat" or args.quick)]
+        only = None if args.section_sizes is None else {float(v) for v in args.section_sizes.split(",")}
+
+        def kept(r):        # with --section-sizes only those sizes of the section series are rerun
+            if r["case"] in keys and r["grading"].startswith("section") and r.get("h_wall") is None:
+                return False    # a section row from before the walls' cap (conformal.meshing.wall)
+            if r["case"] not in keys or (r["far_field"], r["grading"]) not in rerun:
+                return True
+            return only is not None and r["grading"].startswith("section") and r["size"] not in only
+
+        rows = [r for r in old if kept(r) and (r["case"] != "flat" or args.quick)]
     if args.quick:
         rows += run_flat(QUICK_SIZES, "clamped", cache)
     else:
@@ -399,14 +424,26 @@ def main(argv=None) -> int:
             if "straight" in series and case.slab():
                 rows += run_case(case, STRAIGHT_SIZES, "halfspace", 1.0, cache, "straight", closure="straight")
                 _dump(out, rows)
+            sec_sizes = SECTION_SIZES if args.section_sizes is None else tuple(
+                float(v) for v in args.section_sizes.split(","))
             if "section" in series and case.sections() is not None:
-                rows += run_case(case, SECTION_SIZES, "halfspace", 1.0, cache, "section", closure="section")
+                rows += run_case(case, sec_sizes, "halfspace", 1.0, cache, "section", closure="section")
                 _dump(out, rows)
             if "section_clamped" in series and case.sections() is not None:
-                rows += run_case(case, SECTION_SIZES[1:], "clamped", 1.0, cache, "section", closure="section")
+                rows += run_case(case, tuple(v for v in sec_sizes if v >= 2.0), "clamped", 1.0, cache, "section",
+                                 closure="section")
+                _dump(out, rows)
+            if "section_coarse" in series and case.sections() is not None:
+                rows += run_case(case, SECTION_FINE_SIZES if args.section_sizes is None else sec_sizes, "halfspace",
+                                 2.0, cache, "section_coarse", closure="section")
+                _dump(out, rows)
+            if "section_p2" in series and case.sections() is not None:
+                rows += run_case(case, SECTION_FINE_SIZES if args.section_sizes is None else sec_sizes, "halfspace",
+                                 2.0, cache, "section_p2", closure="section", order=2)
                 _dump(out, rows)
             if "section_fine" in series and case.sections() is not None:
-                rows += run_case(case, (16.0, 32.0), "halfspace", 0.5, cache, "section_fine", closure="section")
+                rows += run_case(case, SECTION_FINE_SIZES if args.section_sizes is None else sec_sizes, "halfspace",
+                                 0.5, cache, "section_fine", closure="section")
                 _dump(out, rows)
             if "p2" in series:
                 rows += run_case(case, P2_SIZES, "halfspace", 1.0, cache, "p2", order=2)
@@ -485,6 +522,10 @@ def section_limits(rows, summary) -> list[dict]:
                         and r["far_field"] == "clamped" and k in r)
             fine = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section_fine"
                           and k in r)
+            coarse = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section_coarse"
+                            and k in r)
+            p2 = sorted((r["size"], r[k]) for r in rows if r["case"] == case and r["grading"] == "section_p2"
+                        and k in r)
             at = [r[k] for r in rows if r["case"] == case and r["far_field"] == "halfspace"
                   and r["grading"] == "default" and r["size"] == size and k in r]
             lim = sel[-1][1]
@@ -492,7 +533,9 @@ def section_limits(rows, summary) -> list[dict]:
                    "values": " / ".join(f"{v:.4f}" for _, v in sel[-3:]),
                    "sizes": " / ".join(f"{s:g}" for s, _ in sel[-3:]),
                    "clamped_last": cl[-1][1] if cl else None,
-                   "fine": " / ".join(f"{v:.4f} ({s:g})" for s, v in fine) or "-"}
+                   "fine": " / ".join(f"{v:.4f} ({s:g})" for s, v in fine) or "-",
+                   "coarse": " / ".join(f"{v:.4f} ({s:g})" for s, v in coarse) or "-",
+                   "p2": " / ".join(f"{v:.4f} ({s:g})" for s, v in p2) or "-"}
             if at:
                 row.update(default=at[0], default_off=at[0] / lim - 1.0)
             out.append(row)
@@ -539,11 +582,13 @@ def report(rows, summary) -> str:
                  "conformal.geometry.sections): the value at the largest size as the limit, with the change "
                  "from the size before, and the production default's (closure \"extend\") distance from it.",
                  "", "| case | quantity | sizes | section series | limit (largest size) | clamped section, "
-                 "largest size | every element halved | default (extend) | default - limit |",
-                 "|---|---|---|---|---|---|---|---|---|"]
+                 "largest size | every element doubled | every element halved | P2, every element doubled | "
+                 "default (extend) | default - limit |",
+                 "|---|---|---|---|---|---|---|---|---|---|---|"]
         for c in sec:
             head.append(f"| {c['case']} | {c['quantity']} | {c['sizes']} | {c['values']} | {c['limit']:.4f} +- "
-                        f"{c['err']:.4f} | {f(c.get('clamped_last'))} | {c['fine']} | {f(c.get('default'))} | "
+                        f"{c['err']:.4f} | {f(c.get('clamped_last'))} | {c['coarse']} | {c['fine']} | {c['p2']} | "
+                        f"{f(c.get('default'))} | "
                         f"{f(c.get('default_off'), '{:+.2%}')} |")
     sizes = sorted({r["size"] for r in rows if "size" in r and r["case"] != "flat"} | set(SIZES))
     lines = head + ["", "| case | quantity | far field / grading | value at size " + " / ".join(f"{s:g}" for s in sizes)
@@ -574,7 +619,8 @@ def _plot(rows, summary, path: Path) -> None:
             for far, grading, style in (("halfspace", "default", "-o"), ("clamped", "default", "--s"),
                                         ("halfspace", "fine", ":^"), ("halfspace", "straight", "-.x"),
                                         ("halfspace", "p2", ":D"), ("halfspace", "section", "-P"),
-                                        ("clamped", "section", "--P"), ("halfspace", "section_fine", ":P")):
+                                        ("clamped", "section", "--P"), ("halfspace", "section_fine", ":P"),
+                                        ("halfspace", "section_coarse", "-.P"), ("halfspace", "section_p2", ":X")):
                 sel = sorted((r for r in rows if r["case"] == case and r["far_field"] == far
                               and r["grading"] == grading and key in r), key=lambda r: r["size"])
                 if sel:

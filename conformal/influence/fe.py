@@ -99,6 +99,9 @@ from conformal.influence.fe_halfspace3d import _gauss_rectangle_stress, rectangl
 from conformal.meshing.bodies import BodyModel, StripPatch
 from conformal.meshing.gmsh_body import BodyMesh, MeshSpec, mesh_body, surface_frame, surface_point
 
+# (closure "section": its bodies' meshes gained a cap at a fraction of the local wall thickness,
+#  MeshSpec.h_wall; their key gained that entry, so that they are new keys without a version bump,
+#  which would have recomputed every other body)
 FE_VERSION = "6"   # 6: keys of every bit of the profile points and patch edges (were rounded to
 #                    12 decimals, under which gmsh's mesh still changed): one key, one mesh (issue 22);
 #                  5: profiles that end inside the body's disc continued straight (closure "extend"),
@@ -114,7 +117,8 @@ COLLOCATIONS = ("centre", "average")
 #: the body's size and closure (conformal.meshing.gmsh_body.closure_report), reported per body in
 #: the statistics (``stats["body"]``) and so in a solve's JSON (``fe.rail.body``, ``fe.wheel.body``)
 _BODY_KEYS = ("disc_radius_mm", "margin_mm", "margin_requested_mm", "closure_lo", "closure_hi",
-              "extension_lo_mm", "extension_hi_mm", "margin_limited_by", "mesh_reach_mm")
+              "extension_lo_mm", "extension_hi_mm", "margin_limited_by", "mesh_reach_mm", "wall_fraction",
+              "wall_thickness_min_mm")
 FAR_FIELDS = ("halfspace", "clamped")
 
 
@@ -839,13 +843,13 @@ def wheel_rail_kernel(grid, material, settings: FESettings = FESettings(), *, ca
 _OPTION_KEYS = {"fe_method": "method", "fe_order": "order", "fe_h_patch": "h_patch", "fe_h_load": "h_load",
                 "fe_growth": "growth", "fe_h_max": "h_max", "fe_conform": "conform",
                 "fe_body_size": "body_size", "fe_solver": "solver", "fe_collocation": "collocation",
-                "fe_far_field": "far_field", "fe_closure": "closure"}
+                "fe_far_field": "far_field", "fe_closure": "closure", "fe_h_wall": "h_wall"}
 
 
 def settings_from_options(options) -> FESettings:
     """FESettings from a scene's [model] keys fe_method, fe_order, fe_h_patch, fe_h_load, fe_growth,
-    fe_h_max, fe_conform, fe_body_size, fe_solver, fe_collocation, fe_far_field, fe_closure (defaults for
-    missing keys)."""
+    fe_h_max, fe_conform, fe_body_size, fe_solver, fe_collocation, fe_far_field, fe_closure, fe_h_wall
+    (defaults for missing keys)."""
     opts = {k: v for k, v in dict(options or {}).items() if str(k).startswith("fe_")}
     unknown = sorted(set(opts) - set(_OPTION_KEYS))
     if unknown:

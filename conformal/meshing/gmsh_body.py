@@ -32,6 +32,10 @@ from conformal.meshing.bodies import (BodyExtent, BodyModel, StripPatch, body_ex
 SAMPLING = 0
 CONFORM = ("all", "column", "none")
 CLOSURES = ("extend", "straight", "cut", "section")
+#: closure "section": at the section's re-entrant corners (a web meeting a head, foot or rim
+#: without a fillet: a singular stress) the walls' cap falls to this fraction of its value
+#: (conformal.meshing.wall.wall_cap); halving it with every element keeps the corners graded
+WALL_CORNER = 0.25
 
 
 class MeshingError(ConformalError):
@@ -67,6 +71,10 @@ class MeshSpec:
     # profile is a whole section's boundary less its support edge ("section", bodies.section_profile:
     # the body is that section cut by the disc)
     closure: str = "extend"
+    # closure "section" only: the largest element in a wall of the section (the rail's web and
+    # foot, the wheel's rim and web), as a fraction of its local thickness (conformal.meshing.wall):
+    # P1 tetrahedra much longer than a wall is thick are too stiff in bending there
+    h_wall: float = 0.25
 
     def __post_init__(self):
         if self.order not in (1, 2):
@@ -75,7 +83,7 @@ class MeshSpec:
             raise InputError(f"[model] fe_closure: must be one of {', '.join(CLOSURES)}, got {self.closure!r}")
         if self.conform not in CONFORM:
             raise InputError(f"[model] fe_conform: must be one of {', '.join(CONFORM)}, got {self.conform!r}")
-        for name in ("h_patch", "growth", "h_max", "body_size"):
+        for name in ("h_patch", "growth", "h_max", "body_size", "h_wall"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise InputError(f"[model] fe_{name}: must be > 0, got {v!r}")
@@ -83,9 +91,12 @@ class MeshSpec:
             raise InputError(f"[model] fe_h_load: must be > 0, got {self.h_load!r}")
 
     def key(self) -> dict:
-        return {"order": self.order, "h_patch": self.h_patch, "h_load": self.h_load, "growth": self.growth,
-                "h_max": self.h_max, "conform": self.conform, "body_size": self.body_size,
-                "optimize": self.optimize, "closure": self.closure}
+        key = {"order": self.order, "h_patch": self.h_patch, "h_load": self.h_load, "growth": self.growth,
+               "h_max": self.h_max, "conform": self.conform, "body_size": self.body_size,
+               "optimize": self.optimize, "closure": self.closure}
+        if self.closure == "section":          # the other closures' meshes (and keys) do not use it
+            key.update(h_wall=self.h_wall, wall_corner=WALL_CORNER)
+        return key
 
 
 @dataclass(frozen=True, eq=False)
@@ -475,8 +486,25 @@ class _NoTetrahedra(Exception):
     """gmsh's 3-D mesher left the volume empty (try another algorithm)."""
 
 
-def _generate(gmsh, body, patch, ext, spec, h_e, threads, algorithm3d, joints=()):
-    """One gmsh session: geometry, size field, mesh (Mesh.Algorithm3D = algorithm3d), extraction."""
+def _wall_size(body: BodyModel, cap):
+    """gmsh's mesh size callback that caps the size at ``cap`` (a :class:`~conformal.meshing.wall.WallCap`
+    of the cross-section) at the point's cross-section coordinates (about the axle for a wheel)."""
+    y0, z0, h, table = cap.y0, cap.z0, cap.spacing, cap.cap
+    ni, nj = table.shape[0] - 1, table.shape[1] - 1
+    axle = body.axle_z if body.revolved else None
+
+    def size(dim, tag, x, y, z, lc):
+        zz = z if axle is None else axle + math.hypot(x, z - axle)
+        i = min(max(int(round((y - y0) / h)), 0), ni)
+        j = min(max(int(round((zz - z0) / h)), 0), nj)
+        return min(lc, float(table[i, j]))
+
+    return size
+
+
+def _generate(gmsh, body, patch, ext, spec, h_e, threads, algorithm3d, joints=(), wall=None):
+    """One gmsh session: geometry, size field, mesh (Mesh.Algorithm3D = algorithm3d), extraction;
+    ``wall``: a wall-thickness cap of the cross-section (closure "section") on top of the size field."""
     if gmsh.isInitialized():
         gmsh.finalize()
     # interruptible=False: no SIGINT handler, so that meshing also works in worker threads (Dask)
@@ -492,6 +520,8 @@ def _generate(gmsh, body, patch, ext, spec, h_e, threads, algorithm3d, joints=()
             n_obs, n_col = _size_field(gmsh, body, patch, ext, spec, h_e)
             if n_obs == 0:
                 raise MeshingError("the patch edges were not found on the body surface")
+            if wall is not None:
+                gmsh.model.mesh.setSizeCallback(_wall_size(body, wall))
             # measured on a 51 x 39 patch: HXT without gmsh's full optimiser meshes in 3-4 s
             # (Delaunay 4-6 s, HXT + optimiser 10-20 s); a cheap pass on tets with quality
             # gamma < 0.2 then removes the slivers (min gamma 0.07 instead of 1e-24).
@@ -586,6 +616,12 @@ def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
     original = body.profile
     joints: tuple[float, ...] = ()
     size = spec.body_size
+    wall = None
+    if spec.closure == "section":
+        from conformal.meshing.wall import wall_cap
+
+        # the section is the profile closed by its straight support edge (bodies.section_profile)
+        wall = wall_cap(np.column_stack([original.y, original.z]), spec.h_wall, spec.growth, corner=WALL_CORNER)
     if extent is None:
         if spec.closure == "section":
             ext = closed_section_extent(body, patch, spec.body_size)
@@ -612,9 +648,9 @@ def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
     try:
         if algorithm3d == 1:
             raise _NoTetrahedra()
-        pts, tets, free, clamped, t1, t2 = _generate(gmsh, body, patch, ext, spec, h_e, threads, 10, joints)
+        pts, tets, free, clamped, t1, t2 = _generate(gmsh, body, patch, ext, spec, h_e, threads, 10, joints, wall)
     except _NoTetrahedra:
-        pts, tets, free, clamped, t1, t2 = _generate(gmsh, body, patch, ext, spec, h_e, threads, 1, joints)
+        pts, tets, free, clamped, t1, t2 = _generate(gmsh, body, patch, ext, spec, h_e, threads, 1, joints, wall)
     if len(tets) == 0:
         raise MeshingError(f"gmsh produced no tetrahedra for the {body.kind} body")
     tets = _drop_flat(pts, tets, body)
@@ -635,4 +671,6 @@ def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
     stats = {"geometry_s": t1 - t0, "mesh_s": t2 - t1, "nodes": len(pts), "tets": len(tets),
              "free_tris": len(free), "clamped_tris": len(clamped), "h_element": h_e,
              **closure_report(original, body, patch, ext, spec.body_size, pts, slab=size < spec.body_size)}
+    if wall is not None:
+        stats.update(wall_fraction=float(spec.h_wall), wall_thickness_min_mm=float(np.nanmin(wall.thickness)))
     return BodyMesh(body, patch, ext, spec, pts, tets, free, clamped, uv, stats)
