@@ -2,7 +2,8 @@
 
 Geometry (same answers to rounding): the cubic pieces against the B-spline, the wheel locus moved
 with the height against the locus sampled at that height, the projections of the near locus
-samples against all samples, the wheel's line intersections on its surface.  Balance: the
+samples against all samples, the wheel's line intersections on its surface, the contact
+point's Newton system in floats against numpy's.  Balance: the
 one-patch passes of a warm-started Manchester sweep against the general balance with tight
 tolerances (an independent path) and against the forces of the code before (stored values).
 """
@@ -103,6 +104,28 @@ def test_wheel_on_lines_meets_the_wheel_surface(y):
         s_w, th, t = gp.wheel_on_lines(wheel, Q, n, s0, th0)
         np.testing.assert_allclose(wheel.point(s_w, th), Q + t[:, None] * n, rtol=0, atol=1e-9)
         assert np.all(np.abs(th - th0) < math.pi) and np.all(np.abs(t) < 1.0)
+
+
+@pytest.mark.parametrize("y", [0.0, 5.0, 7.0])
+def test_float_newton_system_equals_the_numpy_one(y):
+    """The contact point's Newton system in Python floats (the steps of newton_contact) equals
+    the numpy one (residual, Jacobian) to 1e-12 of its largest entry, at the contact point and
+    away from it (tread, the jump at 5 mm, flange)."""
+    from conformal.geometry.search import _newton_system, _residual_and_jacobian, find_contacts
+
+    sc = mbench_case(y)
+    pl = wr.place_scene(sc)
+    wheel = pl.pair.wheel(pl.z_touch + 0.03)
+    f = wheel.frame
+    frame = tuple(tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
+    c = find_contacts(wheel, pl.pair.rail, pl.top).contacts[0]
+    for dq in ((0.0, 0.0, 0.0, 0.0), (0.3, 0.01, 0.5, -0.2)):
+        q = np.array([c.s_w, c.theta, c.x, c.s_r]) + dq
+        F, J, _ = _residual_and_jacobian(wheel, pl.pair.rail, q)
+        F2, J2 = _newton_system(wheel, pl.pair.rail, q, frame)
+        scale = np.abs(J).max()
+        np.testing.assert_allclose(F2, F, rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(J2, J, rtol=0, atol=1e-12 * scale)
 
 
 def test_resample_is_bilinear_and_exact_on_the_same_grid():
