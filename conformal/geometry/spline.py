@@ -136,8 +136,8 @@ class _Pieces:
     x: np.ndarray            # breaks (m + 1,)
     a: np.ndarray            # (4, m, 2) coefficients a0..a3 of (y, z)
     x_list: list             # the same for the scalar path (Python floats)
-    a_list: list             # per piece [(a0y, a0z), (a1y, a1z), (a2y, a2z), (a3y, a3z)]
     rows: np.ndarray         # (8, m): a0y, a0z, a1y, a1z, a2y, a2z, a3y, a3z (one gather per evaluation)
+    by_piece: np.ndarray     # (m, 8): the same per piece (one row per scalar evaluation)
 
     @classmethod
     def of(cls, bs: BSpline) -> "_Pieces":
@@ -145,8 +145,8 @@ class _Pieces:
         x = np.unique(bs.t[k:-k] if k > 0 else bs.t)
         left, mid = x[:-1], 0.5 * (x[:-1] + x[1:])
         a = np.stack([bs(left), bs(left, 1), 0.5 * bs(left, 2), bs(mid, 3) / 6.0])
-        return cls(x, a, x.tolist(), a.transpose(1, 0, 2).tolist(),
-                   np.ascontiguousarray(a.transpose(0, 2, 1).reshape(8, -1)))
+        rows = np.ascontiguousarray(a.transpose(0, 2, 1).reshape(8, -1))
+        return cls(x, a, x.tolist(), rows, np.ascontiguousarray(rows.T))
 
     def _index(self, s: np.ndarray) -> np.ndarray:
         i = np.searchsorted(self.x, s, side="right")
@@ -186,7 +186,7 @@ class _Pieces:
         xs = self.x_list
         i = min(max(bisect.bisect_right(xs, s) - 1, 0), len(xs) - 2)
         t = s - xs[i]
-        (a0y, a0z), (a1y, a1z), (a2y, a2z), (a3y, a3z) = self.a_list[i]
+        a0y, a0z, a1y, a1z, a2y, a2z, a3y, a3z = self.by_piece[i].tolist()
         return (((a3y * t + a2y) * t + a1y) * t + a0y, ((a3z * t + a2z) * t + a1z) * t + a0z,
                 (3.0 * a3y * t + 2.0 * a2y) * t + a1y, (3.0 * a3z * t + 2.0 * a2z) * t + a1z,
                 6.0 * a3y * t + 2.0 * a2y, 6.0 * a3z * t + 2.0 * a2z)
