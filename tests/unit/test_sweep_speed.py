@@ -3,7 +3,7 @@
 Geometry (same answers to rounding): the cubic pieces against the B-spline, the wheel locus moved
 with the height against the locus sampled at that height, the projections of the near locus
 samples against all samples, the wheel's line intersections on its surface, the contact
-point's Newton system in floats against numpy's.  Balance: the
+point's Newton system in floats against numpy's, the contact parts against scipy.ndimage.  Balance: the
 one-patch passes of a warm-started Manchester sweep against the general balance with tight
 tolerances (an independent path) and against the forces of the code before (stored values).
 """
@@ -126,6 +126,24 @@ def test_float_newton_system_equals_the_numpy_one(y):
         scale = np.abs(J).max()
         np.testing.assert_allclose(F2, F, rtol=0, atol=1e-12 * scale)
         np.testing.assert_allclose(J2, J, rtol=0, atol=1e-12 * scale)
+
+
+def test_connected_parts_equal_ndimage_label():
+    """The edge-connected parts of random masks (1 x 1 to 29 x 29, densities 0..1: single
+    elements, stripes, one part spanning the grid) equal scipy.ndimage.label's labels and count,
+    numbering included; an empty mask has none."""
+    from scipy import ndimage
+
+    from conformal.grid import connected_parts
+
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        m = rng.random(tuple(rng.integers(1, 30, size=2))) < rng.random()
+        labels, n = connected_parts(m)
+        ref, n_ref = ndimage.label(m)
+        assert n == n_ref
+        np.testing.assert_array_equal(labels, ref)
+    assert connected_parts(np.zeros((3, 4), bool))[1] == 0
 
 
 def test_resample_is_bilinear_and_exact_on_the_same_grid():
