@@ -2,9 +2,9 @@
 
 Geometry (same answers to rounding): the cubic pieces against the B-spline, the wheel locus moved
 with the height against the locus sampled at that height, the projections of the near locus
-samples against all samples, the wheel's line intersections on its surface, the contact
-point's Newton system in floats against numpy's, the contact parts against scipy.ndimage.  Balance: the
-one-patch passes of a warm-started Manchester sweep against the general balance with tight
+samples against all samples, Cramer's 3 x 3 solves against numpy.linalg.solve, the wheel's
+line intersections on its surface, the contact point's Newton system in floats against numpy's,
+the contact parts against scipy.ndimage.  Balance: the one-patch passes of a warm-started Manchester sweep against the general balance with tight
 tolerances (an independent path) and against the forces of the code before (stored values).
 """
 import json
@@ -85,11 +85,19 @@ def test_near_samples_give_the_patches_of_all_samples(y, monkeypatch):
                                    rtol=0, atol=1e-12)
 
 
+def test_cramer_solves_equal_numpy_solve():
+    rng = np.random.default_rng(3)
+    c0, c1, c2, b = (rng.normal(size=(50, 3)) for _ in range(4))
+    ref = np.linalg.solve(np.stack([c0, c1, c2], axis=2), b[..., None])[..., 0]
+    np.testing.assert_allclose(gp._solve3(c0, c1, c2, b), ref, rtol=1e-10, atol=1e-12)
+    with pytest.raises(np.linalg.LinAlgError):
+        gp._solve3(c0, c0, c2, b)
+
+
 @pytest.mark.parametrize("y", [0.0, 7.0])
 def test_wheel_on_lines_meets_the_wheel_surface(y):
-    """The intersections of lines with the wheel (Newton on the meridian: axial position and
-    radius) lie on the revolved wheel surface, r_w(s_w, theta) = Q + t n within 1e-9 mm, for the
-    lines of a planar grid (one direction: tread at 0 mm, flange at 7 mm) and for lines of
+    """The intersections of lines with the wheel lie on the revolved wheel surface,
+    r_w(s_w, theta) = Q + t n within 1e-9 mm, for the lines of a planar grid (one direction: tread at 0 mm, flange at 7 mm) and for lines of
     their own directions (a curved grid's local normals); theta within pi of its start."""
     sc = mbench_case(y)
     pl = wr.place_scene(sc)
