@@ -4,8 +4,9 @@ Geometry (same answers to rounding): the cubic pieces against the B-spline, the 
 with the height against the locus sampled at that height, the projections of the near locus
 samples against all samples, Cramer's 3 x 3 solves against numpy.linalg.solve, the wheel's
 line intersections on its surface, the contact point's Newton system in floats against numpy's,
-the contact parts against scipy.ndimage.  Balance: the one-patch passes of a warm-started Manchester sweep against the general balance with tight
-tolerances (an independent path) and against the forces of the code before (stored values).
+the contact parts against scipy.ndimage.  Balance: the one-patch passes of a warm-started
+Manchester sweep against the general balance with tight tolerances (an independent path) and
+against the forces of the code before (stored values).
 """
 import json
 import math
