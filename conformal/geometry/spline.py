@@ -155,19 +155,23 @@ class _Pieces:
 
     def eval(self, s, nu: int = 0) -> np.ndarray:
         """The curve (nu = 0) or its derivative of order nu (1, 2, 3) at s, shape s.shape + (2,)."""
+        if nu not in (0, 1, 2, 3):
+            raise ValueError(f"derivative order {nu} of a cubic")
         s = np.asarray(s, dtype=float)
         i = self._index(s)
-        t = (s - self.x[i])[..., None]
-        a0, a1, a2, a3 = self.a[0][i], self.a[1][i], self.a[2][i], self.a[3][i]
-        if nu == 0:
-            return ((a3 * t + a2) * t + a1) * t + a0
-        if nu == 1:
-            return (3.0 * a3 * t + 2.0 * a2) * t + a1
-        if nu == 2:
-            return 6.0 * a3 * t + 2.0 * a2
-        if nu == 3:
-            return 6.0 * a3 + 0.0 * t
-        raise ValueError(f"derivative order {nu} of a cubic")
+        t = s - self.x[i]
+        a0y, a0z, a1y, a1z, a2y, a2z, a3y, a3z = self.rows.take(i, axis=1)
+        out = []
+        for a0, a1, a2, a3 in ((a0y, a1y, a2y, a3y), (a0z, a1z, a2z, a3z)):
+            if nu == 0:
+                out.append(((a3 * t + a2) * t + a1) * t + a0)
+            elif nu == 1:
+                out.append((3.0 * a3 * t + 2.0 * a2) * t + a1)
+            elif nu == 2:
+                out.append(6.0 * a3 * t + 2.0 * a2)
+            else:
+                out.append(6.0 * a3 + 0.0 * t)
+        return np.stack(out, axis=-1)
 
     def derivatives(self, s) -> tuple[np.ndarray, ...]:
         s = np.asarray(s, dtype=float)
