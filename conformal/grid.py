@@ -174,3 +174,48 @@ class CurvedGrid:
     def mesh(self) -> tuple[np.ndarray, np.ndarray]:
         """Element centres (x, s) as two (mx, ms) arrays."""
         return np.meshgrid(self.x, self.s, indexing="ij")
+
+
+def connected_parts(mask: np.ndarray) -> tuple[np.ndarray, int]:
+    """The edge-connected parts of a boolean grid array (e.g. the contact elements): labels of the
+    array's shape, 0 outside ``mask`` and 1..n numbered in the raster order of each part's first
+    element, and n (what ``scipy.ndimage.label`` gives with its default structure, without
+    importing scipy.ndimage, whose import costs about 0.3 s of CPU).
+
+    Parameters
+    ----------
+    mask : boolean array (any number of axes); neighbours share a face (2-D: an edge).
+
+    Returns
+    -------
+    (labels, n): int32 labels of ``mask``'s shape and the number of parts.
+
+    >>> connected_parts(np.array([[1, 0, 1], [1, 0, 0], [0, 1, 1]], bool))[0].tolist()
+    [[1, 0, 2], [1, 0, 0], [0, 3, 3]]
+    """
+    m = np.asarray(mask, bool)
+    labels = np.zeros(m.shape, dtype=np.int32)
+    idx = np.flatnonzero(m)
+    if idx.size == 0:
+        return labels, 0
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    node = np.full(m.size, -1, dtype=np.int64)
+    node[idx] = np.arange(idx.size)
+    node = node.reshape(m.shape)
+    a, b = [], []
+    for axis in range(m.ndim):        # neighbours along each axis
+        lo = tuple(slice(None, -1) if k == axis else slice(None) for k in range(m.ndim))
+        hi = tuple(slice(1, None) if k == axis else slice(None) for k in range(m.ndim))
+        both = m[lo] & m[hi]
+        a.append(node[lo][both])
+        b.append(node[hi][both])
+    a, b = np.concatenate(a), np.concatenate(b)
+    graph = coo_matrix((np.ones(a.size), (a, b)), shape=(idx.size, idx.size))
+    n, comp = connected_components(graph, directed=False)
+    _, first = np.unique(comp, return_index=True)       # each part's first element (raster order)
+    rank = np.empty(n, dtype=np.int32)
+    rank[np.argsort(first)] = np.arange(1, n + 1, dtype=np.int32)
+    labels.reshape(-1)[idx] = rank[comp]
+    return labels, int(n)

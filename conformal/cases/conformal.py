@@ -26,6 +26,7 @@ from conformal.cases.wheelrail import (curved_creepages, loaded_state, patch_inf
 from conformal.errors import ConvergenceError, InputError
 from conformal.geometry.patches import Patch, curved_grid_for_patch
 from conformal.geometry.wheelrail import profile_curves
+from conformal.grid import connected_parts
 from conformal.result import EXTERIOR, Result
 from conformal.specs import Friction
 from conformal.solvers.conformal import (MAX_ELEMENTS, CurvedProblem, approach_weights, column_creepages,
@@ -478,12 +479,10 @@ def _contact_parts(problem: CurvedProblem, result: Result, builder: StripBuilder
     """The contact regions of a coupled strip solution (connected sets of contact elements, side
     frame) as patches for strips of their own: x and s ranges of the region, reference point at
     its pressure centroid along s; regions under MIN_PART_SHARE of FN are dropped."""
-    from scipy import ndimage
-
     g = problem.grid
     pn = result.field.side_frame("pn")
     contact = result.field.side_frame("status") != EXTERIOR
-    labels, n = ndimage.label(contact)
+    labels, n = connected_parts(contact)
     dS = np.broadcast_to(g.area, g.shape)
     total = float((pn * dS).sum())
     parts = []

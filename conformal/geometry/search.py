@@ -242,6 +242,35 @@ def _residual_and_jacobian(wheel: WheelSurface, rail: RailSurface, q: np.ndarray
                       u2=u2, rho2=rho2, rho=rho, t2r=t2r / g, d=d, Y1=Y1, Z1=Z1, Y2=Y2, Z2=Z2)
 
 
+def _newton_system(wheel: WheelSurface, rail: RailSurface, q, frame: tuple) -> tuple[list, list]:
+    """F and J of :func:`_residual_and_jacobian` (the same expressions) in Python floats, for the
+    Newton steps (four unknowns: numpy's per-call cost exceeds the arithmetic); ``frame`` = the
+    wheel frame's (O, a, e_d, e_f) as tuples."""
+    s_w, th, x, s_r = (float(v) for v in q)
+    u, rho, u1, rho1, u2, rho2 = (float(v) for v in wheel.meridian(s_w))
+    (O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (f0, f1, f2) = frame
+    c, sn = math.cos(th), math.sin(th)
+    er = (c * d0 + sn * f0, c * d1 + sn * f1, c * d2 + sn * f2)
+    et = (-sn * d0 + c * f0, -sn * d1 + c * f1, -sn * d2 + c * f2)
+    rw = (O0 + u * a0 + rho * er[0], O1 + u * a1 + rho * er[1], O2 + u * a2 + rho * er[2])
+    t1w = (u1 * a0 + rho1 * er[0], u1 * a1 + rho1 * er[1], u1 * a2 + rho1 * er[2])
+    t2w = (rho * et[0], rho * et[1], rho * et[2])
+    Y, Z, Y1, Z1, Y2, Z2 = (float(v) for v in rail.profile(s_r))
+    g = math.hypot(Y1, Z1)
+    n1, n2 = -Z1 / g, Y1 / g                      # n = (0, n1, n2)
+    ndm = n1 * -Z2 + n2 * Y2
+    dn1, dn2 = (-Z2 - n1 * ndm) / g, (Y2 - n2 * ndm) / g
+    e0, e1, e2 = rw[0] - x, rw[1] - Y, rw[2] - Z
+    a_ss = (u2 * a1 + rho2 * er[1], u2 * a2 + rho2 * er[2])
+    etn = et[1] * n1 + et[2] * n2
+    F = [e0, Y1 * e1 + Z1 * e2, t1w[1] * n1 + t1w[2] * n2, etn]
+    J = [[t1w[0], t2w[0], -1.0, 0.0],
+         [Y1 * t1w[1] + Z1 * t1w[2], Y1 * t2w[1] + Z1 * t2w[2], 0.0, (Y2 * e1 + Z2 * e2) - (Y1 * Y1 + Z1 * Z1)],
+         [a_ss[0] * n1 + a_ss[1] * n2, rho1 * etn, 0.0, t1w[1] * dn1 + t1w[2] * dn2],
+         [0.0, -(er[1] * n1 + er[2] * n2), 0.0, et[1] * dn1 + et[2] * dn2]]
+    return F, J
+
+
 def _curvatures(wheel: WheelSurface, rail: RailSurface, v: dict) -> tuple[np.ndarray, float, float]:
     """Relative curvature matrix in (t1 = e_x, t2) and the lateral profile curvatures."""
     n, f = v["n"], wheel.frame
@@ -266,11 +295,12 @@ def newton_contact(wheel: WheelSurface, rail: RailSurface, q0, *, tol: float = 1
     q = np.array(q0, dtype=float)
     Lw, Lr = wheel.curve.length, rail.curve.length
     res = np.inf
+    f = wheel.frame
+    frame = tuple(tuple(float(c) for c in vec) for vec in (f.O, f.a, f.e_d, f.e_f))
     for it in range(1, maxit + 1):
-        F, J, v = _residual_and_jacobian(wheel, rail, q)
-        res = float(np.linalg.norm(F))
+        F, J = _newton_system(wheel, rail, q, frame)
         try:
-            dq = np.linalg.solve(J, -F)
+            dq = np.linalg.solve(np.array(J), -np.array(F))
         except np.linalg.LinAlgError:
             raise ConvergenceError("contact search: singular Jacobian (seed Eq. 55) at "
                                    f"s_w = {q[0]:.3f}, s_r = {q[3]:.3f} mm") from None

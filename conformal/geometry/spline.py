@@ -136,7 +136,8 @@ class _Pieces:
     x: np.ndarray            # breaks (m + 1,)
     a: np.ndarray            # (4, m, 2) coefficients a0..a3 of (y, z)
     x_list: list             # the same for the scalar path (Python floats)
-    a_list: list             # per piece [(a0y, a0z), (a1y, a1z), (a2y, a2z), (a3y, a3z)]
+    rows: np.ndarray         # (8, m): a0y, a0z, a1y, a1z, a2y, a2z, a3y, a3z (one gather per evaluation)
+    by_piece: np.ndarray     # (m, 8): the same per piece (one row per scalar evaluation)
 
     @classmethod
     def of(cls, bs: BSpline) -> "_Pieces":
@@ -144,43 +145,52 @@ class _Pieces:
         x = np.unique(bs.t[k:-k] if k > 0 else bs.t)
         left, mid = x[:-1], 0.5 * (x[:-1] + x[1:])
         a = np.stack([bs(left), bs(left, 1), 0.5 * bs(left, 2), bs(mid, 3) / 6.0])
-        return cls(x, a, x.tolist(), a.transpose(1, 0, 2).tolist())
+        rows = np.ascontiguousarray(a.transpose(0, 2, 1).reshape(8, -1))
+        return cls(x, a, x.tolist(), rows, np.ascontiguousarray(rows.T))
 
     def _index(self, s: np.ndarray) -> np.ndarray:
-        return np.clip(np.searchsorted(self.x, s, side="right") - 1, 0, self.x.size - 2)
+        i = np.searchsorted(self.x, s, side="right")
+        i -= 1
+        return np.minimum(np.maximum(i, 0), self.x.size - 2)
 
     def eval(self, s, nu: int = 0) -> np.ndarray:
         """The curve (nu = 0) or its derivative of order nu (1, 2, 3) at s, shape s.shape + (2,)."""
+        if nu not in (0, 1, 2, 3):
+            raise ValueError(f"derivative order {nu} of a cubic")
         s = np.asarray(s, dtype=float)
         i = self._index(s)
-        t = (s - self.x[i])[..., None]
-        a0, a1, a2, a3 = self.a[0][i], self.a[1][i], self.a[2][i], self.a[3][i]
-        if nu == 0:
-            return ((a3 * t + a2) * t + a1) * t + a0
-        if nu == 1:
-            return (3.0 * a3 * t + 2.0 * a2) * t + a1
-        if nu == 2:
-            return 6.0 * a3 * t + 2.0 * a2
-        if nu == 3:
-            return 6.0 * a3 + 0.0 * t
-        raise ValueError(f"derivative order {nu} of a cubic")
+        t = s - self.x[i]
+        a0y, a0z, a1y, a1z, a2y, a2z, a3y, a3z = self.rows.take(i, axis=1)
+        out = []
+        for a0, a1, a2, a3 in ((a0y, a1y, a2y, a3y), (a0z, a1z, a2z, a3z)):
+            if nu == 0:
+                out.append(((a3 * t + a2) * t + a1) * t + a0)
+            elif nu == 1:
+                out.append((3.0 * a3 * t + 2.0 * a2) * t + a1)
+            elif nu == 2:
+                out.append(6.0 * a3 * t + 2.0 * a2)
+            else:
+                out.append(6.0 * a3 + 0.0 * t)
+        return np.stack(out, axis=-1)
 
     def derivatives(self, s) -> tuple[np.ndarray, ...]:
         s = np.asarray(s, dtype=float)
         i = self._index(s)
-        t = (s - self.x[i])[..., None]
-        a0, a1, a2, a3 = self.a[0][i], self.a[1][i], self.a[2][i], self.a[3][i]
-        c0 = ((a3 * t + a2) * t + a1) * t + a0
-        c1 = (3.0 * a3 * t + 2.0 * a2) * t + a1
-        c2 = 6.0 * a3 * t + 2.0 * a2
-        return (c0[..., 0], c0[..., 1], c1[..., 0], c1[..., 1], c2[..., 0], c2[..., 1])
+        t = s - self.x[i]
+        a0y, a0z, a1y, a1z, a2y, a2z, a3y, a3z = self.rows.take(i, axis=1)
+        out = []
+        for a0, a1, a2, a3 in ((a0y, a1y, a2y, a3y), (a0z, a1z, a2z, a3z)):
+            out.append((((a3 * t + a2) * t + a1) * t + a0, (3.0 * a3 * t + 2.0 * a2) * t + a1,
+                        6.0 * a3 * t + 2.0 * a2))
+        (y, y1, y2), (z, z1, z2) = out
+        return (y, z, y1, z1, y2, z2)
 
     def scalar(self, s: float) -> tuple[float, ...]:
         """y, z, y', z', y'', z'' at one arc length (Python floats)."""
         xs = self.x_list
         i = min(max(bisect.bisect_right(xs, s) - 1, 0), len(xs) - 2)
         t = s - xs[i]
-        (a0y, a0z), (a1y, a1z), (a2y, a2z), (a3y, a3z) = self.a_list[i]
+        a0y, a0z, a1y, a1z, a2y, a2z, a3y, a3z = self.by_piece[i].tolist()
         return (((a3y * t + a2y) * t + a1y) * t + a0y, ((a3z * t + a2z) * t + a1z) * t + a0z,
                 (3.0 * a3y * t + 2.0 * a2y) * t + a1y, (3.0 * a3z * t + 2.0 * a2z) * t + a1z,
                 6.0 * a3y * t + 2.0 * a2y, 6.0 * a3z * t + 2.0 * a2z)

@@ -158,9 +158,11 @@ class HalfSpaceInfluence:
         key = ("D", name)
         if key not in self._fhat:
             mx, my = self.mx, self.my
-            cx = (np.arange(mx) + 0.5) * self.dx
-            cy = (np.arange(my) + 0.5) * self.dy
-            F = _primitives(cx[:, None], cy[None, :])[_PRIM_INDEX[name]]
+            if "primitives" not in self._fhat:   # all five at once (one evaluation per operator)
+                cx = (np.arange(mx) + 0.5) * self.dx
+                cy = (np.arange(my) + 0.5) * self.dy
+                self._fhat["primitives"] = _primitives(cx[:, None], cy[None, :])
+            F = self._fhat["primitives"][_PRIM_INDEX[name]]
             sa, sb = _PARITY[name]
             full = np.empty((2 * mx, 2 * my))
             full[mx:, my:] = F

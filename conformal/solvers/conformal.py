@@ -65,7 +65,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from conformal.errors import ConvergenceError, InputError
-from conformal.grid import CurvedGrid, PlanarGrid
+from conformal.grid import CurvedGrid, PlanarGrid, connected_parts
 from conformal.influence.operator import InfluenceOperator, build_operator
 from conformal.materials import Material
 from conformal.problem import ContactProblem
@@ -277,9 +277,7 @@ def curved_totals(grid: CurvedGrid, pn: np.ndarray, px: np.ndarray, ps: np.ndarr
 def _regions(grid: CurvedGrid, pn, px, ps, contact) -> list[dict]:
     """Connected contact regions (e.g. a tread and a flange patch on one strip), largest first:
     totals, contact-angle range and position along s of each."""
-    from scipy import ndimage
-
-    labels, n = ndimage.label(contact)
+    labels, n = connected_parts(contact)
     out = []
     for k in range(1, n + 1):
         m = labels == k

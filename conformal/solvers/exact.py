@@ -23,7 +23,7 @@ from typing import Any, Callable
 import numpy as np
 
 from conformal.errors import InputError
-from conformal.grid import PlanarGrid
+from conformal.grid import PlanarGrid, connected_parts
 from conformal.influence.operator import InfluenceOperator, build_operator
 from conformal.problem import ContactProblem
 from conformal.result import ADHESION, EXTERIOR, Result, TractionField
@@ -81,12 +81,10 @@ def _edge_warning(grid: PlanarGrid, contact: np.ndarray) -> str | None:
 
 def _patches(grid: PlanarGrid, pn: np.ndarray, contact: np.ndarray) -> list[float]:
     """Normal force of each connected contact patch (edge-connected elements), largest first."""
-    from scipy import ndimage
-
-    labels, n = ndimage.label(contact)
+    labels, n = connected_parts(contact)
     if n == 0:
         return []
-    forces = ndimage.sum_labels(pn, labels, index=np.arange(1, n + 1)) * grid.area
+    forces = np.bincount(labels.ravel(), weights=np.asarray(pn, float).ravel(), minlength=n + 1)[1:] * grid.area
     return sorted((float(f) for f in np.atleast_1d(forces)), reverse=True)
 
 

@@ -144,6 +144,7 @@ monotone) and is reached from zero tractions (or ``p_start``).
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -208,6 +209,25 @@ class TangentialSolution:
 
 
 # ----------------------------------------------------------------------------- the operator L
+#: what the slip operators of one influence operator share across solves (its longer version, the
+#: single-precision product, the preconditioner's symbols, the coarse levels), per rolling kind and
+#: element length; held while the influence operator lives (the planar half-space operators are
+#: themselves shared per grid shape, so the contact solves of a sweep's position and of the
+#: balance passes on one grid build the preconditioner once).  Pure functions of the operator:
+#: the same numbers as a fresh build.
+_PER_OPERATOR: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _operator_shared(op, steady: bool, dx: float) -> dict:
+    """The dict of :data:`_PER_OPERATOR` for ``op`` (a fresh one where the operator cannot be
+    referenced weakly or hashed)."""
+    try:
+        per = _PER_OPERATOR.setdefault(op, {})
+    except TypeError:
+        return {}
+    return per.setdefault((bool(steady), float(dx)), {})
+
+
 class _SlipOperator:
     """L p on the contact elements (steady: upwind difference of A p over dx; shift: A p) and its
     approximate inverse (the preconditioner), see the module docstring.
@@ -227,7 +247,7 @@ class _SlipOperator:
         #                             in this grid's units
         # what depends on the operator alone (longer operator, single-precision product, the
         # preconditioner's symbols), shared by the operators of other contact sets on this grid
-        self._shared = shared = {} if shared is None else shared
+        self._shared = shared = _operator_shared(op, steady, grid.dx) if shared is None else shared
         self._ext = None
         if steady and contact[-1].any():  # u' of the leading column lies outside the grid; operators
             if "ext" not in shared:       # without a longer version fall back to u' = u there

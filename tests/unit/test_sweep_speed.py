@@ -2,9 +2,11 @@
 
 Geometry (same answers to rounding): the cubic pieces against the B-spline, the wheel locus moved
 with the height against the locus sampled at that height, the projections of the near locus
-samples against all samples, Cramer's 3 x 3 solves against numpy.linalg.solve.  Balance: the
-one-patch passes of a warm-started Manchester sweep against the general balance with tight
-tolerances (an independent path) and against the forces of the code before (stored values).
+samples against all samples, Cramer's 3 x 3 solves against numpy.linalg.solve, the wheel's
+line intersections on its surface, the contact point's Newton system in floats against numpy's,
+the contact parts against scipy.ndimage.  Balance: the one-patch passes of a warm-started
+Manchester sweep against the general balance with tight tolerances (an independent path) and
+against the forces of the code before (stored values).
 """
 import json
 import math
@@ -91,6 +93,66 @@ def test_cramer_solves_equal_numpy_solve():
     np.testing.assert_allclose(gp._solve3(c0, c1, c2, b), ref, rtol=1e-10, atol=1e-12)
     with pytest.raises(np.linalg.LinAlgError):
         gp._solve3(c0, c0, c2, b)
+
+
+@pytest.mark.parametrize("y", [0.0, 7.0])
+def test_wheel_on_lines_meets_the_wheel_surface(y):
+    """The intersections of lines with the wheel lie on the revolved wheel surface,
+    r_w(s_w, theta) = Q + t n within 1e-9 mm, for the lines of a planar grid (one direction: tread at 0 mm, flange at 7 mm) and for lines of
+    their own directions (a curved grid's local normals); theta within pi of its start."""
+    sc = mbench_case(y)
+    pl = wr.place_scene(sc)
+    wheel = pl.pair.wheel(pl.z_touch + 0.05)
+    patch = gp.find_patches(wheel, pl.pair.rail, pl.top)[0]
+    X, Y = np.meshgrid(np.linspace(-6.0, 6.0, 25), np.linspace(-4.0, 4.0, 17), indexing="ij")
+    Q = patch.point + X.reshape(-1, 1) * np.array([1.0, 0.0, 0.0]) + Y.reshape(-1, 1) * patch.t2
+    s0, th0 = gp._wheel_start(wheel, patch, Q)
+    rng = np.random.default_rng(5)
+    tilt = patch.normal + 0.05 * rng.normal(size=Q.shape)
+    for n in (patch.normal, tilt / np.linalg.norm(tilt, axis=1, keepdims=True)):
+        s_w, th, t = gp.wheel_on_lines(wheel, Q, n, s0, th0)
+        np.testing.assert_allclose(wheel.point(s_w, th), Q + t[:, None] * n, rtol=0, atol=1e-9)
+        assert np.all(np.abs(th - th0) < math.pi) and np.all(np.abs(t) < 1.0)
+
+
+@pytest.mark.parametrize("y", [0.0, 5.0, 7.0])
+def test_float_newton_system_equals_the_numpy_one(y):
+    """The contact point's Newton system in Python floats (the steps of newton_contact) equals
+    the numpy one (residual, Jacobian) to 1e-12 of its largest entry, at the contact point and
+    away from it (tread, the jump at 5 mm, flange)."""
+    from conformal.geometry.search import _newton_system, _residual_and_jacobian, find_contacts
+
+    sc = mbench_case(y)
+    pl = wr.place_scene(sc)
+    wheel = pl.pair.wheel(pl.z_touch + 0.03)
+    f = wheel.frame
+    frame = tuple(tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
+    c = find_contacts(wheel, pl.pair.rail, pl.top).contacts[0]
+    for dq in ((0.0, 0.0, 0.0, 0.0), (0.3, 0.01, 0.5, -0.2)):
+        q = np.array([c.s_w, c.theta, c.x, c.s_r]) + dq
+        F, J, _ = _residual_and_jacobian(wheel, pl.pair.rail, q)
+        F2, J2 = _newton_system(wheel, pl.pair.rail, q, frame)
+        scale = np.abs(J).max()
+        np.testing.assert_allclose(F2, F, rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(J2, J, rtol=0, atol=1e-12 * scale)
+
+
+def test_connected_parts_equal_ndimage_label():
+    """The edge-connected parts of random masks (1 x 1 to 29 x 29, densities 0..1: single
+    elements, stripes, one part spanning the grid) equal scipy.ndimage.label's labels and count,
+    numbering included; an empty mask has none."""
+    from scipy import ndimage
+
+    from conformal.grid import connected_parts
+
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        m = rng.random(tuple(rng.integers(1, 30, size=2))) < rng.random()
+        labels, n = connected_parts(m)
+        ref, n_ref = ndimage.label(m)
+        assert n == n_ref
+        np.testing.assert_array_equal(labels, ref)
+    assert connected_parts(np.zeros((3, 4), bool))[1] == 0
 
 
 def test_resample_is_bilinear_and_exact_on_the_same_grid():
