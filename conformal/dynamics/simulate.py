@@ -95,7 +95,7 @@ def integrate_model(model: WheelsetModel, X0: np.ndarray, t_end: float, *, metho
                     progress: bool = False, max_step: float = np.inf) -> tuple[np.ndarray, np.ndarray, int, int]:
     """Integrate from X0 over [0, t_end]; returns output times, states (n, 8), steps, RHS calls."""
     if method not in SOLVERS:
-        raise ConvergenceError(f"[simulation] method: unknown integrator {method!r}")
+        raise InputError(f"[simulation] method: unknown integrator {method!r}; one of {', '.join(SOLVERS)}")
     # absolute tolerances per component: atol for y (m) and psi (rad), atol/10 for z and phi (the
     # contact overlap, ~65 um, follows them), x10 for the velocities
     scale = np.array([1e-3, 1e-4, 1e-4, 1e-3, 1e-2, 1e-3, 1e-3, 1e-2])

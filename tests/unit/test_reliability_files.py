@@ -481,3 +481,150 @@ def test_every_writer_of_the_package_is_atomic():
             if RAW_WRITERS.search(code) and "tmp" not in code and ">>>" not in line:
                 found.append(f"{path.relative_to(PACKAGE)}:{n}: {line.strip()}")
     assert found == []
+
+
+# ============================================================================ not converged: exit 3 everywhere
+def _maxit1_scene(tmp_path, base: str = "circ.toml", n: int = 10) -> Path:
+    """circ.toml solved by the exact theory with maxit = 1 (a solve that cannot converge)."""
+    text = (SCENES / base).read_text(encoding="utf-8")
+    text = text.replace('theory = "fastsim"', 'theory = "exact"\nmaxit = 1').replace("n = 50", f"n = {n}")
+    text += "\n[stresses]\nn_depths = 4\n"
+    scene = tmp_path / "m1.toml"
+    scene.write_text(text, encoding="utf-8")
+    return scene
+
+
+def test_stresses_of_an_unconverged_solve_exit_3(tmp_path, capsys):
+    """``stresses`` used to print the stresses of a non-converged solve and exit 0 without a word
+    in its JSON; now "converged": false, one error line and exit 3 (0 with --allow-unconverged)."""
+    scene = _maxit1_scene(tmp_path)
+    out = tmp_path / "s.json"
+    assert main(["stresses", str(scene), "--json", str(out)]) == 3
+    _one_error_line(capsys.readouterr().err, "did not converge", "--allow-unconverged")
+    assert json.loads(out.read_text(encoding="utf-8"))["converged"] is False
+    assert main(["stresses", str(scene), "--allow-unconverged"]) == 0
+    capsys.readouterr()
+    scene.write_text(scene.read_text(encoding="utf-8").replace("maxit = 1", "maxit = 1000"), encoding="utf-8")
+    assert main(["stresses", str(scene), "--json", str(out)]) == 0
+    assert json.loads(out.read_text(encoding="utf-8"))["converged"] is True
+
+
+def test_table_build_with_unconverged_nodes_exits_3(tmp_path, capsys):
+    """A creep table whose exact solves stop at maxit (tol 1e-300 cannot be met) used to be written
+    with exit 0; the count was only in its metadata.  Now exit 3 naming the count (the table is
+    written: a rerun would give the same nodes), 0 with --allow-unconverged."""
+    spec = tmp_path / "spec.toml"
+    spec.write_text(textwrap.dedent("""\
+        [table]
+        ratio_min = 1.0
+        ratio_max = 1.0
+        n_ratio = 1
+        nu_min = 0.28
+        nu_max = 0.28
+        n_nu = 1
+        rho_max = 1.0
+        n_rho = 2
+        n_theta = 2
+        spin_max = 0.0
+        n_spin = 1
+        [solver]
+        grid_n = 6
+        tol = 1e-300
+        [build]
+        chunk = 2
+        """), encoding="utf-8")
+    out = tmp_path / "t.npz"
+    assert main(["table", "build", str(spec), "--out", str(out), "--no-progress"]) == 3
+    cap = capsys.readouterr()
+    _one_error_line(cap.err, "table nodes did not converge", "nonconverged_nodes")
+    assert "NOT CONVERGED" in cap.out and out.is_file()
+    from conformal.tables.table import load_table
+
+    assert load_table(out).meta["nonconverged_nodes"] > 0
+    out.unlink()
+    assert main(["table", "build", str(spec), "--out", str(out), "--no-progress", "--allow-unconverged"]) == 0
+
+
+def test_inp_reports_converged_and_exits_3_for_an_unconverged_case(tmp_path, capsys, monkeypatch):
+    """Every case of ``inp`` carries "converged"; a case that did not converge (here the deck's
+    solver reports so) ends with exit 3 after the JSON Lines are written (atomically)."""
+    from conformal.contact_inp import deck as deck_mod
+    from _paths import REFERENCE
+
+    src = REFERENCE / "contact_decks" / "cattaneo.inp"
+    assert main(["inp", str(src), "--cases", "1", "--out", str(tmp_path / "o")]) == 0
+    line = json.loads((tmp_path / "o" / "cattaneo.jsonl").read_text(encoding="utf-8"))
+    assert line["case"] == 1 and line["converged"] is True
+    real = deck_mod.solve_deck
+
+    def unconverged(parsed, cases=None):
+        for d in real(parsed, cases=cases):
+            yield {**d, "converged": False, "warnings": d["warnings"] + ["not converged"]}
+
+    monkeypatch.setattr(deck_mod, "solve_deck", unconverged)
+    capsys.readouterr()
+    assert main(["inp", str(src), "--cases", "1", "--out", str(tmp_path / "o")]) == 3
+    err = capsys.readouterr().err.replace(f"wrote {tmp_path / 'o' / 'cattaneo.jsonl'}\n", "")
+    _one_error_line(err, "case 1 did not converge")
+    assert json.loads((tmp_path / "o" / "cattaneo.jsonl").read_text(encoding="utf-8"))["converged"] is False
+    assert main(["inp", str(src), "--cases", "1", "--allow-unconverged"]) == 0
+    assert not [p.name for p in (tmp_path / "o").iterdir() if p.name != "cattaneo.jsonl"]   # no temporary left
+
+
+def test_inp_out_under_a_file_is_refused_before_solving(tmp_path, capsys, monkeypatch):
+    """``inp --out`` below a file used to solve every case and then fail on mkdir; now refused first."""
+    from conformal.contact_inp import deck as deck_mod
+    from _paths import REFERENCE
+
+    (tmp_path / "f").write_text("x")
+    monkeypatch.setattr(deck_mod, "solve_deck", lambda *a, **k: pytest.fail("solved before the check"))
+    assert main(["inp", str(REFERENCE / "contact_decks" / "cattaneo.inp"), "--out", str(tmp_path / "f" / "o")]) == 2
+    _one_error_line(capsys.readouterr().err, "--out", "is a file")
+
+
+@pytest.mark.slow
+def test_sweep_solve_with_an_unconverged_shift_exits_3(tmp_path, capsys):
+    """``sweep --solve`` wrote "converged" 0 in its CSV and exited 0; now exit 3 naming the shifts."""
+    scene = tmp_path / "wr.toml"
+    scene.write_text(textwrap.dedent("""\
+        [material]
+        G = 82000.0
+        nu = 0.28
+        [friction]
+        mu = 0.3
+        [geometry]
+        kind = "wheel_rail"
+        wheel_profile = "S1002"
+        rail_profile = "UIC60"
+        lateral_shift = 0.0
+        [load]
+        wheel_load = 10000.0
+        [kinematics]
+        xi = 0.001
+        [grid]
+        n = 12
+        [model]
+        theory = "exact"
+        maxit = 1
+        """), encoding="utf-8")
+    out = tmp_path / "sw"
+    assert main(["sweep", str(scene), "--solve", "--shift", "0:0:1", "--out", str(out), "--workers", "1"]) == 3
+    err = capsys.readouterr().err
+    assert "the solve at shift 0 mm did not converge" in err
+    assert [r["converged"] for r in json.loads((out / "sweep_solved.json").read_text(encoding="utf-8"))["rows"]] == [0]
+    assert main(["sweep", str(scene), "--solve", "--shift", "0:0:1", "--out", str(out), "--workers", "1",
+                 "--allow-unconverged"]) == 0
+
+
+def test_an_iteration_without_a_result_exits_3(tmp_path, capsys, monkeypatch):
+    """A ConvergenceError (the vertical balance, the wheelset integrator, the FE contact's active
+    set: no result at all) used to exit 2 like a bad input; now one line and exit 3."""
+    from conformal import dispatch
+    from conformal.errors import ConvergenceError
+
+    def fail(scene):
+        raise ConvergenceError("FE contact: the active set did not settle in 40 iterations (12 active nodes)")
+
+    monkeypatch.setattr(dispatch, "solve_scene", fail)
+    assert main(["solve", str(SCENES / "circ.toml")]) == 3
+    _one_error_line(capsys.readouterr().err, "did not settle", "exit status 3")
