@@ -443,6 +443,10 @@ class _Section:
         return v
 
 
+#: the largest shear or Young's modulus of a scene (N/mm²): diamond's G is about 5e5
+MAX_MODULUS = 1e9
+
+
 def _material(data: Any) -> Material:
     def constants(sec: _Section) -> tuple[float, float]:
         nu = sec.number("nu", required=True)
@@ -450,9 +454,12 @@ def _material(data: Any) -> Material:
             raise sec.error("nu", f"Poisson's ratio must lie in (-1, 0.5), got {nu:g}")
         if sec.has("G") == sec.has("E"):
             raise sec.error("G", "give exactly one of G (shear modulus) or E (Young's modulus), N/mm²")
-        if sec.has("G"):
-            return sec.number("G", positive=True), nu
-        return sec.number("E", positive=True) / (2.0 * (1.0 + nu)), nu
+        key = "G" if sec.has("G") else "E"
+        v = sec.number(key, positive=True)
+        if v > MAX_MODULUS:       # the contact modulus and the Hertz sizes leave the float range (G = 1e308)
+            raise sec.error(key, f"must be <= {MAX_MODULUS:g} N/mm² (a thousand times diamond's; rigid enough for a "
+                                 f"rigid body), got {v:g}")
+        return (v, nu) if key == "G" else (v / (2.0 * (1.0 + nu)), nu)
 
     if data is None:
         data = {"G": 82000.0, "nu": 0.28}

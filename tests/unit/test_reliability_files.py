@@ -215,7 +215,7 @@ def test_json_on_a_full_disk_leaves_no_cut_file(tmp_path):
     out = tmp_path / "out.json"
     r = _run(["solve", str(scene), "--json", str(out)], fsize=200)
     assert r.returncode == 2
-    _one_error_line(r.stderr, "File too large")
+    _one_error_line(r.stderr, "File too large", str(out))            # the line names the file it could not write
     assert not out.exists() and list(tmp_path.iterdir()) == [scene]    # no temporary file either
     out.write_text("previous result\n")
     r = _run(["solve", str(scene), "--json", str(out)], fsize=200)
@@ -241,7 +241,7 @@ def test_simulate_on_a_full_disk_leaves_no_cut_history(tmp_path):
     out = tmp_path / "run"
     r = _run(["simulate", str(scene), "--out", str(out)], fsize=4000)
     assert r.returncode == 2, r.stderr
-    _one_error_line(r.stderr, "File too large")
+    _one_error_line(r.stderr, "File too large", "history.csv")
     assert not (out / "history.csv").exists() and not any(p.name.startswith(".") for p in out.iterdir())
 
 
