@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from conformal.errors import InputError
-from conformal.materials import Material
+from conformal.materials import MAX_MODULUS, Material
 from conformal.registry import (APPROACH_ALONG, CONFORMAL_GEOMETRY, CURVED_STRIP, HISTORY, INFLUENCE_FILE, LOAD_ANGLE, MODELS, MU_TABLE,
                                 PLANAR_HALFSPACE, RIGID_SLIP, Registry, flatten_model_table)
 from conformal.specs import Friction, HistoryStep, Kinematics, ModelSpec  # noqa: F401  (part of the scene API)
@@ -441,10 +441,6 @@ class _Section:
         if v is not None and not isinstance(v, str):
             raise self.error(key, f"must be a string, got {v!r}")
         return v
-
-
-#: the largest shear or Young's modulus of a scene (N/mm²): diamond's G is about 5e5
-MAX_MODULUS = 1e9
 
 
 def _material(data: Any) -> Material:

@@ -38,6 +38,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from conformal.dynamics.contact import C, ContactGeometry, cached_table
+from conformal.dynamics.scene import MAX_SPEED as MAX_SPEED  # re-exported: the --v-max bound (one eigenproblem per m/s)
 from conformal.dynamics.scene import Irregularity, VehicleScene
 from conformal.errors import ConvergenceError, InputError
 
@@ -238,8 +239,6 @@ def nonlinear_decays(scene: VehicleScene, V: float, t_end: float | None = None) 
     return bool(rate > 0), rate
 
 
-#: the largest speed (m/s) a stability scan considers (the linear scan solves one eigenproblem per m/s)
-MAX_SPEED = 1000.0
 #: most time-domain runs of the nonlinear bisection (each is a simulation of seconds)
 MAX_BISECTIONS = 20
 

@@ -628,3 +628,29 @@ def test_an_iteration_without_a_result_exits_3(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(dispatch, "solve_scene", fail)
     assert main(["solve", str(SCENES / "circ.toml")]) == 3
     _one_error_line(capsys.readouterr().err, "did not settle", "exit status 3")
+
+
+@pytest.mark.slow
+def test_vehicle_wheel_load_beyond_elastic_contact_is_refused(tmp_path, capsys):
+    """Fault trial: [vehicle] wheel_load = 1e300 ran the integrator on NaN ("lateral shift nan mm left
+    the contact table", after the table build); now refused naming the key at the static equilibrium."""
+    scene = _vehicle_scene(tmp_path, wheel_load="1e300", t_end=0.01)
+    assert main(["simulate", str(scene), "--out", str(tmp_path / "o")]) == 2
+    _one_error_line(capsys.readouterr().err, "[vehicle] wheel_load", "into its rail")
+
+
+def test_integrator_steps_are_bounded():
+    """A model so stiff that an explicit integrator's steps shrink without end (a [contact] damping
+    of 1e300 came close) stops after MAX_STEPS_PER_ROW steps per output row, naming the keys."""
+    from types import SimpleNamespace
+
+    from conformal.dynamics.simulate import MAX_STEPS_PER_ROW, integrate_model
+    from conformal.errors import ConvergenceError
+
+    stiff = SimpleNamespace(rhs=lambda t, y: -1e12 * y, contacts=lambda t, y: None)
+    with pytest.raises(ConvergenceError, match=r"took \d+ steps .*\[contact\] damping") as info:
+        integrate_model(stiff, np.ones(8), 1e-3, output_step=1e-3)
+    assert int(re.search(r"took (\d+) steps", str(info.value)).group(1)) == MAX_STEPS_PER_ROW * 2
+    soft = SimpleNamespace(rhs=lambda t, y: -y, contacts=lambda t, y: None)
+    times, states, steps, _ = integrate_model(soft, np.ones(8), 1e-2, output_step=1e-3)
+    assert steps < 50 and states[-1][0] == pytest.approx(np.exp(-1e-2), rel=1e-6)
