@@ -315,6 +315,7 @@ CLI_ARGS = [
      "[simulation] speed"),
     ("simulate: initial_lateral 1e300", lambda t: ["simulate", _vehicle(t, "initial_lateral = 1e300"), "--out",
                                                     str(t / "o")], "[simulation] initial_lateral"),
+    ("stresses: depth 1e300", lambda t: ["stresses", _planar_file(t), "--depth", "1e300"], "--depth"),
     ("stability: G 1e308", lambda t: ["stability", _vehicle(t, "G = 1e308"), "--out", str(t / "o")], "[material] G"),
     ("stability: scene missing", lambda t: ["stability", str(t / "v.toml")], "v.toml"),
 ]

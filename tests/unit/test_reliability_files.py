@@ -654,3 +654,36 @@ def test_integrator_steps_are_bounded():
     soft = SimpleNamespace(rhs=lambda t, y: -y, contacts=lambda t, y: None)
     times, states, steps, _ = integrate_model(soft, np.ones(8), 1e-2, output_step=1e-3)
     assert steps < 50 and states[-1][0] == pytest.approx(np.exp(-1e-2), rel=1e-6)
+
+
+def test_fe_element_sizes_are_bounded_before_meshing(monkeypatch, tmp_path):
+    """Fault trial: [model] fe_h_patch = 1e-6 started gmsh on about 1e15 nodes (no end in sight);
+    now refused before gmsh starts, naming the key and the smallest admissible value, which meshes."""
+    from conformal.meshing import gmsh_body
+    from conformal.meshing.bodies import StripPatch
+    from conformal.meshing.gmsh_body import MAX_PATCH_NODES, MeshSpec, check_patch_nodes
+
+    patch = StripPatch.uniform(40, 0.2, 40, 0.2, 0.0)
+    with pytest.raises(InputError, match=r"^\[model\] fe_h_patch: .* more than 1,000,000; use fe_h_patch >= 0\.04$") as e:
+        check_patch_nodes(patch, MeshSpec(h_patch=1e-6), 0.2)
+    least = float(str(e.value).rsplit(">= ", 1)[1])
+    check_patch_nodes(patch, MeshSpec(h_patch=least * 1.01), 0.2)           # just above: accepted
+    with pytest.raises(InputError, match=r"^\[model\] fe_h_load"):
+        check_patch_nodes(patch, MeshSpec(h_load=1e-6), 0.2)
+    check_patch_nodes(patch, MeshSpec(), 0.2)                                # the defaults: a few hundred nodes
+    assert (40 * 0.2) ** 2 / (2 * 0.2) ** 2 < 1e-3 * MAX_PATCH_NODES
+
+    def no_gmsh(*a, **k):
+        raise AssertionError("gmsh started")
+
+    monkeypatch.setattr(gmsh_body, "_generate", no_gmsh)
+    from _scenes import SWEEP_SCENE
+    import tomllib
+
+    from conformal.cases.precompute import plan
+    from conformal.jobs import parse_sweep
+    from conformal.scene import scene_from_dict
+
+    items, _ = plan(scene_from_dict(tomllib.loads(SWEEP_SCENE), ROOT), parse_sweep("shift=0,0"), cache=tmp_path)
+    with pytest.raises(InputError, match=r"fe_h_patch"):
+        gmsh_body.mesh_body(items[0].body, items[0].patch, MeshSpec(h_patch=1e-6))
