@@ -212,6 +212,7 @@ def _cases():
         ("A 1e300 (curvature ratio)", PLANAR, {"geometry.A": 1e300}, "curvature ratio"),
         ("B 1e-300 (curvature ratio)", PLANAR, {"geometry.B": 1e-300}, "curvature ratio"),
         ("wheel_load 1e300", WHEEL_RAIL, {"load.wheel_load": 1e300}, "[load] wheel_load"),
+        ("lateral_shift 1e300", WHEEL_RAIL, {"geometry.lateral_shift": 1e300}, "[geometry] lateral_shift"),
     ]
     return out
 
@@ -316,6 +317,15 @@ CLI_ARGS = [
     ("simulate: initial_lateral 1e300", lambda t: ["simulate", _vehicle(t, "initial_lateral = 1e300"), "--out",
                                                     str(t / "o")], "[simulation] initial_lateral"),
     ("stresses: depth 1e300", lambda t: ["stresses", _planar_file(t), "--depth", "1e300"], "--depth"),
+    ("table build: rho_max 1e300", lambda t: ["table", "build", _spec(t, "rho_max = 5.0", "rho_max = 1e300"),
+                                              "--out", str(t / "t.npz")], "[table] rho_max"),
+    ("table build: spin_max 1e300", lambda t: ["table", "build", _spec(t, "spin_max = 2.0", "spin_max = 1e300"),
+                                               "--out", str(t / "t.npz")], "[table] spin_max"),
+    ("table build: ratio_max 1e300", lambda t: ["table", "build", _spec(t, "ratio_max = 4.0", "ratio_max = 1e300"),
+                                                "--out", str(t / "t.npz")], "[table] ratio_max"),
+    ("stability: creep table a text file", lambda t: ["stability", _vehicle(
+        t, 'creep_model = "table"\ntable = "' + _write(t, "x.npz", "text") + '"'), "--out", str(t / "o")],
+     "[contact] table"),
     ("stability: G 1e308", lambda t: ["stability", _vehicle(t, "G = 1e308"), "--out", str(t / "o")], "[material] G"),
     ("stability: scene missing", lambda t: ["stability", str(t / "v.toml")], "v.toml"),
 ]
@@ -330,6 +340,13 @@ def _vehicle(t, line: str) -> str:
     key = line.split("=")[0].strip()
     text = EXAMPLE if key != "G" else re.sub(r"(?m)^E = .*$", "G = 82000.0", EXAMPLE)
     return _write(t, "v.toml", re.sub(rf"(?m)^{key} = .*$", line, text, count=1))
+
+
+def _spec(t, old: str, new: str) -> str:
+    """The shipped creep-table spec with one line replaced."""
+    text = (ROOT / "conformal" / "data" / "tables" / "creep_default.toml").read_text(encoding="utf-8")
+    assert old in text
+    return _write(t, "spec.toml", text.replace(old, new))
 
 
 def _write(t, name, content) -> str:
