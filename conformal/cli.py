@@ -331,10 +331,28 @@ def _join_negative_ranges(argv: list[str]) -> list[str]:
     return out
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A Python warning as one line, like the program's own: ``conformal: warning: TEXT`` (the
+    package's warnings, e.g. CacheWarning) or ``conformal: warning: RuntimeWarning: TEXT`` (numpy's);
+    Python's default format adds the source file and line, two lines that look like a traceback."""
+    own = getattr(category, "__module__", "").startswith("conformal")
+    text = " ".join(str(message).split())
+    print(f"conformal: warning: {'' if own else category.__name__ + ': '}{text}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
+    import warnings
+
     argv = _join_negative_ranges(list(sys.argv[1:] if argv is None else argv))
     parser = build_parser(argv[0] if argv and argv[0] in CORE_COMMANDS else None)
     args = parser.parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        return _run(args)
+
+
+def _run(args) -> int:
+    """``args.func(args)`` with the exit status of its outcome (see the module docstring)."""
     try:
         return int(args.func(args) or 0)
     except ConvergenceError as exc:   # an iteration that gave no result at all: the same status as "converged": false

@@ -687,3 +687,24 @@ def test_fe_element_sizes_are_bounded_before_meshing(monkeypatch, tmp_path):
     items, _ = plan(scene_from_dict(tomllib.loads(SWEEP_SCENE), ROOT), parse_sweep("shift=0,0"), cache=tmp_path)
     with pytest.raises(InputError, match=r"fe_h_patch"):
         gmsh_body.mesh_body(items[0].body, items[0].patch, MeshSpec(h_patch=1e-6))
+
+
+def test_warnings_are_one_line_each(monkeypatch, capsys):
+    """Fault trial: a corrupt cache entry met by ``solve`` printed Python's two-line warning
+    ("/…/cache.py:226: CacheWarning: …" and the source line), and numpy's overflow warnings did the
+    same; now each warning is one ``conformal: warning:`` line, the program's own format."""
+    import warnings
+
+    import conformal.cli as cli
+
+    def noisy(args):
+        warnings.warn("influence cache: x.npz cannot be read; recomputing", CacheWarning, stacklevel=2)
+        with np.errstate(over="warn"):
+            np.float64(1e300) * np.float64(1e300)
+        return 0
+
+    monkeypatch.setattr(cli, "cmd_cache", noisy)
+    assert main(["cache", "list"]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        "conformal: warning: influence cache: x.npz cannot be read; recomputing",
+        "conformal: warning: RuntimeWarning: overflow encountered in scalar multiply"]
