@@ -213,6 +213,9 @@ def _cases():
         ("B 1e-300 (curvature ratio)", PLANAR, {"geometry.B": 1e-300}, "curvature ratio"),
         ("wheel_load 1e300", WHEEL_RAIL, {"load.wheel_load": 1e300}, "[load] wheel_load"),
         ("lateral_shift 1e300", WHEEL_RAIL, {"geometry.lateral_shift": 1e300}, "[geometry] lateral_shift"),
+        ("fe_contact h 1e-6 (the patch filled the memory)", PLANAR,
+         {"model.theory": "fe_contact", "model.fe_contact": {"h": 1e-6}, "kinematics.xi": 0.0},
+         "[model.fe_contact] n (or h)"),
     ]
     return out
 
