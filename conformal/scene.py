@@ -586,9 +586,9 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
     if roll is not None and abs(roll) > MAX_YAW:
         raise sec.error("roll", f"the wheelset roll must lie within +-{MAX_YAW:g} rad, got {roll:g} rad")
     shift = sec.number("lateral_shift", d.lateral_shift)
-    if abs(shift) > FLANGEWAY[1]:    # 1e300: the contact search ran on inf and NaN before it gave up
-        raise sec.error("lateral_shift", f"must lie within +-{FLANGEWAY[1]:g} mm (the largest gauge - flange_back; "
-                                         f"the wheels leave their rails long before), got {shift:g} mm")
+    if abs(shift) > gauge:    # 1e300: the contact search ran on inf and NaN before it gave up
+        raise sec.error("lateral_shift", f"must lie within +-gauge = +-{gauge:g} mm (the wheels leave their rails "
+                                         f"long before), got {shift:g} mm")
     return WheelRailGeometry(
         wheel_profile=sec.string("wheel_profile", d.wheel_profile),
         rail_profile=sec.string("rail_profile", d.rail_profile),
