@@ -56,9 +56,6 @@ def cmd_inp(args) -> int:
         check_output_path(str(out_path), "--out")           # before the cases are solved, not after
     parsed = read_deck(args.deck, ignore_subsurface=args.ignore_subsurface,
                        ignore_temperature=args.ignore_temperature)
-    if not parsed.cases:      # an empty deck (or only comments / "0 MODULE"): nothing to report success for
-        raise InputError(f"{Path(args.deck).name}: no cases (a CONTACT input file holds \"1 MODULE\" or "
-                         "\"3 MODULE\" cases)")
     lines, unconverged = [], []
     for d in solve_deck(parsed, cases=cases):
         if d.get("converged") is False:
