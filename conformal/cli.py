@@ -11,7 +11,9 @@
 
 Bad input ends with exit code 2 and one line on stderr naming the key and the problem; a solve that
 did not converge writes its JSON with "converged": false and ends with exit code 3 (unless
---allow-unconverged).
+--allow-unconverged), in every command that solves (solve, sweep --solve, inp, stresses, table build
+and refine); an iteration that gives no result at all (ConvergenceError: the vertical balance, the
+wheelset's integrator, the FE contact's active set) ends with one line and exit code 3.
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ import time
 from importlib import resources
 from pathlib import Path
 
-from conformal.errors import ConformalError, InputError
+from conformal.errors import EXIT_UNCONVERGED, ConformalError, ConvergenceError, InputError, unconverged_exit
 from conformal.files import check_output_path, write_text
 from conformal.registry import CURVED_STRIP, FE_BODIES, MODELS, VTU
 
@@ -37,8 +39,8 @@ def _write_json(summary: dict, path: str | None) -> None:
         write_text(path, text + "\n")
 
 
-#: exit status of a solve that did not converge (its JSON and plots are written; --allow-unconverged: 0)
-EXIT_UNCONVERGED = 3
+# a solve that did not converge writes its outputs and exits with conformal.errors.EXIT_UNCONVERGED
+# (--allow-unconverged: 0), the same for every command that solves
 
 
 def _solve_and_report(scene, json_path: str | None, plot_path: str | None, vtu_path: str | None = None,
@@ -187,6 +189,9 @@ def _sweep_solve(scene, args) -> int:
     if all(e is not None for e in table.errors):
         print(f"conformal: error: no shift could be solved ({table.errors[0]})", file=sys.stderr)
         return 2
+    bad = [r["shift"] for r in table.rows() if r["error"] is None and r["converged"] == 0]
+    if bad and code == 0:       # "converged" 0 in the CSV and JSON: the same rule as solve
+        code = unconverged_exit(f"the solve at shift {', '.join(f'{v:g}' for v in bad)} mm", args.allow_unconverged)
     return code
 
 
@@ -233,6 +238,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
                    "numbers: forces, creepages, patches (sweep_solved.csv / .json / .png)")
     w.add_argument("--workers", type=int, default=None, help="with --solve: processes for missing FE influence "
                    "numbers (default: cores/2)")
+    w.add_argument("--allow-unconverged", action="store_true",
+                   help="with --solve: exit 0 also when a shift did not converge (default: exit status 3)")
     w.set_defaults(func=cmd_sweep)
 
     d = sub.add_parser("demo", help="solve the built-in demo scene, write JSON and PNG")
@@ -335,15 +342,37 @@ def _join_negative_ranges(argv: list[str]) -> list[str]:
     return out
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A Python warning as one line, like the program's own: ``conformal: warning: TEXT`` (the
+    package's warnings, e.g. CacheWarning) or ``conformal: warning: RuntimeWarning: TEXT`` (numpy's);
+    Python's default format adds the source file and line, two lines that look like a traceback."""
+    own = getattr(category, "__module__", "").startswith("conformal")
+    text = " ".join(str(message).split())
+    print(f"conformal: warning: {'' if own else category.__name__ + ': '}{text}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
+    import warnings
+
     argv = _join_negative_ranges(list(sys.argv[1:] if argv is None else argv))
     parser = build_parser(argv[0] if argv and argv[0] in CORE_COMMANDS else None)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:       # --help, --version, or a bad command line (one line, _Parser.error)
         return int(exc.code or 0)
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        return _run(args)
+
+
+def _run(args) -> int:
+    """``args.func(args)`` with the exit status of its outcome (see the module docstring)."""
     try:
         return int(args.func(args) or 0)
+    except ConvergenceError as exc:   # an iteration that gave no result at all: the same status as "converged": false
+        print(f"conformal: error: {exc} (did not converge; nothing written): exit status {EXIT_UNCONVERGED}",
+              file=sys.stderr)
+        return EXIT_UNCONVERGED
     except ConformalError as exc:
         print(f"conformal: error: {exc}", file=sys.stderr)
         return 2

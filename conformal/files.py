@@ -75,9 +75,11 @@ def atomic_path(path: str | os.PathLike, *, keep_suffix: bool = False, make_pare
         yield tmp
         _fsync(tmp)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and exc.filename is None:    # a failed write names no file: name the target
+            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
         raise
 
 

@@ -22,6 +22,11 @@ def lame_lambda(G: float, nu: float) -> float:
     return 2.0 * G * nu / (1.0 - 2.0 * nu)
 
 
+#: the largest shear or Young's modulus of a scene (N/mm²): diamond's G is about 5e5; beyond, the
+#: contact modulus and the Hertz sizes leave the float range (G = 1e308)
+MAX_MODULUS = 1e9
+
+
 @dataclass(frozen=True)
 class Material:
     """Body 1 and body 2 elastic constants (N/mm², -). Body 1 is the body the normal points into."""

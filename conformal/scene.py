@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from conformal.errors import InputError
-from conformal.materials import Material
+from conformal.materials import MAX_MODULUS, Material
 from conformal.registry import (APPROACH_ALONG, CONFORMAL_GEOMETRY, CURVED_STRIP, HISTORY, INFLUENCE_FILE, LOAD_ANGLE, MODELS, MU_TABLE,
                                 PLANAR_HALFSPACE, RIGID_SLIP, Registry, flatten_model_table)
 from conformal.specs import Friction, HistoryStep, Kinematics, ModelSpec  # noqa: F401  (part of the scene API)
@@ -455,9 +455,12 @@ def _material(data: Any) -> Material:
             raise sec.error("nu", f"Poisson's ratio must lie in (-1, 0.5), got {nu:g}")
         if sec.has("G") == sec.has("E"):
             raise sec.error("G", "give exactly one of G (shear modulus) or E (Young's modulus), N/mm²")
-        if sec.has("G"):
-            return sec.number("G", positive=True), nu
-        return sec.number("E", positive=True) / (2.0 * (1.0 + nu)), nu
+        key = "G" if sec.has("G") else "E"
+        v = sec.number(key, positive=True)
+        if v > MAX_MODULUS:       # the contact modulus and the Hertz sizes leave the float range (G = 1e308)
+            raise sec.error(key, f"must be <= {MAX_MODULUS:g} N/mm² (a thousand times diamond's; rigid enough for a "
+                                 f"rigid body), got {v:g}")
+        return (v, nu) if key == "G" else (v / (2.0 * (1.0 + nu)), nu)
 
     if data is None:
         data = {"G": 82000.0, "nu": 0.28}
@@ -590,6 +593,10 @@ def _geometry(data: Any, base_dir: Path) -> Geometry:
                         f"1435 - 1360 = 75 mm): otherwise the wheels do not lie over their rails")
     if roll is not None and abs(roll) > MAX_YAW:
         raise sec.error("roll", f"the wheelset roll must lie within +-{MAX_YAW:g} rad, got {roll:g} rad")
+    shift = sec.number("lateral_shift", d.lateral_shift)
+    if abs(shift) > gauge:    # 1e300: the contact search ran on inf and NaN before it gave up
+        raise sec.error("lateral_shift", f"must lie within +-gauge = +-{gauge:g} mm (the wheels leave their rails "
+                                         f"long before), got {shift:g} mm")
     return WheelRailGeometry(
         wheel_profile=sec.string("wheel_profile", d.wheel_profile),
         rail_profile=sec.string("rail_profile", d.rail_profile),

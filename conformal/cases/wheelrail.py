@@ -271,6 +271,8 @@ def place_scene(scene: Scene, *, touch_only: bool = False) -> Placement:
 #: by the lateral part dz sin(delta) of a lowering dz, far below the element size
 BALANCE_ZTOL = 1e-4
 #: at most this many geometry searches per balance before the bracketing search takes over
+#: the largest approach (mm) of the vertical balance: the seed's steel wheels stay below 0.1 mm
+MAX_APPROACH = 10.0
 MAX_SEARCHES = 8
 #: the passes of solve_wheel_rail keep a searched geometry while the height moves at most this (mm)
 #: from it (the first-order gap change dz cos d; the tangential shift dz sin d is left out)
@@ -471,7 +473,12 @@ def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float 
             trial *= 2.0
         else:
             raise ConvergenceError("[load] wheel_load: the vertical force does not grow when the wheel is lowered")
-        st = search(pl.z_touch + trial * (W / F1) ** (2.0 / 3.0))
+        lowering = trial * (W / F1) ** (2.0 / 3.0)       # Hertz: the approach grows as FN^(2/3)
+        if not lowering <= MAX_APPROACH:      # beyond the profiles (wheel_load = 1e300: a search outside the rail)
+            raise InputError(f"[load] wheel_load: {W:g} N would press the wheel about {lowering:.3g} mm into the rail "
+                             f"(Hertz estimate), more than {MAX_APPROACH:g} mm: far beyond elastic contact "
+                             f"(the seed's wheels: below 0.1 mm)")
+        st = search(pl.z_touch + lowering)
     for _ in range(MAX_SEARCHES):
         del warnings[:]
         dz, fns = linear_balance(st, scene, ratios, counts=counts, warnings=warnings, fields=fields,

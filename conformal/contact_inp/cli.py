@@ -7,7 +7,6 @@ support ends the run with one error line naming it (exit 2, conformal.cli).
 from __future__ import annotations
 
 import json
-import os
 import sys
 from pathlib import Path
 
@@ -22,6 +21,8 @@ def add_parsers(sub) -> None:
                    help="accept S = 1..3 and skip the subsurface stresses (each case warns)")
     p.add_argument("--ignore-temperature", action="store_true",
                    help="accept H = 1, 3 and skip the surface temperatures (each case warns)")
+    p.add_argument("--allow-unconverged", action="store_true",
+                   help="exit 0 also when a case did not converge (default: exit status 3)")
     p.set_defaults(func=cmd_inp)
 
 
@@ -42,7 +43,8 @@ def _case_numbers(text: str | None):
 def cmd_inp(args) -> int:
     from conformal.contact_inp.combine import PREFIX
     from conformal.contact_inp.deck import read_deck, solve_deck
-    from conformal.errors import InputError
+    from conformal.errors import InputError, unconverged_exit
+    from conformal.files import check_output_path, write_text
 
     cases = _case_numbers(args.cases)
     out_path = None
@@ -51,20 +53,23 @@ def cmd_inp(args) -> int:
         if folder.exists() and not folder.is_dir():
             raise InputError(f"--out: {folder} is a file, not a folder")
         out_path = folder / (Path(args.deck).stem + ".jsonl")
+        check_output_path(str(out_path), "--out")           # before the cases are solved, not after
     parsed = read_deck(args.deck, ignore_subsurface=args.ignore_subsurface,
                        ignore_temperature=args.ignore_temperature)
-    lines = []
+    lines, unconverged = [], []
     for d in solve_deck(parsed, cases=cases):
+        if d.get("converged") is False:
+            unconverged.append(str(d.get("case")))
         text = json.dumps(d)
         print(text, flush=True)
         for w in d.get("warnings", []):      # CONTACT's patch combination not reproduced: one line each
             if w.startswith(PREFIX):
                 print(f"case {d['case']}: {w}", file=sys.stderr)
         lines.append(text)
-    if out_path is not None:
-        out_path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = out_path.with_name(f".{out_path.name}.{os.getpid()}.tmp")
-        tmp.write_text("".join(t + "\n" for t in lines), encoding="utf-8")
-        os.replace(tmp, out_path)
+    if out_path is not None:      # conformal.files: atomic, like every file the package writes
+        write_text(out_path, "".join(t + "\n" for t in lines))
         print(f"wrote {out_path}", file=sys.stderr)
+    if unconverged:
+        return unconverged_exit(f"case{'s' if len(unconverged) > 1 else ''} {', '.join(unconverged)}",
+                                args.allow_unconverged)
     return 0

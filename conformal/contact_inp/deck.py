@@ -64,8 +64,8 @@ def read_deck(path, *, ignore_subsurface: bool = False, ignore_temperature: bool
         cases.append(case)
         if case.digits["R"] in (1, 3):   # return to the main program: the next case names its module
             head = None
-    if not cases:
-        raise InputError(f"{deck.name}: no cases (a CONTACT deck starts with a module number, e.g. ' 3  MODULE')")
+    if not cases:      # an empty deck (or only comments / "0 MODULE"): `inp` reported success for nothing
+        raise InputError(f"{path.name}: no cases (a CONTACT deck starts with a module number, e.g. ' 3  MODULE')")
     return ParsedDeck(path=path, cases=tuple(cases))
 
 

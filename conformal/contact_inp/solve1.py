@@ -271,4 +271,4 @@ def summary(case: Module1Case, r) -> dict:
             "FX_track": r.extra.get("FX_track"), "FY_track": r.extra.get("FY_track"),
             "FZ_track": r.extra.get("FZ_track"), "z_ws": r.extra.get("z_ws"), "patches": patches,
             **({"pitch_velocity": r.extra["pitch_velocity_solved"]} if "pitch_velocity_solved" in r.extra else {}),
-            "warnings": warnings}
+            "converged": bool(r.converged), "warnings": warnings}

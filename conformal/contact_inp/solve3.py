@@ -184,5 +184,6 @@ def summary(case: Module3Case, r) -> dict:
     warnings = list(case.skipped) + list(r.extra.get("warnings", []))
     if not r.converged:
         warnings.append("not converged")
+    out["converged"] = bool(r.converged)
     out["warnings"] = warnings
     return out

@@ -58,6 +58,13 @@ def cmd_stability(args) -> int:
         raise InputError(f"--v-max: must lie in (0, {MAX_SPEED:g}] m/s, got {args.v_max}")
     out = Path(args.out) if args.out else _default_out(args.scene)
     check_output_path(str(out / "stability.png"), "--out")
+    if scene.contact.creep_model == "table":     # the linear scan does not read it: check it is a table all the same
+        from conformal.tables import load_table
+
+        try:
+            load_table(scene.contact.table or "default")
+        except InputError as exc:
+            raise InputError(f"[contact] table: {exc}") from None
     if args.method == "nonlinear":
         check_bisection(0.5 * args.v_max, args.v_max, args.tol)
     lin = linear_inputs(scene)

@@ -41,7 +41,7 @@ from scipy.optimize import fsolve
 from conformal.dynamics.contact import C, ContactGeometry, ContactTable, cached_table, normal_force
 from conformal.dynamics.creep import CreepEvaluator, make_creep_model
 from conformal.dynamics.scene import Irregularity, VehicleScene
-from conformal.errors import ConvergenceError
+from conformal.errors import ConvergenceError, InputError
 
 SIDES = ("right", "left")
 SIGN = np.array([1.0, 1.0, -1.0, -1.0])           # contacts: right tread, right flange, left tread, left flange
@@ -223,6 +223,10 @@ class WheelsetModel:
         return {k: float(v) for k, v in row.items()}
 
 
+#: the largest static overlap (mm) of a wheel on its rail; the seed's wheelset: 0.065 mm
+MAX_STATIC_OVERLAP = 10.0
+
+
 def build_model(scene: VehicleScene, *, table: ContactTable | None = None, table_step: float | None = None,
                 table_range: float | None = None) -> WheelsetModel:
     """The equations of motion of a vehicle scene.
@@ -269,7 +273,12 @@ def equilibrium(model: WheelsetModel, y: float = 0.0, psi: float = 0.0, t: float
     val, _ = model.table.evaluate(np.array([1000.0 * y, -1000.0 * y]))
     ZR, ZL = val[0, 0, C["Z"]], val[1, 0, C["Z"]]
     Kh = float(val[0, 0, C["Kh"]])
-    z0 = 0.5 * (ZR + ZL) + (model.W / Kh) ** (2.0 / 3.0)            # mm
+    overlap = (model.W / Kh) ** (2.0 / 3.0)                           # mm, Hertz: W = Kh overlap^(3/2)
+    if not overlap <= MAX_STATIC_OVERLAP:       # wheel_load = 1e300: the contact leaves the float range
+        raise InputError(f"[vehicle] wheel_load: {model.W:g} N presses each wheel {overlap:.3g} mm into its rail "
+                         f"(Hertz), more than {MAX_STATIC_OVERLAP:g} mm: far beyond elastic contact (the seed's "
+                         "wheelset: 0.065 mm)")
+    z0 = 0.5 * (ZR + ZL) + overlap
     phi0 = 1000.0 * (ZR - ZL) / (2.0 * val[0, 0, C["L"]])             # mrad
 
     def state(q):

@@ -35,7 +35,10 @@ from typing import Any
 
 from conformal.dynamics.contact import check_table_size
 from conformal.errors import InputError
-from conformal.materials import Material
+from conformal.materials import MAX_MODULUS, Material
+
+#: the largest speed (m/s) of a scene and of a stability scan (conformal.dynamics.stability)
+MAX_SPEED = 1000.0
 
 CREEP_MODELS = ("linear", "empirical", "fastsim", "none", "table")
 
@@ -233,10 +236,6 @@ def _positive_or_zero(sec: str, key: str, v) -> None:
         raise InputError(f"[{sec}] {key}: must be a number >= 0, got {v!r}")
 
 
-#: m/s, the largest vehicle speed (simulation and stability scans): the integrator's steps grow with it
-MAX_SPEED = 1000.0
-
-
 def check_speed(key: str, v: float) -> float:
     """A vehicle speed in m/s: finite, >= 0 and at most MAX_SPEED (a value in km/h or mm/s is refused)."""
     if v > MAX_SPEED:
@@ -325,6 +324,9 @@ def scene_from_dict(data: dict, base_dir: str | Path = ".", name: str = "scene")
     nu = m.number("nu")
     if m.has("G") == m.has("E"):
         raise m.error("G", "give exactly one of G (shear modulus) or E (Young's modulus), N/mm²")
+    key = "G" if m.has("G") else "E"
+    if m.number(key, positive=True) > MAX_MODULUS:
+        raise m.error(key, f"must be <= {MAX_MODULUS:g} N/mm², got {m.number(key):g}")
     G = m.number("G", positive=True) if m.has("G") else m.number("E", positive=True) / (2.0 * (1.0 + nu))
     material = Material.identical(G, nu)
 
@@ -335,6 +337,9 @@ def scene_from_dict(data: dict, base_dir: str | Path = ".", name: str = "scene")
                      method=s.string("method", "RK45", choices=("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")),
                      rtol=s.number("rtol", 1e-3, positive=True), atol=s.number("atol", 1e-7, positive=True),
                      output_step=s.number("output_step", 1e-3, positive=True))
+    if abs(sim.initial_lateral) > contact.table_range:
+        raise s.error("initial_lateral", f"{sim.initial_lateral:g} mm lies outside the contact table's "
+                                         f"+-{contact.table_range:g} mm ([contact] table_range)")
     if sim.speed == 0 and contact.creep_model != "none":
         raise s.error("speed", "must be > 0 with creep forces (creepages divide by the speed); "
                                "use creep_model = \"none\" for a wheelset at rest")

@@ -39,6 +39,10 @@ SOLVERS = {"RK45": integrate.RK45, "RK23": integrate.RK23, "DOP853": integrate.D
            "Radau": integrate.Radau, "BDF": integrate.BDF, "LSODA": integrate.LSODA}
 
 
+#: the most integrator steps per output row (the seed's wheelset takes fewer than 1)
+MAX_STEPS_PER_ROW = 200
+
+
 def history_rows(t_end: float, output_step: float) -> int:
     """Rows of a run's history: one per output_step from 0 to t_end."""
     return int(math.floor(t_end / output_step + 1e-9)) + 1
@@ -95,7 +99,7 @@ def integrate_model(model: WheelsetModel, X0: np.ndarray, t_end: float, *, metho
                     progress: bool = False, max_step: float = np.inf) -> tuple[np.ndarray, np.ndarray, int, int]:
     """Integrate from X0 over [0, t_end]; returns output times, states (n, 8), steps, RHS calls."""
     if method not in SOLVERS:
-        raise ConvergenceError(f"[simulation] method: unknown integrator {method!r}")
+        raise InputError(f"[simulation] method: unknown integrator {method!r}; one of {', '.join(SOLVERS)}")
     # absolute tolerances per component: atol for y (m) and psi (rad), atol/10 for z and phi (the
     # contact overlap, ~65 um, follows them), x10 for the velocities
     scale = np.array([1e-3, 1e-4, 1e-4, 1e-3, 1e-2, 1e-3, 1e-3, 1e-2])
@@ -107,8 +111,14 @@ def integrate_model(model: WheelsetModel, X0: np.ndarray, t_end: float, *, metho
     states = np.empty((n_out, X0.size))
     states[0] = X0
     k, steps = 1, 0
+    max_steps = MAX_STEPS_PER_ROW * n_out
     bar = _Progress(t_end, progress)
     while solver.status == "running":
+        if steps >= max_steps:       # a stiff model (damping = 1e300) shrinks the steps without end
+            raise ConvergenceError(f"wheelset dynamics: the integrator took {steps} steps by t = {solver.t:.4g} s "
+                                   f"(step {solver.step_size:.3g} s; at most {MAX_STEPS_PER_ROW} per output_step): "
+                                   "a stiff model ([contact] damping, [vehicle] stiffnesses) or [simulation] "
+                                   "rtol/atol too small; try method = \"Radau\"")
         msg = solver.step()
         if solver.status == "failed":
             why = msg

@@ -38,6 +38,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from conformal.dynamics.contact import C, ContactGeometry, cached_table
+from conformal.dynamics.scene import MAX_SPEED as MAX_SPEED  # re-exported: the --v-max bound (one eigenproblem per m/s)
 from conformal.dynamics.scene import Irregularity, VehicleScene
 from conformal.errors import ConvergenceError, InputError
 

@@ -29,7 +29,7 @@ from conformal.errors import InputError
 from conformal.fe_contact.solver import ContactBody
 from conformal.materials import Material
 from conformal.meshing.bodies import BodyModel, Profile2D, StripPatch, flat_profile
-from conformal.meshing.gmsh_body import MeshSpec, mesh_body
+from conformal.meshing.gmsh_body import MAX_PATCH_NODES, MeshSpec, mesh_body
 
 STEEL = Material(82000.0, 0.28, 82000.0, 0.28)
 
@@ -109,6 +109,11 @@ def strip_patch(x_half: float, s_lo: float, s_hi: float, h: float) -> StripPatch
     if not (h > 0 and x_half > 0 and s_hi > s_lo):
         raise InputError(f"contact patch: need h > 0 and a non-empty patch, got h = {h}, x_half = {x_half}, "
                          f"s = {s_lo} .. {s_hi}")
+    cells = (2.0 * x_half / h) * ((s_hi - s_lo) / h)
+    if not cells <= MAX_PATCH_NODES:         # fec_h = 1e-6: the patch's edges alone filled the memory
+        raise InputError(f"[model.fe_contact] n (or h): elements of {h:.3g} mm put about {cells:.3g} cells on the "
+                         f"contact patch, more than {MAX_PATCH_NODES:,}; use larger elements (at least "
+                         f"{math.sqrt(2.0 * x_half * (s_hi - s_lo) / MAX_PATCH_NODES):.3g} mm)")
     mx = max(1, math.ceil((2.0 * x_half / h + 1.0) / 2.0))
     ms = max(1, math.ceil((s_hi - s_lo) / h))
     return StripPatch(mx, h, tuple(float(v) for v in np.linspace(s_lo, s_hi, ms + 1)))
@@ -167,8 +172,9 @@ def _arc_patch(patch: StripPatch, prof: Profile2D) -> StripPatch:
 
 def _pair(b1: BodyModel, p1: StripPatch, b2: BodyModel, p2: StripPatch, material: Material, mesh: ContactMesh,
           rotation2=None, origin2=None) -> tuple[ContactBody, ContactBody]:
-    m1 = mesh_body(b1, p1, mesh.spec())
-    m2 = mesh_body(b2, p2, mesh.spec())
+    key = "[model.fe_contact] n (or h)"       # the contact-surface element size of these meshes
+    m1 = mesh_body(b1, p1, mesh.spec(), size_key=key)
+    m2 = mesh_body(b2, p2, mesh.spec(), size_key=key)
     kw = {} if rotation2 is None else {"rotation": rotation2, "origin": origin2}
     return (ContactBody(m1, material.G1, material.nu1),
             ContactBody(m2, material.G2, material.nu2, **kw))

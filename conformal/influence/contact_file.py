@@ -300,7 +300,11 @@ def _source_text(source) -> tuple[str, str]:
     path = Path(source)
     if not path.is_file():
         raise InputError(f"influence file not found: {path}")
-    return path.read_text(encoding="ascii", errors="replace"), path.name
+    data = path.read_bytes()
+    if b"\0" in data[:4096]:     # an NPZ, a zip, a binary: say so rather than echo its bytes
+        raise InputError(f"{path.name}: a binary file, not an influence file (text: CONTACT's format or "
+                         f"the project's {FORMAT!r}, see conformal.influence.contact_file)")
+    return data.decode("ascii", errors="replace"), path.name
 
 
 def read_contact_file(source) -> ContactInfluenceFile:

@@ -592,8 +592,36 @@ def closure_report(original, body: BodyModel, patch: StripPatch, ext: BodyExtent
     return out
 
 
+#: the most mesh nodes on the contact patch's surface alone (the FE solve's memory check, about
+#: 25 kB per unknown, refuses far fewer; this bound stops gmsh before it meshes for hours)
+MAX_PATCH_NODES = 1_000_000
+
+
+def check_patch_nodes(patch: StripPatch, spec: MeshSpec, h_e: float, size_key: str | None = None) -> None:
+    """Refuse (InputError naming ``[model] fe_h_patch`` / ``fe_h_load``, or ``size_key``: the key
+    that set the element size, e.g. the direct FE contact's ``[model.fe_contact] n``) element sizes
+    that put more than MAX_PATCH_NODES nodes on the patch's surface (its area over the element size
+    squared), before gmsh is started: ``fe_h_patch = 1e-6`` meshed without end."""
+    area = patch.mx * patch.dx * float(patch.s_edges[-1] - patch.s_edges[0])
+    for name, rel, what in (("fe_h_patch", spec.h_patch, area),
+                            ("fe_h_load", spec.h_load, patch.dx * float(patch.s_edges[-1] - patch.s_edges[0]))):
+        if rel is None:
+            continue
+        n = what / (rel * h_e) ** 2
+        if n <= MAX_PATCH_NODES:
+            continue
+        if size_key is not None:
+            raise InputError(f"{size_key}: elements of {rel * h_e:.3g} mm put about {n:.3g} mesh nodes on the "
+                             f"patch, more than {MAX_PATCH_NODES:,}; use larger elements (at least "
+                             f"{math.sqrt(what / MAX_PATCH_NODES):.3g} mm)")
+        least = math.sqrt(what / MAX_PATCH_NODES) / h_e
+        raise InputError(f"[model] {name}: {rel:g} contact elements ({rel * h_e:.3g} mm) puts about {n:.3g} "
+                         f"mesh nodes on the patch, more than {MAX_PATCH_NODES:,}; use {name} >= {least:.3g}")
+
+
 def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
-              extent: BodyExtent | None = None, *, threads: int = 1, algorithm3d: int | None = None) -> BodyMesh:
+              extent: BodyExtent | None = None, *, threads: int = 1, algorithm3d: int | None = None,
+              size_key: str | None = None) -> BodyMesh:
     """Build and mesh one body for a patch (gmsh, OpenCASCADE).  Raises MeshingError on failure.
 
     ``algorithm3d``: gmsh's 3-D mesher; None (default) HXT (10), and gmsh's Delaunay (1) where HXT
@@ -639,6 +667,7 @@ def mesh_body(body: BodyModel, patch: StripPatch, spec: MeshSpec = MeshSpec(),
     else:
         ext = extent
     h_e = min(patch.dx, float(patch.s_widths.min()))
+    check_patch_nodes(patch, spec, h_e, size_key)       # size_key: the key that set the sizes (default fe_h_*)
     t0 = time.perf_counter()
     # HXT (fast) first; where it cannot recover the surface mesh ("failed to recover constrained
     # triangles", S1002 at a 5 mm shift) it leaves gmsh unusable ("I'm busy"), so the whole model

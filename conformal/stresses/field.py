@@ -92,6 +92,10 @@ class StressField:
         }
 
 
+#: the deepest plane, in larger semi-axes (the stresses there are below 1e-6 of the surface's)
+MAX_DEPTH_FACTOR = 1000.0
+
+
 def default_depths(a: float, b: float, depth: float | None = None, n: int = N_DEPTHS) -> np.ndarray:
     """n depths from 0 to ``depth`` (default DEPTH_FACTOR x the smaller semi-axis)."""
     if depth is None:
@@ -101,6 +105,11 @@ def default_depths(a: float, b: float, depth: float | None = None, n: int = N_DE
         depth = DEPTH_FACTOR * lo
     if not (isinstance(depth, (int, float)) and math.isfinite(depth) and depth > 0):
         raise InputError(f"--depth: must be a positive number of mm, got {depth!r}")
+    far = MAX_DEPTH_FACTOR * max(a, b)
+    if math.isfinite(far) and far > 0 and depth > far:    # depth = 1e300: the planes' fields overflow (LinAlgError)
+        raise InputError(f"--depth: {depth:g} mm is more than {MAX_DEPTH_FACTOR:g} x the larger semi-axis "
+                         f"({max(a, b):.3g} mm), where the stresses are below 1e-6 of the surface's; give --depth "
+                         f"<= {far:.3g}")
     if not (isinstance(n, int) and 2 <= n <= 2000):
         raise InputError(f"[stresses] n_depths: must be an integer in [2, 2000], got {n!r}")
     return np.linspace(0.0, float(depth), n)

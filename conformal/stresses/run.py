@@ -160,6 +160,7 @@ def patch_stresses(result, scene, opts: dict, vtu=None) -> tuple[dict, list]:
                      key=lambda d: d["tau_dv_max"])
             for who in sorted({w for r in fe_rows for w in r["fe_bodies"]})}
     out["frame"] = rows[0]["frame"]
+    out["converged"] = bool(result.converged)     # the contact solve under the stresses
     out["patches"] = rows
     warnings = list(result.warnings)
     for r in rows:
@@ -360,6 +361,10 @@ def cmd_stresses(args) -> int:
             print(f"conformal: error: --plot: {type(exc).__name__}: {exc} (the JSON summary was written)",
                   file=sys.stderr)
             code = 1
+    if not summary["converged"] and code == 0:
+        from conformal.errors import unconverged_exit
+
+        code = unconverged_exit("the contact solve", args.allow_unconverged)
     return code
 
 
@@ -375,4 +380,6 @@ def add_parsers(sub, check_output, plot_suffixes) -> None:
     st.add_argument("--json", metavar="OUT.json", help="also write the JSON to this file")
     st.add_argument("--vtu", metavar="OUT.vtu", help="the stress block of the most stressed patch for ParaView")
     st.add_argument("--plot", metavar="OUT.png", help="slices of von Mises and orthogonal shear, Dang Van per depth")
+    st.add_argument("--allow-unconverged", action="store_true",
+                    help="exit 0 also when the contact solve did not converge (default: exit status 3)")
     st.set_defaults(func=cmd_stresses, check_output=check_output, plot_suffixes=tuple(plot_suffixes))

@@ -241,10 +241,12 @@ class BuildReport:
     wall_s: float
     solve_s: float
     path: Path | None
+    nonconverged: int = 0      # nodes of the written table whose exact solve did not converge
 
     def summary(self) -> str:
         text = (f"{self.nodes} nodes in {self.chunks} chunks: {self.resumed} already done, {self.solved} solved"
-                + (f", {len(self.failed)} FAILED" if self.failed else "") + f" ({self.wall_s:.1f} s")
+                + (f", {len(self.failed)} FAILED" if self.failed else "")
+                + (f", {self.nonconverged} NOT CONVERGED" if self.nonconverged else "") + f" ({self.wall_s:.1f} s")
         if self.solved:
             text += f", {self.solve_s:.1f} s of solves"
         text += ")"
@@ -302,6 +304,7 @@ def build_table(spec: TableSpec, out: str | Path, *, workers: int = 1, scheduler
             "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         }
         report.path = save_table(CreepTable(spec, values, c11, c22, c23, meta), out)
+        report.nonconverged = meta["nonconverged_nodes"]
         if not keep_parts:
             _remove_parts(folder)
     report.wall_s = time.perf_counter() - t0
@@ -456,6 +459,7 @@ def add_patch(table_path: str | Path | None, box: tuple, q, out: str | Path, *, 
         table = CreepTable(spec, base.values, base.c11, base.c22, base.c23, meta,
                            patches=tuple(base.patches) + (Patch(box, np.array(q), values),))
         report.path = save_table(table, out)
+        report.nonconverged = meta["patches"][-1]["nonconverged_nodes"]
         _remove_parts(folder)
     report.wall_s = time.perf_counter() - t0
     return report

@@ -26,6 +26,8 @@ def add_parsers(sub) -> None:
     b.add_argument("--scheduler", metavar="ADDRESS",
                    help="Dask scheduler address (tcp://host:8786), or 'local' for a Dask LocalCluster")
     b.add_argument("--no-progress", action="store_true", help="no progress bar")
+    b.add_argument("--allow-unconverged", action="store_true",
+                   help="exit 0 also when some nodes did not converge (default: exit status 3)")
     b.set_defaults(func=cmd_build)
     r = tsub.add_parser("refine", help="add extra q nodes (cell midpoints) in a box of a built table")
     r.add_argument("table", help="TABLE.npz ('default': the table shipped with the package)")
@@ -36,6 +38,8 @@ def add_parsers(sub) -> None:
     r.add_argument("--workers", type=int, default=1, help="parallel workers (local processes or LocalCluster)")
     r.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address, or 'local'")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
+    r.add_argument("--allow-unconverged", action="store_true",
+                   help="exit 0 also when some nodes did not converge (default: exit status 3)")
     r.set_defaults(func=cmd_refine)
     i = tsub.add_parser("info", help="print a table's metadata (default: the shipped table)")
     i.add_argument("table", nargs="?", default=None, help="TABLE.npz (default: the table shipped with the package)")
@@ -54,7 +58,20 @@ def cmd_build(args) -> int:
     for label, why in rep.failed:
         print(f"conformal: {label}: failed: {why}", file=sys.stderr)
     print(rep.summary())
-    return 1 if rep.failed else 0
+    return _exit_code(rep, args.allow_unconverged)
+
+
+def _exit_code(rep, allow_unconverged: bool) -> int:
+    """1 when chunks failed (the table is not written; rerun to resume), 3 when the table was
+    written with nodes that did not converge (its metadata counts them), unless allowed."""
+    if rep.failed:
+        return 1
+    if rep.nonconverged:
+        from conformal.errors import unconverged_exit
+
+        return unconverged_exit(f"the exact solve of {rep.nonconverged} table nodes", allow_unconverged,
+                                where="\"nonconverged_nodes\" in the table's metadata; table info shows it")
+    return 0
 
 
 def _ranges(text: str, n: int, what: str) -> list[float]:
@@ -88,7 +105,7 @@ def cmd_refine(args) -> int:
     for label, why in rep.failed:
         print(f"conformal: {label}: failed: {why}", file=sys.stderr)
     print(rep.summary())
-    return 1 if rep.failed else 0
+    return _exit_code(rep, args.allow_unconverged)
 
 
 def cmd_info(args) -> int:

@@ -69,6 +69,10 @@ N_OUT = 3
 #: most nodes of a table (each is an exact solve; the node values alone take 24 bytes each, the plan
 #: of a build one task per ``chunk`` nodes): the shipped table has 486 720
 MAX_NODES = 10_000_000
+#: the largest rho_max and spin_max (normalised: 1 = saturation, Eq. T1)
+MAX_NORMALISED = 1000.0
+#: the most elements along the long axis of one node's grid (grid_n across the short one)
+MAX_LONG_AXIS = 20_000
 #: most elements across the short axis of an exact solve's box (its memory and time grow as grid_n^4)
 MAX_GRID_N = 400
 
@@ -133,6 +137,9 @@ class TableSpec:
             bad("nu_min", f"need -1 < nu_min <= nu_max < 0.5, got {self.nu_min}, {self.nu_max}")
         if not (self.rho_max > 0 and self.spin_max >= 0):
             bad("rho_max", f"need rho_max > 0 and spin_max >= 0, got {self.rho_max}, {self.spin_max}")
+        for key in ("rho_max", "spin_max"):        # 1 = saturation (Eq. T1): far beyond, the forces no longer change
+            if getattr(self, key) > MAX_NORMALISED:
+                bad(key, f"must be <= {MAX_NORMALISED:g} (1 = saturation, Eq. T1), got {getattr(self, key):g}")
         for key, lo in (("n_rho", 2), ("n_theta", 2)):
             if getattr(self, key) < lo:
                 bad(key, f"must be >= {lo}, got {getattr(self, key)}")
@@ -144,6 +151,11 @@ class TableSpec:
                 bad(n, f"must be 1 exactly when {lo} = {hi}")
         if not 4 <= self.grid_n <= MAX_GRID_N:
             bad("grid_n", f"must lie in 4 .. {MAX_GRID_N}, got {self.grid_n}")
+        if self.grid_n * max(self.ratio_max, 1.0 / self.ratio_min) > MAX_LONG_AXIS:
+            key = "ratio_max" if self.ratio_max >= 1.0 / self.ratio_min else "ratio_min"
+            bad(key, f"an a/b of {getattr(self, key):g} with grid_n = {self.grid_n} needs "
+                     f"{self.grid_n * max(self.ratio_max, 1.0 / self.ratio_min):.3g} elements along the long axis, "
+                     f"more than {MAX_LONG_AXIS:,}")
         n = math.prod(self.shape)
         if n > MAX_NODES:
             raise InputError(f"SPEC [table] n_ratio x n_nu x n_rho x n_theta x n_spin: "

@@ -76,12 +76,19 @@ def _shape_functions(k: float) -> tuple[float, float, float]:
     return kA, kB, k * K
 
 
+#: the largest curvature ratio :func:`aspect_from_curvatures` resolves (semi-axis ratio 1e6)
+MAX_CURVATURE_RATIO = 1e9
+
+
 def aspect_from_curvatures(A: float, B: float) -> float:
     """Semi-axis ratio a/b of the Hertz ellipse for curvatures A (x) and B (y)."""
     if A == B:
         return 1.0
     lo, hi = min(A, B), max(A, B)
     ratio = hi / lo  # >= 1: curvature of the short axis over that of the long axis
+    if not ratio <= MAX_CURVATURE_RATIO:      # outside the bracket of the root search below
+        raise InputError(f"Hertz: the curvature ratio max(A, B)/min(A, B) = {ratio:.3g} exceeds {MAX_CURVATURE_RATIO:g} "
+                         f"(a/b beyond 1e6: a line contact; give B = 0), got A = {A:g}, B = {B:g}")
 
     def f(log_k):
         kA, kB, _ = _shape_functions(math.exp(log_k))

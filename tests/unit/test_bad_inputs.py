@@ -206,6 +206,17 @@ def _cases():
         ("angle_table kinetic above static", WHEEL_RAIL, {"friction.angle_table": [[0.0, 0.3, 0.4]]},
          "[friction] angle_table"),
         ("angle_table row of two", WHEEL_RAIL, {"friction.angle_table": [[0.0, 0.3]]}, "[friction] angle_table"),
+        # huge numbers (fault trials): a traceback or a float overflow before
+        ("G 1e308", PLANAR, {"material.G": 1e308}, "[material] G"),
+        ("E 1e308", PLANAR, {"material.G": DELETE, "material.E": 1e308}, "[material] E"),
+        ("body2 G 1e300", PLANAR, {"material.body2": {"G": 1e300, "nu": 0.3}}, "[material.body2] G"),
+        ("A 1e300 (curvature ratio)", PLANAR, {"geometry.A": 1e300}, "curvature ratio"),
+        ("B 1e-300 (curvature ratio)", PLANAR, {"geometry.B": 1e-300}, "curvature ratio"),
+        ("wheel_load 1e300", WHEEL_RAIL, {"load.wheel_load": 1e300}, "[load] wheel_load"),
+        ("lateral_shift 1e300", WHEEL_RAIL, {"geometry.lateral_shift": 1e300}, "[geometry] lateral_shift"),
+        ("fe_contact h 1e-6 (the patch filled the memory)", PLANAR,
+         {"model.theory": "fe_contact", "model.fe_contact": {"h": 1e-6}, "kinematics.xi": 0.0},
+         "[model.fe_contact] n (or h)"),
     ]
     out += _newer_cases()
     return out
@@ -382,8 +393,47 @@ CLI_ARGS = [
     ("table info: text file", lambda t: ["table", "info", _write(t, "t.npz", "hello")], "not a creep table"),
     ("table info: missing", lambda t: ["table", "info", str(t / "none.npz")], "not found"),
     ("simulate: scene missing", lambda t: ["simulate", str(t / "v.toml")], "v.toml"),
+    # fault trials: a run reported for nothing, numbers beyond the float range, bytes echoed
+    ("inp: empty deck", lambda t: ["inp", _write(t, "e.inp", "")], "no cases"),
+    ("inp: only comments", lambda t: ["inp", _write(t, "c.inp", "% nothing\n 0  MODULE\n")], "no cases"),
+    ("influence file an NPZ", lambda t: ["solve", _planar_file(t, **{"model.theory": "exact", "model.influence_file":
+                                                                     _write(t, "k.npz", b"PK\x03\x04\x00\x00junk")})],
+     "a binary file"),
+    ("simulate: speed 1e300", lambda t: ["simulate", _vehicle(t, "speed = 1e300"), "--out", str(t / "o")],
+     "[simulation] speed"),
+    ("simulate: initial_lateral 1e300", lambda t: ["simulate", _vehicle(t, "initial_lateral = 1e300"), "--out",
+                                                    str(t / "o")], "[simulation] initial_lateral"),
+    ("stresses: depth 1e300", lambda t: ["stresses", _planar_file(t), "--depth", "1e300"], "--depth"),
+    ("table build: rho_max 1e300", lambda t: ["table", "build", _spec(t, "rho_max = 5.0", "rho_max = 1e300"),
+                                              "--out", str(t / "t.npz")], "[table] rho_max"),
+    ("table build: spin_max 1e300", lambda t: ["table", "build", _spec(t, "spin_max = 2.0", "spin_max = 1e300"),
+                                               "--out", str(t / "t.npz")], "[table] spin_max"),
+    ("table build: ratio_max 1e300", lambda t: ["table", "build", _spec(t, "ratio_max = 4.0", "ratio_max = 1e300"),
+                                                "--out", str(t / "t.npz")], "[table] ratio_max"),
+    ("stability: creep table a text file", lambda t: ["stability", _vehicle(
+        t, 'creep_model = "table"\ntable = "' + _write(t, "x.npz", "text") + '"'), "--out", str(t / "o")],
+     "[contact] table"),
+    ("stability: G 1e308", lambda t: ["stability", _vehicle(t, "G = 1e308"), "--out", str(t / "o")], "[material] G"),
     ("stability: scene missing", lambda t: ["stability", str(t / "v.toml")], "v.toml"),
 ]
+
+
+def _vehicle(t, line: str) -> str:
+    """The dynamics EXAMPLE scene with one ``key = value`` line replaced."""
+    import re
+
+    from conformal.dynamics.scene import EXAMPLE
+
+    key = line.split("=")[0].strip()
+    text = EXAMPLE if key != "G" else re.sub(r"(?m)^E = .*$", "G = 82000.0", EXAMPLE)
+    return _write(t, "v.toml", re.sub(rf"(?m)^{key} = .*$", line, text, count=1))
+
+
+def _spec(t, old: str, new: str) -> str:
+    """The shipped creep-table spec with one line replaced."""
+    text = (ROOT / "conformal" / "data" / "tables" / "creep_default.toml").read_text(encoding="utf-8")
+    assert old in text
+    return _write(t, "spec.toml", text.replace(old, new))
 
 
 def _write(t, name, content) -> str:

@@ -215,7 +215,7 @@ def test_json_on_a_full_disk_leaves_no_cut_file(tmp_path):
     out = tmp_path / "out.json"
     r = _run(["solve", str(scene), "--json", str(out)], fsize=200)
     assert r.returncode == 2
-    _one_error_line(r.stderr, "File too large")
+    _one_error_line(r.stderr, "File too large", str(out))            # the line names the file it could not write
     assert not out.exists() and list(tmp_path.iterdir()) == [scene]    # no temporary file either
     out.write_text("previous result\n")
     r = _run(["solve", str(scene), "--json", str(out)], fsize=200)
@@ -241,7 +241,7 @@ def test_simulate_on_a_full_disk_leaves_no_cut_history(tmp_path):
     out = tmp_path / "run"
     r = _run(["simulate", str(scene), "--out", str(out)], fsize=4000)
     assert r.returncode == 2, r.stderr
-    _one_error_line(r.stderr, "File too large")
+    _one_error_line(r.stderr, "File too large", "history.csv")
     assert not (out / "history.csv").exists() and not any(p.name.startswith(".") for p in out.iterdir())
 
 
@@ -481,3 +481,230 @@ def test_every_writer_of_the_package_is_atomic():
             if RAW_WRITERS.search(code) and "tmp" not in code and ">>>" not in line:
                 found.append(f"{path.relative_to(PACKAGE)}:{n}: {line.strip()}")
     assert found == []
+
+
+# ============================================================================ not converged: exit 3 everywhere
+def _maxit1_scene(tmp_path, base: str = "circ.toml", n: int = 10) -> Path:
+    """circ.toml solved by the exact theory with maxit = 1 (a solve that cannot converge)."""
+    text = (SCENES / base).read_text(encoding="utf-8")
+    text = text.replace('theory = "fastsim"', 'theory = "exact"\nmaxit = 1').replace("n = 50", f"n = {n}")
+    text += "\n[stresses]\nn_depths = 4\n"
+    scene = tmp_path / "m1.toml"
+    scene.write_text(text, encoding="utf-8")
+    return scene
+
+
+def test_stresses_of_an_unconverged_solve_exit_3(tmp_path, capsys):
+    """``stresses`` used to print the stresses of a non-converged solve and exit 0 without a word
+    in its JSON; now "converged": false, one error line and exit 3 (0 with --allow-unconverged)."""
+    scene = _maxit1_scene(tmp_path)
+    out = tmp_path / "s.json"
+    assert main(["stresses", str(scene), "--json", str(out)]) == 3
+    _one_error_line(capsys.readouterr().err, "did not converge", "--allow-unconverged")
+    assert json.loads(out.read_text(encoding="utf-8"))["converged"] is False
+    assert main(["stresses", str(scene), "--allow-unconverged"]) == 0
+    capsys.readouterr()
+    scene.write_text(scene.read_text(encoding="utf-8").replace("maxit = 1", "maxit = 1000"), encoding="utf-8")
+    assert main(["stresses", str(scene), "--json", str(out)]) == 0
+    assert json.loads(out.read_text(encoding="utf-8"))["converged"] is True
+
+
+def test_table_build_with_unconverged_nodes_exits_3(tmp_path, capsys):
+    """A creep table whose exact solves stop at maxit (tol 1e-300 cannot be met) used to be written
+    with exit 0; the count was only in its metadata.  Now exit 3 naming the count (the table is
+    written: a rerun would give the same nodes), 0 with --allow-unconverged."""
+    spec = tmp_path / "spec.toml"
+    spec.write_text(textwrap.dedent("""\
+        [table]
+        ratio_min = 1.0
+        ratio_max = 1.0
+        n_ratio = 1
+        nu_min = 0.28
+        nu_max = 0.28
+        n_nu = 1
+        rho_max = 1.0
+        n_rho = 2
+        n_theta = 2
+        spin_max = 0.0
+        n_spin = 1
+        [solver]
+        grid_n = 6
+        tol = 1e-300
+        [build]
+        chunk = 2
+        """), encoding="utf-8")
+    out = tmp_path / "t.npz"
+    assert main(["table", "build", str(spec), "--out", str(out), "--no-progress"]) == 3
+    cap = capsys.readouterr()
+    _one_error_line(cap.err, "table nodes did not converge", "nonconverged_nodes")
+    assert "NOT CONVERGED" in cap.out and out.is_file()
+    from conformal.tables.table import load_table
+
+    assert load_table(out).meta["nonconverged_nodes"] > 0
+    out.unlink()
+    assert main(["table", "build", str(spec), "--out", str(out), "--no-progress", "--allow-unconverged"]) == 0
+
+
+def test_inp_reports_converged_and_exits_3_for_an_unconverged_case(tmp_path, capsys, monkeypatch):
+    """Every case of ``inp`` carries "converged"; a case that did not converge (here the deck's
+    solver reports so) ends with exit 3 after the JSON Lines are written (atomically)."""
+    from conformal.contact_inp import deck as deck_mod
+    from _paths import REFERENCE
+
+    src = REFERENCE / "contact_decks" / "cattaneo.inp"
+    assert main(["inp", str(src), "--cases", "1", "--out", str(tmp_path / "o")]) == 0
+    line = json.loads((tmp_path / "o" / "cattaneo.jsonl").read_text(encoding="utf-8"))
+    assert line["case"] == 1 and line["converged"] is True
+    real = deck_mod.solve_deck
+
+    def unconverged(parsed, cases=None):
+        for d in real(parsed, cases=cases):
+            yield {**d, "converged": False, "warnings": d["warnings"] + ["not converged"]}
+
+    monkeypatch.setattr(deck_mod, "solve_deck", unconverged)
+    capsys.readouterr()
+    assert main(["inp", str(src), "--cases", "1", "--out", str(tmp_path / "o")]) == 3
+    err = capsys.readouterr().err.replace(f"wrote {tmp_path / 'o' / 'cattaneo.jsonl'}\n", "")
+    _one_error_line(err, "case 1 did not converge")
+    assert json.loads((tmp_path / "o" / "cattaneo.jsonl").read_text(encoding="utf-8"))["converged"] is False
+    assert main(["inp", str(src), "--cases", "1", "--allow-unconverged"]) == 0
+    assert not [p.name for p in (tmp_path / "o").iterdir() if p.name != "cattaneo.jsonl"]   # no temporary left
+
+
+def test_inp_out_under_a_file_is_refused_before_solving(tmp_path, capsys, monkeypatch):
+    """``inp --out`` below a file used to solve every case and then fail on mkdir; now refused first."""
+    from conformal.contact_inp import deck as deck_mod
+    from _paths import REFERENCE
+
+    (tmp_path / "f").write_text("x")
+    monkeypatch.setattr(deck_mod, "solve_deck", lambda *a, **k: pytest.fail("solved before the check"))
+    assert main(["inp", str(REFERENCE / "contact_decks" / "cattaneo.inp"), "--out", str(tmp_path / "f" / "o")]) == 2
+    _one_error_line(capsys.readouterr().err, "--out", "is a file")
+
+
+@pytest.mark.slow
+def test_sweep_solve_with_an_unconverged_shift_exits_3(tmp_path, capsys):
+    """``sweep --solve`` wrote "converged" 0 in its CSV and exited 0; now exit 3 naming the shifts."""
+    scene = tmp_path / "wr.toml"
+    scene.write_text(textwrap.dedent("""\
+        [material]
+        G = 82000.0
+        nu = 0.28
+        [friction]
+        mu = 0.3
+        [geometry]
+        kind = "wheel_rail"
+        wheel_profile = "S1002"
+        rail_profile = "UIC60"
+        lateral_shift = 0.0
+        [load]
+        wheel_load = 10000.0
+        [kinematics]
+        xi = 0.001
+        [grid]
+        n = 12
+        [model]
+        theory = "exact"
+        maxit = 1
+        """), encoding="utf-8")
+    out = tmp_path / "sw"
+    assert main(["sweep", str(scene), "--solve", "--shift", "0:0:1", "--out", str(out), "--workers", "1"]) == 3
+    err = capsys.readouterr().err
+    assert "the solve at shift 0 mm did not converge" in err
+    assert [r["converged"] for r in json.loads((out / "sweep_solved.json").read_text(encoding="utf-8"))["rows"]] == [0]
+    assert main(["sweep", str(scene), "--solve", "--shift", "0:0:1", "--out", str(out), "--workers", "1",
+                 "--allow-unconverged"]) == 0
+
+
+def test_an_iteration_without_a_result_exits_3(tmp_path, capsys, monkeypatch):
+    """A ConvergenceError (the vertical balance, the wheelset integrator, the FE contact's active
+    set: no result at all) used to exit 2 like a bad input; now one line and exit 3."""
+    from conformal import dispatch
+    from conformal.errors import ConvergenceError
+
+    def fail(scene):
+        raise ConvergenceError("FE contact: the active set did not settle in 40 iterations (12 active nodes)")
+
+    monkeypatch.setattr(dispatch, "solve_scene", fail)
+    assert main(["solve", str(SCENES / "circ.toml")]) == 3
+    _one_error_line(capsys.readouterr().err, "did not settle", "exit status 3")
+
+
+@pytest.mark.slow
+def test_vehicle_wheel_load_beyond_elastic_contact_is_refused(tmp_path, capsys):
+    """Fault trial: [vehicle] wheel_load = 1e300 ran the integrator on NaN ("lateral shift nan mm left
+    the contact table", after the table build); now refused naming the key at the static equilibrium."""
+    scene = _vehicle_scene(tmp_path, wheel_load="1e300", t_end=0.01)
+    assert main(["simulate", str(scene), "--out", str(tmp_path / "o")]) == 2
+    _one_error_line(capsys.readouterr().err, "[vehicle] wheel_load", "into its rail")
+
+
+def test_integrator_steps_are_bounded():
+    """A model so stiff that an explicit integrator's steps shrink without end (a [contact] damping
+    of 1e300 came close) stops after MAX_STEPS_PER_ROW steps per output row, naming the keys."""
+    from types import SimpleNamespace
+
+    from conformal.dynamics.simulate import MAX_STEPS_PER_ROW, integrate_model
+    from conformal.errors import ConvergenceError
+
+    stiff = SimpleNamespace(rhs=lambda t, y: -1e12 * y, contacts=lambda t, y: None)
+    with pytest.raises(ConvergenceError, match=r"took \d+ steps .*\[contact\] damping") as info:
+        integrate_model(stiff, np.ones(8), 1e-3, output_step=1e-3)
+    assert int(re.search(r"took (\d+) steps", str(info.value)).group(1)) == MAX_STEPS_PER_ROW * 2
+    soft = SimpleNamespace(rhs=lambda t, y: -y, contacts=lambda t, y: None)
+    times, states, steps, _ = integrate_model(soft, np.ones(8), 1e-2, output_step=1e-3)
+    assert steps < 50 and states[-1][0] == pytest.approx(np.exp(-1e-2), rel=1e-6)
+
+
+def test_fe_element_sizes_are_bounded_before_meshing(monkeypatch, tmp_path):
+    """Fault trial: [model] fe_h_patch = 1e-6 started gmsh on about 1e15 nodes (no end in sight);
+    now refused before gmsh starts, naming the key and the smallest admissible value, which meshes."""
+    from conformal.meshing import gmsh_body
+    from conformal.meshing.bodies import StripPatch
+    from conformal.meshing.gmsh_body import MAX_PATCH_NODES, MeshSpec, check_patch_nodes
+
+    patch = StripPatch.uniform(40, 0.2, 40, 0.2, 0.0)
+    with pytest.raises(InputError, match=r"^\[model\] fe_h_patch: .* more than 1,000,000; use fe_h_patch >= 0\.04$") as e:
+        check_patch_nodes(patch, MeshSpec(h_patch=1e-6), 0.2)
+    least = float(str(e.value).rsplit(">= ", 1)[1])
+    check_patch_nodes(patch, MeshSpec(h_patch=least * 1.01), 0.2)           # just above: accepted
+    with pytest.raises(InputError, match=r"^\[model\] fe_h_load"):
+        check_patch_nodes(patch, MeshSpec(h_load=1e-6), 0.2)
+    check_patch_nodes(patch, MeshSpec(), 0.2)                                # the defaults: a few hundred nodes
+    assert (40 * 0.2) ** 2 / (2 * 0.2) ** 2 < 1e-3 * MAX_PATCH_NODES
+
+    def no_gmsh(*a, **k):
+        raise AssertionError("gmsh started")
+
+    monkeypatch.setattr(gmsh_body, "_generate", no_gmsh)
+    from _scenes import SWEEP_SCENE
+    import tomllib
+
+    from conformal.cases.precompute import plan
+    from conformal.jobs import parse_sweep
+    from conformal.scene import scene_from_dict
+
+    items, _ = plan(scene_from_dict(tomllib.loads(SWEEP_SCENE), ROOT), parse_sweep("shift=0,0"), cache=tmp_path)
+    with pytest.raises(InputError, match=r"fe_h_patch"):
+        gmsh_body.mesh_body(items[0].body, items[0].patch, MeshSpec(h_patch=1e-6))
+
+
+def test_warnings_are_one_line_each(monkeypatch, capsys):
+    """Fault trial: a corrupt cache entry met by ``solve`` printed Python's two-line warning
+    ("/…/cache.py:226: CacheWarning: …" and the source line), and numpy's overflow warnings did the
+    same; now each warning is one ``conformal: warning:`` line, the program's own format."""
+    import warnings
+
+    import conformal.cli as cli
+
+    def noisy(args):
+        warnings.warn("influence cache: x.npz cannot be read; recomputing", CacheWarning, stacklevel=2)
+        with np.errstate(over="warn"):
+            np.float64(1e300) * np.float64(1e300)
+        return 0
+
+    monkeypatch.setattr(cli, "cmd_cache", noisy)
+    assert main(["cache", "list"]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        "conformal: warning: influence cache: x.npz cannot be read; recomputing",
+        "conformal: warning: RuntimeWarning: overflow encountered in scalar multiply"]
