@@ -399,9 +399,9 @@ CLI_ARGS = [
     ("influence file an NPZ", lambda t: ["solve", _planar_file(t, **{"model.theory": "exact", "model.influence_file":
                                                                      _write(t, "k.npz", b"PK\x03\x04\x00\x00junk")})],
      "a binary file"),
-    ("simulate: speed 1e300", lambda t: ["simulate", _vehicle(t, "speed = 1e300"), "--out", str(t / "o")],
+    ("simulate: speed 1e300", lambda t: ["simulate", _vehicle(t, "speed = 65.0", "speed = 1e300"), "--out", str(t / "o")],
      "[simulation] speed"),
-    ("simulate: initial_lateral 1e300", lambda t: ["simulate", _vehicle(t, "initial_lateral = 1e300"), "--out",
+    ("simulate: initial_lateral 1e300", lambda t: ["simulate", _vehicle(t, "initial_lateral = 0.0", "initial_lateral = 1e300"), "--out",
                                                     str(t / "o")], "[simulation] initial_lateral"),
     ("stresses: depth 1e300", lambda t: ["stresses", _planar_file(t), "--depth", "1e300"], "--depth"),
     ("table build: rho_max 1e300", lambda t: ["table", "build", _spec(t, "rho_max = 5.0", "rho_max = 1e300"),
@@ -410,10 +410,10 @@ CLI_ARGS = [
                                                "--out", str(t / "t.npz")], "[table] spin_max"),
     ("table build: ratio_max 1e300", lambda t: ["table", "build", _spec(t, "ratio_max = 4.0", "ratio_max = 1e300"),
                                                 "--out", str(t / "t.npz")], "[table] ratio_max"),
-    ("stability: creep table a text file", lambda t: ["stability", _vehicle(
+    ("stability: creep table a text file", lambda t: ["stability", _vehicle_line(
         t, 'creep_model = "table"\ntable = "' + _write(t, "x.npz", "text") + '"'), "--out", str(t / "o")],
      "[contact] table"),
-    ("stability: G 1e308", lambda t: ["stability", _vehicle(t, "G = 1e308"), "--out", str(t / "o")], "[material] G"),
+    ("stability: G 1e308", lambda t: ["stability", _vehicle_line(t, "G = 1e308"), "--out", str(t / "o")], "[material] G"),
     ("stability: scene missing", lambda t: ["stability", str(t / "v.toml")], "v.toml"),
 ]
 
@@ -459,6 +459,17 @@ def _deck(t, old: str = "", new: str = "", name: str = "d.inp") -> str:
 def _vehicle(t, old: str = "", new: str = "") -> str:
     assert old in _VEHICLE
     return _write(t, "v.toml", _VEHICLE.replace(old, new, 1) if old else _VEHICLE)
+
+
+def _vehicle_line(t, line: str) -> str:
+    """The dynamics EXAMPLE scene with one ``key = value`` line replaced."""
+    import re
+
+    from conformal.dynamics.scene import EXAMPLE
+
+    key = line.split("=")[0].strip()
+    text = EXAMPLE if key != "G" else re.sub(r"(?m)^E = .*$", "G = 82000.0", EXAMPLE)
+    return _write(t, "v.toml", re.sub(rf"(?m)^{key} = .*$", line, text, count=1))
 
 
 def _stresses(t, section: str = "") -> str:
