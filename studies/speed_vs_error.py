@@ -147,7 +147,7 @@ def read_rows(path: Path) -> list[dict]:
             for k, v in r.items():
                 if v in ("", None):
                     continue
-                row[k] = v if k in ("scene", "model", "note") else float(v)
+                row[k] = v if k in ("scene", "model", "note") else int(float(v)) if k == "n" else float(v)
             rows.append(row)
     return rows
 
