@@ -21,7 +21,7 @@ from _studies import run_study
 
 @pytest.mark.slow
 def test_body_size_study_quick(tmp_path):
-    out = run_study("fe_contact_body_size", tmp_path / "out", timeout=600.0)
+    out = run_study("fe_contact_body_size", tmp_path / "out", timeout=900.0)
     data = json.loads((out / "fe_contact_body_size.json").read_text())
     rows = data["rows"]
     clamped = sorted((r for r in rows if r["far_field"] == "clamped"), key=lambda r: r["size"])
