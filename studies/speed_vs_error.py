@@ -18,11 +18,14 @@ speed_vs_error.png and the sidecar run.json (commit, arguments, package versions
     python studies/speed_vs_error.py            # ~15 minutes the first time (FE), then ~2
     python studies/speed_vs_error.py --quick --out DIR   # flange root only, n = 12, 16, no FE; the
                                                          # reference is conformal HS n = 24 (< 1 min)
+    python studies/speed_vs_error.py --only 6.3 "conformal FE n=24"   # one cell again, against the
+                                                         # stored reference row; merged into the CSV
 """
 from __future__ import annotations
 
 import argparse
 import csv
+import json
 import sys
 import time
 from pathlib import Path
@@ -85,9 +88,15 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--out", default=None,
                    help="output folder (default studies/out/speed_vs_error; with --quick a temporary folder)")
+    ap.add_argument("--only", nargs=2, metavar=("SHIFT", "MODEL"), default=None,
+                    help="rerun one cell (lateral shift in mm, one of the scenes', and a model label such as "
+                         "'conformal FE n=24') against the stored reference row of that scene; the row replaces "
+                         "the stored one and md/png are rewritten")
     args = ap.parse_args(argv)
     out = output_dir("speed_vs_error", args)
     out.mkdir(parents=True, exist_ok=True)
+    if args.only:
+        return rerun_cell(out, float(args.only[0]), args.only[1], args)
     base = load_scene(SCENE)
     runs, ref_cfg = configs(args.quick)
     rows = []
@@ -126,6 +135,76 @@ def main(argv=None):
     plot(rows, out / "speed_vs_error.png", ref_cfg[0])   # per-scene fallbacks are noted in the table
     write_sidecar(out, __file__, args, extra={"reference": ref_cfg[0]})
     print(f"wrote {out}")
+    return 0
+
+
+def read_rows(path: Path) -> list[dict]:
+    """The rows of a stored speed_vs_error.csv (numbers as floats, empty cells as absent)."""
+    rows = []
+    with path.open(newline="") as fh:
+        for r in csv.DictReader(fh):
+            row = {}
+            for k, v in r.items():
+                if v in ("", None):
+                    continue
+                row[k] = v if k in ("scene", "model", "note") else int(float(v)) if k == "n" else float(v)
+            rows.append(row)
+    return rows
+
+
+def write_outputs(rows, out: Path, ref_label: str) -> None:
+    """CSV (atomic), markdown and plot of ``rows``."""
+    tmp = out / "speed_vs_error.csv.tmp"
+    with tmp.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=FIELDS, extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
+    tmp.replace(out / "speed_vs_error.csv")
+    write_markdown(rows, out / "speed_vs_error.md")
+    plot(rows, out / "speed_vs_error.png", ref_label)
+
+
+def rerun_cell(out: Path, shift: float, label: str, args) -> int:
+    """Run one model at one scene again and merge it into the stored outputs (its errors against
+    the stored reference row of that scene)."""
+    scene_label = next((lab for lab, y in SCENES if abs(y - shift) < 1e-9), None)
+    runs, ref_cfg = configs(False)
+    cfg = next((c for c in runs if c[0] == label), None)
+    if scene_label is None or cfg is None:
+        print(f"speed_vs_error: --only: no scene at {shift:g} mm or no model {label!r} (scenes at "
+              f"{', '.join(f'{y:g}' for _, y in SCENES)}; models {', '.join(c[0] for c in runs)})", file=sys.stderr)
+        return 2
+    rows = read_rows(out / "speed_vs_error.csv")
+    ref = next((r for r in rows if r["scene"] == scene_label and "(reference)" in r["model"]), None)
+    if ref is None:
+        print(f"speed_vs_error: --only: no stored reference row for {scene_label!r}", file=sys.stderr)
+        return 2
+    sc = load_scene(SCENE).with_("geometry.lateral_shift", shift)
+    try:
+        row = run(sc, *cfg[1:])
+    except ConformalError as exc:
+        row = {"note": f"{type(exc).__name__}: {exc}"[:160]}
+    else:
+        F = np.array([row["FX_track"], row["FY_track"], row["FZ_track"]])
+        F_ref = np.array([ref["FX_track"], ref["FY_track"], ref["FZ_track"]])
+        row["force_error"] = float(np.linalg.norm(F - F_ref) / np.linalg.norm(F_ref))
+        row["pmax_error"] = abs(row["pmax"] - ref["pmax"]) / ref["pmax"]
+    row.update(scene=scene_label, model=label, n=cfg[3])
+    print(f"{scene_label}: {label}: " + "  ".join(f"{k}={row[k]:.4g}" for k in ("force_error", "pmax_error", "wall_s",
+                                                                              "wall_cold_s") if k in row)
+          + f"  {row.get('note', '')}", flush=True)
+    i = next((i for i, r in enumerate(rows) if r["scene"] == scene_label and r["model"] == label), None)
+    if i is None:
+        rows.append(row)
+    else:
+        rows[i] = row
+    write_outputs(rows, out, ref_cfg[0])
+    # the full run's provenance stays with the rows it made; this run's describes the one cell
+    side = out / "run.json"
+    before = json.loads(side.read_text()) if side.exists() else {}
+    earlier = before.pop("earlier_runs", [])
+    write_sidecar(out, __file__, args, extra={"reference": ref_cfg[0], "rerun_cell": [scene_label, label],
+                                              "earlier_runs": earlier + ([before] if before else [])})
     return 0
 
 

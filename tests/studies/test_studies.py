@@ -195,3 +195,34 @@ def test_fe_influence_speed_error_quick(tmp_path):
     assert sorted(p.name for p in out.glob("fe_kernel_*.npy")) == ["fe_kernel_gauge_P1_2_0.5.npy",
                                                                     "fe_kernel_gauge_P2_0.5_None.npy"]
     assert "| gauge split P1 h=2d col 0.5d |" in (out / "fe_influence_speed_error.md").read_text()
+
+
+@pytest.mark.slow
+def test_speed_vs_error_rerun_one_cell(tmp_path):
+    """``--only SHIFT MODEL`` reruns one cell against the stored reference row and merges it: on a
+    copy of the stored outputs, the half-space n = 16 cell of the flange root (6.2 mm) computed
+    again reproduces its stored force and pmax errors (0.09 % / 0.1 %: the same model on the same
+    scene, against the same stored FE reference) and leaves every other row as it was; an unknown
+    model is refused with exit code 2."""
+    import shutil
+
+    out = tmp_path / "out"
+    shutil.copytree(STUDIES / "out" / "speed_vs_error", out)
+    before = rows(out / "speed_vs_error.csv")
+    e = dict(os.environ, OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
+    cmd = [sys.executable, str(STUDIES / "speed_vs_error.py"), "--out", str(out), "--only", "6.2"]
+    r = subprocess.run(cmd + ["conformal HS n=16"], cwd=ROOT, capture_output=True, text=True, timeout=300, env=e)
+    assert r.returncode == 0, r.stderr[-2000:]
+    after = rows(out / "speed_vs_error.csv")
+    assert len(after) == len(before)
+    key = ("flange root, y = 6.2", "conformal HS n=16")
+    for a, b in zip(before, after):
+        if (a["scene"], a["model"]) == key:
+            assert float(b["force_error"]) == pytest.approx(float(a["force_error"]), rel=1e-3, abs=1e-6)
+            assert float(b["pmax_error"]) == pytest.approx(float(a["pmax_error"]), rel=1e-3, abs=1e-6)
+        else:
+            assert a == b
+    side = json.loads((out / "run.json").read_text())
+    assert side["rerun_cell"] == list(key) and side["earlier_runs"][0]["args"]["quick"] is False
+    bad = subprocess.run(cmd + ["no such model"], cwd=ROOT, capture_output=True, text=True, timeout=300, env=e)
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1
