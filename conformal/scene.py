@@ -832,10 +832,22 @@ def grid_bytes(mx: int, my: int, theory: str, models: Registry = MODELS) -> floa
     return models.grid_bytes(mx, my, theory)
 
 
+#: the most elements of any grid (planar n x n, mx x my, line grids, conformal strips, CONTACT decks):
+#: 1000 x 1000, six times the largest grid the validation measures (400², docs/validation/halfspace.md);
+#: a larger one fits the memory of a workstation but runs for many minutes (a line grid of 5.5 million
+#: elements does) and resolves nothing a 1000-element row or a 400 x 400 grid does not
+MAX_GRID_ELEMENTS = 1_000_000
+
+
 def check_grid_memory(mx: int, my: int, theory: str, key: str, hint: str = "use a coarser grid",
                       models: Registry = MODELS) -> None:
-    """Refuse (InputError naming ``key``) an mx x my grid whose estimated memory with ``theory``
-    (:func:`grid_bytes`) exceeds 80 % of the memory available, before anything is allocated."""
+    """Refuse (InputError naming ``key``) an mx x my grid of more than :data:`MAX_GRID_ELEMENTS`
+    elements, or whose estimated memory with ``theory`` (:func:`grid_bytes`) exceeds 80 % of the
+    memory available, before anything is allocated."""
+    if float(mx) * float(my) > MAX_GRID_ELEMENTS:
+        raise InputError(f"{key}: a {mx} x {my} grid has {float(mx) * float(my):.3g} elements, more than "
+                         f"{MAX_GRID_ELEMENTS:.0e} (1000 x 1000; the largest measured grid is 400 x 400) and "
+                         f"would run for many minutes; {hint}")
     need = grid_bytes(mx, my, theory, models)
     avail = available_memory()
     if avail is not None and need > 0.8 * avail:
@@ -852,6 +864,8 @@ def grid_memory(scene: "Scene", models: Registry = MODELS) -> tuple[int, int, fl
         mx, my = int(g.mx), int(g.my)
     elif scene.geometry.kind == "wheel_rail" and scene.geometry.element_size is not None:
         return 0, 0, 0.0
+    elif isinstance(scene.geometry, QuadraticGeometry) and scene.geometry.B == 0.0:
+        mx, my = int(g.n), 1          # line contact: a row of n elements (conformal.problem)
     else:
         mx = my = int(g.n)
     return mx, my, grid_bytes(mx, my, theory, models)
