@@ -945,9 +945,16 @@ def scene_warnings(scene: "Scene") -> list[str]:
     return out
 
 
+#: theories that do not iterate to ``[model] tol`` within ``maxit`` (closed forms, FASTSIM's one pass,
+#: a table look-up)
+NOT_ITERATED = ("hertz", "linear", "empirical", "johnson_vermeulen", "fastsim", "table")
+
+
 def unread_model_options(scene: "Scene", models: Registry = MODELS) -> list[str]:
     """Warnings for ``[model]`` keys the scene's theory does not read (a key of another theory, or
-    an FE key without ``influence = "fe"``): valid, but without effect on this solve.
+    an FE key without ``influence = "fe"``; ``tol`` / ``maxit`` with a theory of
+    :data:`NOT_ITERATED`, ``bound`` with a theory other than fastsim, fe_contact's section keys with
+    another body), given with a value other than the default: valid, but without effect on this solve.
 
     >>> s = scene_from_dict({"geometry": {"kind": "quadratic", "A": 1e-3, "B": 1e-3},
     ...                      "load": {"normal_force": 1e4}, "model": {"theory": "exact", "fec_n": 6}})
@@ -961,6 +968,20 @@ def unread_model_options(scene: "Scene", models: Registry = MODELS) -> list[str]
     own = {o.key for o in model.options} | {o.key for me in model.methods for o in models.method(me).options}
     fe_keys = {o.key for o in models.method("fe").options} if "fe" in {me.name for me in models.methods} else set()
     out = []
+    spec, default = scene.model, ModelSpec()
+    if theory in NOT_ITERATED:
+        for key in ("tol", "maxit"):
+            if getattr(spec, key) != getattr(default, key):
+                out.append(f"[model] {key} = {getattr(spec, key):g}: theory {theory!r} does not iterate to a "
+                           "tolerance (closed form or one pass); it has no effect here")
+    if spec.bound != default.bound and theory != "fastsim":
+        out.append(f"[model] bound = {spec.bound!r}: the traction bound of FASTSIM, read only by theory "
+                   f"'fastsim' (this scene: {theory!r}); it has no effect here")
+    body = spec.options.get("fec_body", "disc")
+    for key in ("fec_section_size", "fec_section_h_max"):
+        if key in spec.options and key in own and body != "section":
+            out.append(f"[model] {key}: read only with [model] fec_body = \"section\", this scene has fec_body = "
+                       f"{body!r}; it has no effect here")
     for key in scene.model.options:
         if key not in own:
             readers = ", ".join(models.readers(key)) or "no theory"
