@@ -844,15 +844,15 @@ def check_grid_memory(mx: int, my: int, theory: str, key: str, hint: str = "use 
     """Refuse (InputError naming ``key``) an mx x my grid of more than :data:`MAX_GRID_ELEMENTS`
     elements, or whose estimated memory with ``theory`` (:func:`grid_bytes`) exceeds 80 % of the
     memory available, before anything is allocated."""
-    if float(mx) * float(my) > MAX_GRID_ELEMENTS:
-        raise InputError(f"{key}: a {mx} x {my} grid has {float(mx) * float(my):.3g} elements, more than "
-                         f"{MAX_GRID_ELEMENTS:.0e} (1000 x 1000; the largest measured grid is 400 x 400) and "
-                         f"would run for many minutes; {hint}")
     need = grid_bytes(mx, my, theory, models)
     avail = available_memory()
     if avail is not None and need > 0.8 * avail:
         raise InputError(f"{key}: a {mx} x {my} grid needs about {need / 2**30:.3g} GiB with theory "
                          f"{theory!r}, more than the {avail / 2**30:.3g} GiB available; {hint}")
+    if float(mx) * float(my) > MAX_GRID_ELEMENTS:
+        raise InputError(f"{key}: a {mx} x {my} grid has {float(mx) * float(my):.3g} elements, more than "
+                         f"{MAX_GRID_ELEMENTS:.0e} (1000 x 1000; the largest measured grid is 400 x 400) and "
+                         f"would run for many minutes; {hint}")
 
 
 def grid_memory(scene: "Scene", models: Registry = MODELS) -> tuple[int, int, float]:
