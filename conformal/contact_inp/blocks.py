@@ -6,8 +6,8 @@ digits B and M, damping M2 = 2 and temperature H = 3).
 >>> d = Deck("x.inp", " 203100\\n 022020 2\\n 0001341\\n 100 100 30 1 1e-8\\n")
 >>> digits = control_words(d, "PBTNFS")
 >>> maxout, eps, notes = solver_parameters(d, digits["G"], module=3)
->>> digits["T"], digits["L"], digits["V"], digits["M2"], digits["O"], maxout, eps, notes[0][:31]
-(3, 0, 0, 2, 3, 1, 1e-08, 'MAXGS = 100 (CONTACT\'s Gauss-Se')
+>>> digits["T"], digits["L"], digits["V"], digits["M2"], digits["O"], maxout, eps, notes[0][:11]
+(3, 0, 0, 2, 3, 1, 1e-08, 'MAXGS = 100')
 """
 from __future__ import annotations
 
