@@ -832,15 +832,27 @@ def grid_bytes(mx: int, my: int, theory: str, models: Registry = MODELS) -> floa
     return models.grid_bytes(mx, my, theory)
 
 
+#: the most elements of any grid (planar n x n, mx x my, line grids, conformal strips, CONTACT decks):
+#: 1000 x 1000, six times the largest grid the validation measures (400², docs/validation/halfspace.md);
+#: a larger one fits the memory of a workstation but runs for many minutes (a line grid of 5.5 million
+#: elements does) and resolves nothing a 1000-element row or a 400 x 400 grid does not
+MAX_GRID_ELEMENTS = 1_000_000
+
+
 def check_grid_memory(mx: int, my: int, theory: str, key: str, hint: str = "use a coarser grid",
                       models: Registry = MODELS) -> None:
-    """Refuse (InputError naming ``key``) an mx x my grid whose estimated memory with ``theory``
-    (:func:`grid_bytes`) exceeds 80 % of the memory available, before anything is allocated."""
+    """Refuse (InputError naming ``key``) an mx x my grid of more than :data:`MAX_GRID_ELEMENTS`
+    elements, or whose estimated memory with ``theory`` (:func:`grid_bytes`) exceeds 80 % of the
+    memory available, before anything is allocated."""
     need = grid_bytes(mx, my, theory, models)
     avail = available_memory()
     if avail is not None and need > 0.8 * avail:
         raise InputError(f"{key}: a {mx} x {my} grid needs about {need / 2**30:.3g} GiB with theory "
                          f"{theory!r}, more than the {avail / 2**30:.3g} GiB available; {hint}")
+    if float(mx) * float(my) > MAX_GRID_ELEMENTS:
+        raise InputError(f"{key}: a {mx} x {my} grid has {float(mx) * float(my):.3g} elements, more than "
+                         f"{MAX_GRID_ELEMENTS:.0e} (1000 x 1000; the largest measured grid is 400 x 400) and "
+                         f"would run for many minutes; {hint}")
 
 
 def grid_memory(scene: "Scene", models: Registry = MODELS) -> tuple[int, int, float]:
@@ -852,6 +864,8 @@ def grid_memory(scene: "Scene", models: Registry = MODELS) -> tuple[int, int, fl
         mx, my = int(g.mx), int(g.my)
     elif scene.geometry.kind == "wheel_rail" and scene.geometry.element_size is not None:
         return 0, 0, 0.0
+    elif isinstance(scene.geometry, QuadraticGeometry) and scene.geometry.B == 0.0:
+        mx, my = int(g.n), 1          # line contact: a row of n elements (conformal.problem)
     else:
         mx = my = int(g.n)
     return mx, my, grid_bytes(mx, my, theory, models)
@@ -931,9 +945,16 @@ def scene_warnings(scene: "Scene") -> list[str]:
     return out
 
 
+#: theories that do not iterate to ``[model] tol`` within ``maxit`` (closed forms, FASTSIM's one pass,
+#: a table look-up)
+NOT_ITERATED = ("hertz", "linear", "empirical", "johnson_vermeulen", "fastsim", "table")
+
+
 def unread_model_options(scene: "Scene", models: Registry = MODELS) -> list[str]:
     """Warnings for ``[model]`` keys the scene's theory does not read (a key of another theory, or
-    an FE key without ``influence = "fe"``): valid, but without effect on this solve.
+    an FE key without ``influence = "fe"``; ``tol`` / ``maxit`` with a theory of
+    :data:`NOT_ITERATED`, ``bound`` with a theory other than fastsim, fe_contact's section keys with
+    another body), given with a value other than the default: valid, but without effect on this solve.
 
     >>> s = scene_from_dict({"geometry": {"kind": "quadratic", "A": 1e-3, "B": 1e-3},
     ...                      "load": {"normal_force": 1e4}, "model": {"theory": "exact", "fec_n": 6}})
@@ -947,6 +968,20 @@ def unread_model_options(scene: "Scene", models: Registry = MODELS) -> list[str]
     own = {o.key for o in model.options} | {o.key for me in model.methods for o in models.method(me).options}
     fe_keys = {o.key for o in models.method("fe").options} if "fe" in {me.name for me in models.methods} else set()
     out = []
+    spec, default = scene.model, ModelSpec()
+    if theory in NOT_ITERATED:
+        for key in ("tol", "maxit"):
+            if getattr(spec, key) != getattr(default, key):
+                out.append(f"[model] {key} = {getattr(spec, key):g}: theory {theory!r} does not iterate to a "
+                           "tolerance (closed form or one pass); it has no effect here")
+    if spec.bound != default.bound and theory != "fastsim":
+        out.append(f"[model] bound = {spec.bound!r}: the traction bound of FASTSIM, read only by theory "
+                   f"'fastsim' (this scene: {theory!r}); it has no effect here")
+    body = spec.options.get("fec_body", "disc")
+    for key in ("fec_section_size", "fec_section_h_max"):
+        if key in spec.options and key in own and body != "section":
+            out.append(f"[model] {key}: read only with [model] fec_body = \"section\", this scene has fec_body = "
+                       f"{body!r}; it has no effect here")
     for key in scene.model.options:
         if key not in own:
             readers = ", ".join(models.readers(key)) or "no theory"

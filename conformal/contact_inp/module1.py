@@ -132,7 +132,7 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
     if d["S"] and not ignore_subsurface:
         own.append(f"control digit S = {d['S']} (subsurface stresses; --ignore-subsurface skips them)")
     inh = state.reasons
-    _, eps = solver_parameters(deck, d["G"], module=1, debug=d["X"] == 1)
+    _, eps, solver_notes = solver_parameters(deck, d["G"], module=1, debug=d["X"] == 1)
     L = d["L"]
     nval = {0: 2, 2: 5, 3: 5, 4: 5, 6: 4}.get(L)
     if L != 1:
@@ -216,12 +216,12 @@ def read_case(deck: Deck, state: Module1State, number: int, line: int, *, ignore
         deck.reals(12, "flexible wheelset deviations", angle=True)
     if state.position is None:
         raise InputError(f"{deck.name}, line {line}: the first case needs the wheelset position (E >= 1)")
-    skipped = ()
+    skipped = solver_notes
     if d["S"]:
         if d["S"] >= 2:
             _skip_subsurface(deck, d["S"])
         if ignore_subsurface:
-            skipped = (f"subsurface stresses (S = {d['S']}) not computed",)
+            skipped = skipped + (f"subsurface stresses (S = {d['S']}) not computed",)
     if d["H"] and ignore_temperature:
         skipped = skipped + (f"surface temperatures (H = {d['H']}) not computed",)
     geo = []

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from conformal.errors import InputError
+from conformal.scene import check_grid_memory
 from conformal.contact_inp.blocks import control_words, damping_and_heat, material_parameters, solver_parameters
 from conformal.contact_inp.tokens import Deck
 
@@ -150,7 +151,7 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
         own.append(f"control digit S = {digits['S']} (subsurface stresses; --ignore-subsurface skips them)")
     inh = state.reasons
     T, C, M, L = digits["T"], digits["C"], digits["M"], digits["L"]
-    maxout, eps = solver_parameters(deck, digits["G"], module=3, debug=digits["X"] == 1)
+    maxout, eps, solver_notes = solver_parameters(deck, digits["G"], module=3, debug=digits["X"] == 1)
     kin = deck.reals(4, "PEN/FN CKSI/FXREL CETA/FYREL CPHI", optional=2)
     spin = (kin[4], kin[5]) if len(kin) >= 6 else (0.0, 0.0)
     if digits["V"] == 3:
@@ -214,6 +215,9 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
     elif state.grid_spec is None:
         raise InputError(f"{deck.name}, line {line}: D = {digits['D']} keeps the grid of a previous case; there is none")
     mx, my = state.grid_spec[2], state.grid_spec[3]
+    if digits["D"] == 2:      # the element count bounded before any array of the grid is read or allocated
+        check_grid_memory(mx, my, "exact", f"{deck.name}, line {deck.lines[deck.pos - 1].number}: MX, MY",
+                          "use a coarser grid")
     if digits["Z"] == 2 and state.grid_spec[1] > 0:
         ibase, iplan = deck.ints(2, "IBASE IPLAN")
         inh.pop("geometry", None)
@@ -262,12 +266,12 @@ def read_case(deck: Deck, state: Module3State, number: int, line: int, ids: tupl
         state.exrhs = None
     elif digits["E"] == 1 and state.exrhs is None:
         raise InputError(f"{deck.name}, line {line}: E = 1 keeps the extra rigid slip of a previous case; there is none")
-    skipped = ()
+    skipped = solver_notes
     if digits["S"] >= 1:
         if digits["S"] >= 2:
             _skip_subsurface(deck, digits["S"])
         if ignore_subsurface:
-            skipped = (f"subsurface stresses (S = {digits['S']}) not computed",)
+            skipped = skipped + (f"subsurface stresses (S = {digits['S']}) not computed",)
     if digits["H"] and ignore_temperature:
         skipped = skipped + (f"surface temperatures (H = {digits['H']}) not computed",)
     state.case_count += 1

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import brentq
 
+from conformal.contact_inp.blocks import eps_tolerance
 from conformal.contact_inp.module3 import Module3Case, chi_direction, exrhs_grid, grid_of, unsupported
 from conformal.grid import PlanarGrid
 from conformal.materials import Material
@@ -66,7 +67,7 @@ def problem_of(case: Module3Case, base_dir: Path) -> ContactProblem:
         rolling="shift" if T in (0, 1) else "steady",
         fx_rel=case.fxrel if T else None, fy_rel=case.fyrel if T else None,
         velocity=case.rolling[2] if (case.rolling and T >= 2) else 1000.0, direction=direction)
-    tol = 1e-8 if case.eps is None else min(max(case.eps, 1e-10), 1e-6)
+    tol = eps_tolerance(case.eps)
     opts = {} if case.maxout is None else {"maxout": max(int(case.maxout), 1) if mat.quasi_identical else 30}
     model = ModelSpec(theory="exact", influence="halfspace", tol=tol, maxit=1000, options=opts)
     info: dict = {}

@@ -276,6 +276,15 @@ def _newer_cases():
         ("element_size nan", WHEEL_RAIL, {"geometry.element_size": nan}, "[geometry] element_size"),
         ("grid n 1e9", PLANAR, {"grid.n": 10 ** 9}, "[grid] n"),
         ("grid n 0", PLANAR, {"grid.n": 0}, "[grid] n"),
+        # every grid bounded at 1000 x 1000 elements (scene.MAX_GRID_ELEMENTS), memory or not
+        ("grid n 1001: more than 1e6 elements", PLANAR, {"grid.n": 1001, "model.theory": "exact"}, "[grid] n"),
+        ("grid mx x my 2000 x 600", PLANAR, {"grid": {"mx": 2000, "my": 600, "dx": 0.01, "dy": 0.01},
+                                             "model.theory": "exact"}, "[grid] mx"),
+        ("line grid of 5.5 million elements", PLANAR,
+         {"geometry.B": 0.0, "grid": {"mx": 5_500_000, "my": 1, "dx": 1e-6, "dy": 1.0, "xl": -2.75, "yl": -0.5},
+          "model.theory": "exact"}, "[grid] mx"),
+        ("automatic line grid of 2 million elements", PLANAR,
+         {"geometry.B": 0.0, "grid.n": 2_000_000, "model.theory": "exact"}, "[grid] n"),
         ("grid dx -1", PLANAR, {"grid": {"mx": 10, "my": 10, "dx": -1.0, "dy": 1.0}, "model.theory": "exact"}, "[grid] dx"),
         ("grid dy nan", PLANAR, {"grid": {"mx": 10, "my": 10, "dx": 1.0, "dy": nan}, "model.theory": "exact"}, "[grid] dy"),
         ("grid mx 0", PLANAR, {"grid": {"mx": 0, "my": 10, "dx": 1.0, "dy": 1.0}, "model.theory": "exact"}, "[grid] mx"),
@@ -497,6 +506,8 @@ CLI_ARGS += [
     ("inp --cases 0", lambda t: ["inp", _deck(t), "--cases", "0"], "--cases"),
     ("inp --cases beyond the deck", lambda t: ["inp", _deck(t), "--cases", "99"], "--cases"),
     ("inp --out a file", lambda t: ["inp", _deck(t), "--out", _planar_file(t)], "--out"),
+    ("inp MX 5.5 million", lambda t: ["inp", _deck(t, "  55   1   -1.0500", "  5500000   1   -1.0500")],
+     "line 23: MX, MY"),
     ("inp FN nan", lambda t: ["inp", _deck(t, "35780.   -0.00024", "nan   -0.00024")], "line 17"),
     ("inp G negative", lambda t: ["inp", _deck(t, "82000.   82000.", "-82000.   82000.")], "G1"),
     ("inp binary", lambda t: ["inp", _write(t, "b.inp", bytes(range(256)) * 4)], "b.inp"),
@@ -711,6 +722,51 @@ def test_fe_keys_without_fe_influence_warn():
     assert unread_model_options(s) == ['[model] fe_order: read only with [model] influence = "fe" (FE influence '
                                        "numbers), this scene has influence = 'halfspace'; it has no effect here"]
     assert unread_model_options(s.with_("model.influence", "fe")) == []
+
+
+def test_line_grid_bounded_by_its_elements_not_n_squared():
+    """A line grid of n elements (one row) is bounded by n, not n x n: 2000 elements are accepted."""
+    from conformal.scene import MAX_GRID_ELEMENTS, grid_memory, scene_from_dict
+
+    s = scene_from_dict(edit(PLANAR, {"geometry.B": 0.0, "grid.n": 2000, "model.theory": "exact"}))
+    assert grid_memory(s)[:2] == (2000, 1) and 2000 ** 2 > MAX_GRID_ELEMENTS
+
+
+def test_keys_the_theory_does_not_read_warn_when_given():
+    from conformal.scene import scene_from_dict, unread_model_options
+
+    s = scene_from_dict(edit(PLANAR, {"model.tol": 1e-9, "model.maxit": 50}))
+    assert unread_model_options(s) == [
+        "[model] tol = 1e-09: theory 'fastsim' does not iterate to a tolerance (closed form or one pass); "
+        "it has no effect here",
+        "[model] maxit = 50: theory 'fastsim' does not iterate to a tolerance (closed form or one pass); "
+        "it has no effect here"]
+    assert unread_model_options(scene_from_dict(edit(PLANAR, {"model.tol": 1e-6, "model.maxit": 1000}))) == []
+    assert unread_model_options(scene_from_dict(edit(PLANAR, {"model.theory": "exact", "model.tol": 1e-9}))) == []
+    exact = scene_from_dict(edit(PLANAR, {"model.theory": "exact", "model.bound": "elliptic"}))
+    assert unread_model_options(exact) == [
+        "[model] bound = 'elliptic': the traction bound of FASTSIM, read only by theory 'fastsim' "
+        "(this scene: 'exact'); it has no effect here"]
+    assert unread_model_options(scene_from_dict(edit(PLANAR, {"model.bound": "elliptic"}))) == []
+    disc = scene_from_dict(edit(FE_CONTACT, {"model.fec_section_size": 30.0}))
+    assert unread_model_options(disc) == [
+        "[model] fec_section_size: read only with [model] fec_body = \"section\", this scene has fec_body = "
+        "'disc'; it has no effect here"]
+    assert unread_model_options(disc.with_("model.fec_body", "section")) == []
+
+
+def _inp_warnings(tmp_path, capsys, old: str, new: str) -> list:
+    assert main(["inp", _deck(tmp_path, old, new)]) == 0
+    return json.loads(capsys.readouterr().out.splitlines()[0])["warnings"]
+
+
+def test_inp_eps_and_maxgs_not_silently_changed(tmp_path, capsys):
+    """The deck's MAXGS is not used (a warning names it); a negative EPS warns with the tol used."""
+    maxgs = ("MAXGS = 999 (CONTACT's Gauss-Seidel iteration limit) is not used: the solver here stops at its "
+             "own limit, maxit = 1000")
+    assert _inp_warnings(tmp_path, capsys, "", "") == [maxgs]
+    assert _inp_warnings(tmp_path, capsys, "1     1e-5 ", "1    -1e-5 ") == [
+        maxgs, "EPS = -1e-05 is not a tolerance (must be > 0): the solver uses tol = 1e-10"]
 
 
 def test_profile_order_and_repeated_points_do_not_change_the_answer(tmp_path):
