@@ -612,30 +612,41 @@ def _plot(rows, summary, path: Path) -> None:
     import matplotlib.pyplot as plt
 
     cases = [c for c in summary if c != "flat"] or ["flat"]
-    fig, axes = plt.subplots(1, len(cases), figsize=(4.6 * len(cases), 4.0), squeeze=False)
-    for ax, case in zip(axes[0], cases):
+    styles = (("halfspace", "default", "-o"), ("clamped", "default", "--s"), ("halfspace", "fine", ":^"),
+              ("halfspace", "straight", "-.x"), ("halfspace", "p2", ":D"), ("halfspace", "section", "-P"),
+              ("clamped", "section", "--P"), ("halfspace", "section_fine", ":P"),
+              ("halfspace", "section_coarse", "-.P"), ("halfspace", "section_p2", ":X"))
+    # the real sections (30-100 % more compliant than the half-space) get a panel of their own, so
+    # that the few-per-cent differences of the continued profiles stay readable
+    panels = []
+    for case in cases:
+        for real in (False, True):
+            own = [st for st in styles if st[1].startswith("section") == real]
+            if any(r["case"] == case and (r["grading"], r["far_field"]) in {(g, f) for f, g, _ in own} for r in rows):
+                panels.append((case, real, own))
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels), 4.0), squeeze=False)
+    for ax, (case, real, own) in zip(axes[0], panels):
         keys = ["C_block"] if case == "flat" else ["C_rail", "C_wheel", "FN_ratio"]
+        vals = []
         for k, key in enumerate(keys):
-            for far, grading, style in (("halfspace", "default", "-o"), ("clamped", "default", "--s"),
-                                        ("halfspace", "fine", ":^"), ("halfspace", "straight", "-.x"),
-                                        ("halfspace", "p2", ":D"), ("halfspace", "section", "-P"),
-                                        ("clamped", "section", "--P"), ("halfspace", "section_fine", ":P"),
-                                        ("halfspace", "section_coarse", "-.P"), ("halfspace", "section_p2", ":X")):
+            for far, grading, style in own:
                 sel = sorted((r for r in rows if r["case"] == case and r["far_field"] == far
                               and r["grading"] == grading and key in r), key=lambda r: r["size"])
                 if sel:
                     ax.plot([1 / r["size"] for r in sel], [r[key] for r in sel], style, color=f"C{k}", ms=4,
                             label=f"{key}, {far}, {grading}")
+                    vals += [r[key] for r in sel]
             lim = summary.get(case, {}).get("halfspace/default", {}).get(key)
-            if lim:
+            if lim and not real:
                 ax.plot([0], [lim.get("R3", lim["R2"])], "*", color=f"C{k}", ms=10)
         ax.axhline(1.0, color="0.6", lw=0.8)
         ax.set_xlabel("1 / fe_body_size (patch sizes)")
         if ax is axes[0][0]:
             ax.set_ylabel("FE / half-space")
-        ax.set_title(case, fontsize=10)
-        vals = [r[k] for r in rows if r["case"] == case for k in keys if k in r]
+        ax.set_title(f"{case}: real rail and wheel sections" if real else case, fontsize=10)
         ax.set_ylim(min(0.85, min(vals, default=1) - 0.02), max(1.2, max(vals, default=1) + 0.02))
+        if real:
+            ax.set_xlim(left=0.0)
     handles = {}
     for ax in axes[0]:
         for h, lab in zip(*ax.get_legend_handles_labels()):
