@@ -53,6 +53,9 @@ class Patch:
     x_range: tuple[float, float]   # rolling-direction extent of the overlap (absolute x)
     eta_range: tuple[float, float]  # lateral extent in the tangent plane (relative to point)
     n_lobes: int = 1
+    #: d s_ref / dz (mm per mm of wheelset lowering): how fast the reference point moves along the
+    #: rail profile as the wheel sinks (each locus sample's overlap grows by dz cos delta_i)
+    s_ref_rate: float = 0.0
 
     @property
     def delta(self) -> float:
@@ -176,7 +179,11 @@ def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobe
     # the reference normal: weighted mean of the contact angles (equal to the normal at s_ref on
     # narrow patches; on wide ones it follows the mean inclination, as CONTACT's does)
     nr = rail.normal(s_r)
-    delta = float(np.sum(w * np.arctan2(-nr[:, 0], nr[:, 1])) / np.sum(w))
+    angles = np.arctan2(-nr[:, 0], nr[:, 1])
+    delta = float(np.sum(w * angles) / np.sum(w))
+    # each sample's overlap grows by dz cos(delta_i) and its rail point moves by dz sin(delta_i)
+    dw = (REF_EXPONENT + 0.5) * w / pen * np.cos(angles)           # pen > 0 on a patch
+    s_ref_rate = float(np.sum(dw * (s_r - s_ref) + w * np.sin(angles)) / np.sum(w))
     n = np.array([0.0, -math.sin(delta), math.cos(delta)])
     t2 = np.cross(n, np.array([1.0, 0.0, 0.0]))
     P = np.array([x_ref, Y, Z])
@@ -190,7 +197,7 @@ def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobe
                  wheel_point=P + t * n, wheel_s=sw, wheel_theta=th, deepest=deepest,
                  penetration=float(pen.max()), s_range=(float(s_r.min()), float(s_r.max())),
                  x_range=(float((x - half).min()), float((x + half).max())),
-                 eta_range=(float(eta.min()), float(eta.max())), n_lobes=n_lobes)
+                 eta_range=(float(eta.min()), float(eta.max())), n_lobes=n_lobes, s_ref_rate=s_ref_rate)
 
 
 # ----------------------------------------------------------------------------- intersections

@@ -201,10 +201,14 @@ def test_warm_sweep_equals_independent_balance_and_before():
     two stretches (tread 2-3 mm; the flange from 6 mm, its jump at 6.5 mm) against
 
     * the general balance (normal problems, then contact solves with FS/FN fed back), each case
-      cold, with the force and height tolerances 1e-8 W and 1e-7 mm: FN and FS within 1e-5 W
-      (measured 8e-6 at most), FX within 1e-4 W (the geometry is kept within BALANCE_ZTOL =
-      1e-4 mm of the height, measured 5e-5), the height within 1e-5 mm, and the balance itself
-      within 1e-5 W (the passes take it to ONE_PATCH_TOL = 1e-6 W);
+      cold, with the force and height tolerances 1e-8 W and 1e-7 mm, its geometry searched at the
+      balanced height: FN and FS within 5e-5 W, FX within 1e-4 W, the height within 5e-5 mm
+      (measured 1.6e-5 W, 0.2e-5 W and 8.5e-6 mm at 7 mm).  The sweep keeps a searched geometry
+      lowered by up to GEOMETRY_KEEP = 2e-3 mm (each element's distance moved at its own rate), so
+      its grid samples the patch at other points: over all 21 positions of the sequence the
+      differences are at most 3.9e-5 W in FN and 2.1e-4 mm in the height (9 mm, flange: the grid's
+      element centres sample the overlap peak, (dy/2)^2 / 2R ~ 3e-4 mm on 0.2 mm elements);
+      the balance itself within 2e-5 W (the passes take it to ONE_PATCH_TOL = 1e-5 W);
     * the forces before issue 23's speed-up (stored, balanced to 1e-4 W): within 3e-4 W."""
     W = 10000.0
     for stretch in ((2.0, 2.5, 3.0), (6.0, 6.5, 7.0)):
@@ -214,7 +218,7 @@ def test_warm_sweep_equals_independent_balance_and_before():
             r = wr.solve_wheel_rail(sc, warm=warm)
             warm = wr.WarmStart.from_result(r, warm)
             assert r.extra["balance"]["one_patch_passes"] and len(r.patches) == 1
-            assert abs(r.extra["FZ_track"] - W) <= 1e-5 * W
+            assert abs(r.extra["FZ_track"] - W) <= 2e-5 * W
             pl = wr.place_scene(sc)
             tight = {"BALANCE_TOL": 1e-8, "BALANCE_ZTOL": 1e-7}
             old = {k: getattr(wr, k) for k in tight}
@@ -226,10 +230,10 @@ def test_warm_sweep_equals_independent_balance_and_before():
                 for k, v in old.items():
                     setattr(wr, k, v)
             ref = wr.combine_patches(res, probs, "exact", {}, pl.pair)
-            assert abs(r.FN - ref.FN) <= 1e-5 * W, y
-            assert abs(r.FY - ref.FY) <= 1e-5 * W, y
+            assert abs(r.FN - ref.FN) <= 5e-5 * W, y
+            assert abs(r.FY - ref.FY) <= 5e-5 * W, y
             assert abs(r.FX - ref.FX) <= 1e-4 * W, y
-            assert abs(r.extra["z_ws"] - z) <= 1e-5, y
+            assert abs(r.extra["z_ws"] - z) <= 5e-5, y
             before = next(c for c in BEFORE if c["y_ws"] == y)
             for k in ("FN", "FX", "FY"):
                 assert abs(getattr(r, k) - before[k]) <= 3e-4 * W, (y, k)
