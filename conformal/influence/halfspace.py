@@ -209,7 +209,7 @@ class HalfSpaceInfluence:
         if (i, j) in ((X, Z), (Y, Z)):
             return -self._kernel_hat(j, i)  # A_xz = -A_zx, A_yz = -A_zy
         if (i, j) not in self._fhat:
-            self._fhat[i, j] = sfft.rfft2(self.kernel(i, j))
+            self._fhat[i, j] = ffts.rfft2(self.kernel(i, j))
         return self._fhat[i, j]
 
     def kernel_hat(self, i: int, j: int) -> np.ndarray:

@@ -148,7 +148,6 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import fft as sfft
 
 from conformal.influence import fft as ffts
 from conformal.solvers import checks
@@ -363,7 +362,7 @@ class _SlipOperator:
             else:
                 dxx, dyy = dxx / self.dx, dyy / self.dx
         self.diag = 0.5 * (dxx + dyy)
-        sym = [sfft.rfft2(np.roll(k, (-cx, -cy), axis=(0, 1))) for k in (kxx, kxy, kyx, kyy)]
+        sym = [ffts.rfft2(np.roll(k, (-cx, -cy), axis=(0, 1))) for k in (kxx, kxy, kyx, kyy)]
         a, b, c, d = sym
         det = a * d - b * c
         floor = 1e-8 * np.abs(det).max()
