@@ -396,7 +396,7 @@ class TangentialProduct32:
 
     def __call__(self, p: np.ndarray) -> np.ndarray:
         """p: (2, mx, my) float32 (or castable); returns (2, mx, my) float32."""
-        ctype = np.result_type(p.dtype, np.complex64)
+        ctype = np.complex64 if p.dtype == np.float32 else np.complex128
         half = self.My // 2 + 1
         if self.block >= half:   # the row transforms straight into the padded half-spectrum
             h = np.zeros((2, self.Mx, half), dtype=ctype)
