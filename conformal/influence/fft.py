@@ -4,11 +4,13 @@ Each ``scipy.fft`` call passes through uarray's backend dispatch and a layer tha
 and pads its arguments before it reaches the pocketfft binding.  On the small grids of a wheel-rail
 sweep (patch grids of 10 x 10 to 60 x 100 elements) that layer costs as much as the transforms: one
 zero-padded product of a 55 x 33 grid took 121 µs through ``scipy.fft`` and 70 µs with the binding
-called directly, 66 and 21 µs on a 12 x 10 grid (``numpy.fft``: 107 and 61 µs).
+called directly, 66 and 21 µs on a 12 x 10 grid (``numpy.fft``: 107 and 61 µs; one thread, best
+of 7 x 200 products on a quiet 2-core machine).
 
 The functions here call that binding (``scipy.fft._pocketfft.pypocketfft``, the same C++ code and
 the same arguments as ``scipy.fft`` with ``workers=None``: one thread, no normalisation forward,
-1/n backward), so their numbers are bitwise those of ``scipy.fft``.  The binding is private, so
+1/n backward), so their numbers are bitwise those of ``scipy.fft``.  They always use one thread
+(a ``scipy.fft.set_workers`` context does not reach them).  The binding is private, so
 the module checks it once on import against ``scipy.fft`` on small arrays of both precisions and
 uses ``scipy.fft`` itself where the binding is missing, has another signature or differs
 (:data:`DIRECT` says which is in use).  Inputs must be float32/float64 (real) or complex64/
