@@ -55,9 +55,16 @@ _PF = _binding()
 DIRECT = _PF is not None
 
 
+def _real(x) -> np.ndarray:
+    """x as a float32 or float64 array (other types as float64)."""
+    x = np.asarray(x)
+    return x if x.dtype in (np.float32, np.float64) else x.astype(np.float64)
+
+
 def rfft(x: np.ndarray, n: int, axis: int = -1, out: np.ndarray | None = None) -> np.ndarray:
     """The real-to-complex transform of x zero-padded to ``n`` >= x.shape[axis] along ``axis``
     (``scipy.fft.rfft(x, n, axis)``); written into ``out`` (shape with n//2+1 along axis) if given."""
+    x = _real(x)
     if _PF is None:
         r = sfft.rfft(x, n=n, axis=axis)
         if out is None:
@@ -100,6 +107,7 @@ def irfft(x: np.ndarray, n: int, axis: int = -1) -> np.ndarray:
 
 def rfft2(x: np.ndarray) -> np.ndarray:
     """``scipy.fft.rfft2(x)``: the real-to-complex transform over the last two axes."""
+    x = _real(x)
     if _PF is None:
         return sfft.rfft2(x)
     return _PF.r2c(x, (x.ndim - 2, x.ndim - 1), True, 0, None, 1)

@@ -3,6 +3,7 @@ conformal.influence.fft) against the dense matrix of the closed-form influence n
 direct pocketfft calls against scipy.fft."""
 import numpy as np
 import pytest
+from scipy import fft as sfft
 
 from conformal.influence import fft as ffts
 from conformal.influence import halfspace as hs
@@ -86,6 +87,12 @@ def test_direct_transforms_are_scipy_fft_bitwise(monkeypatch):
     fallback = products()
     for a, b in zip(direct, fallback):
         assert a.dtype == b.dtype and np.array_equal(a, b)
+
+
+def test_integer_input_is_transformed_as_float64():
+    x = np.arange(12).reshape(3, 4)
+    assert np.array_equal(ffts.rfft(x, 6), sfft.rfft(x.astype(float), 6))
+    assert np.array_equal(ffts.rfft2(x), ffts.rfft2(x.astype(float)))
 
 
 def test_irfft2_refuses_a_spectrum_of_another_shape():
