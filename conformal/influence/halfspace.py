@@ -24,6 +24,7 @@ from typing import Callable
 import numpy as np
 from scipy import fft as sfft
 
+from conformal.influence import fft as ffts
 from conformal.materials import Material
 
 X, Y, Z = 0, 1, 2
@@ -208,7 +209,7 @@ class HalfSpaceInfluence:
         if (i, j) in ((X, Z), (Y, Z)):
             return -self._kernel_hat(j, i)  # A_xz = -A_zx, A_yz = -A_zy
         if (i, j) not in self._fhat:
-            self._fhat[i, j] = sfft.rfft2(self.kernel(i, j))
+            self._fhat[i, j] = ffts.rfft2(self.kernel(i, j))
         return self._fhat[i, j]
 
     def kernel_hat(self, i: int, j: int) -> np.ndarray:
@@ -217,18 +218,19 @@ class HalfSpaceInfluence:
 
     # -------------------------------------------------------------- products
     def _forward(self, p: np.ndarray) -> np.ndarray:
-        """Zero-padded rfft2 of p (..., mx, my): only the mx non-zero rows are transformed along y."""
+        """Zero-padded rfft2 of p (..., mx, my): only the mx non-zero rows are transformed along y,
+        straight into the first mx rows of the padded half-spectrum (:mod:`conformal.influence.fft`)."""
         Mx, My = self.padded_shape
-        rows = sfft.rfft(p, n=My, axis=-1)
-        buf = np.zeros(p.shape[:-2] + (Mx, My // 2 + 1), dtype=complex)
-        buf[..., : self.mx, :] = rows
-        return sfft.fft(buf, axis=-2, overwrite_x=True)
+        spec = np.zeros(p.shape[:-2] + (Mx, My // 2 + 1), dtype=complex)
+        ffts.rfft(p, My, axis=-1, out=spec[..., : self.mx, :])
+        return ffts.fft(spec, axis=-2, overwrite=True)
 
     def _back(self, uhat: np.ndarray) -> np.ndarray:
-        """irfft2 restricted to the first mx x my entries (only mx rows are transformed back along y)."""
+        """irfft2 restricted to the first mx x my entries (only mx rows are transformed back along
+        y); overwrites ``uhat``."""
         Mx, My = self.padded_shape
-        cols = sfft.ifft(uhat, axis=-2, overwrite_x=True)[..., : self.mx, :]
-        return sfft.irfft(cols, n=My, axis=-1)[..., : self.my]
+        cols = ffts.ifft(uhat, axis=-2, overwrite=True)[..., : self.mx, :]
+        return ffts.irfft(cols, My, axis=-1)[..., : self.my]
 
     def apply(self, p: np.ndarray) -> np.ndarray:
         """u = A p for tractions p of shape (3, mx, my)."""
@@ -394,27 +396,36 @@ class TangentialProduct32:
 
     def __call__(self, p: np.ndarray) -> np.ndarray:
         """p: (2, mx, my) float32 (or castable); returns (2, mx, my) float32."""
-        rows = sfft.rfft(p, n=self.My, axis=-1)
-        half = rows.shape[-1]
-        if self.block >= half:
-            return sfft.irfft(self._spectral(rows, slice(None)), n=self.My, axis=-1)[:, :, : self.my]
+        ctype = np.complex64 if p.dtype == np.float32 else np.complex128
+        half = self.My // 2 + 1
+        if self.block >= half:   # the row transforms straight into the padded half-spectrum
+            h = np.zeros((2, self.Mx, half), dtype=ctype)
+            ffts.rfft(p, self.My, axis=-1, out=h[:, : self.mx])
+            return ffts.irfft(self._spectral(h, slice(None)), self.My, axis=-1)[:, :, : self.my]
+        rows = ffts.rfft(p, self.My, axis=-1)
         out = np.empty_like(rows)
+        h = np.zeros((2, self.Mx, self.block), dtype=ctype)
         for j0 in range(0, half, self.block):
             cols = slice(j0, min(half, j0 + self.block))
-            out[:, :, cols] = self._spectral(rows[:, :, cols], cols)
-        return sfft.irfft(out, n=self.My, axis=-1)[:, :, : self.my]
+            nc = cols.stop - j0
+            hb = h[:, :, :nc]
+            hb[:, : self.mx] = rows[:, :, cols]
+            hb[:, self.mx:] = 0.0
+            out[:, :, cols] = self._spectral(hb, cols)
+        return ffts.irfft(out, self.My, axis=-1)[:, :, : self.my]
 
-    def _spectral(self, rows: np.ndarray, cols: slice) -> np.ndarray:
-        """The transform along x of the row transforms ``rows`` (2, mx, nc) of the half-spectrum's
-        columns ``cols``, the product with the kernels there and the transform back, (2, mx, nc)."""
-        h = sfft.fft(rows, n=self.Mx, axis=-2, overwrite_x=True)
+    def _spectral(self, h: np.ndarray, cols: slice) -> np.ndarray:
+        """The transform along x of ``h`` (2, Mx, nc): the row transforms of the half-spectrum's
+        columns ``cols`` in its first mx rows, zero below; the product with the kernels there
+        and the transform back, in place; returns the first mx rows (2, mx, nc)."""
+        h = ffts.fft(h, axis=-2, overwrite=True)
         kxx, kxy, kyy = (k[:, cols] for k in self.k)
         a0 = kxx * h[0]
         a0 += kxy * h[1]
         h[1] *= kyy
         h[1] += kxy * h[0]
         h[0] = a0
-        return sfft.ifft(h, axis=-2, overwrite_x=True)[:, : self.mx]
+        return ffts.ifft(h, axis=-2, overwrite=True)[:, : self.mx]
 
 
 #: the single-precision tangential product works on column blocks of the half-spectrum

@@ -148,8 +148,8 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import fft as sfft
 
+from conformal.influence import fft as ffts
 from conformal.solvers import checks
 from conformal.solvers.krylov import gmres
 from conformal.errors import InputError
@@ -362,7 +362,7 @@ class _SlipOperator:
             else:
                 dxx, dyy = dxx / self.dx, dyy / self.dx
         self.diag = 0.5 * (dxx + dyy)
-        sym = [sfft.rfft2(np.roll(k, (-cx, -cy), axis=(0, 1))) for k in (kxx, kxy, kyx, kyy)]
+        sym = [ffts.rfft2(np.roll(k, (-cx, -cy), axis=(0, 1))) for k in (kxx, kxy, kyx, kyy)]
         a, b, c, d = sym
         det = a * d - b * c
         floor = 1e-8 * np.abs(det).max()
@@ -379,14 +379,14 @@ class _SlipOperator:
         if self.steady:  # D^-1: sum from the leading edge downstream
             full = np.cumsum(full[:, ::-1], axis=1)[:, ::-1]
             full *= np.float32(self.dx)
-        h = sfft.rfft2(full)
+        h = ffts.rfft2(full)
         i00, i01, i10, i11 = self._inv
         q = np.empty_like(h)
         q[0] = i00 * h[0]
         q[0] += i01 * h[1]
         q[1] = i10 * h[0]
         q[1] += i11 * h[1]
-        q = sfft.irfft2(q, s=(self.mx, self.my), overwrite_x=True)
+        q = ffts.irfft2(q, (self.mx, self.my))
         return q[self._pm].astype(float).reshape(2, -1)
 
 
