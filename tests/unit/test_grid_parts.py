@@ -1,7 +1,8 @@
 """conformal.grid.connected_parts: the parts of a contact mask by runs along the rows, checked
 element by element against scipy.ndimage.label (an independent implementation) on structured and
 random masks, through each of its three routes (one convex part; union-find in Python; union-find
-in numpy calls) and the graph route of arrays with more axes."""
+in numpy calls) and the graph route of arrays with more axes; and what a planar result takes from
+the parts and the grid (patch forces, extent, edge warning, the moment MZ)."""
 from __future__ import annotations
 
 import numpy as np
@@ -125,3 +126,46 @@ def test_many_parts_on_a_large_grid():
     ref, n_ref = ndimage.label(m)
     assert n == n_ref > 1000
     np.testing.assert_array_equal(labels, ref)
+
+
+def test_totals_moment_is_the_sum_over_the_element_centres():
+    """TractionField.totals on an offset planar grid: FN, FX, FY the sums p dA, and MZ the sum of
+    (x p_y - y p_x) dA over the element centres of PlanarGrid.mesh, to the last bit (the same
+    products and the same summation)."""
+    from conformal.grid import PlanarGrid
+    from conformal.result import TractionField
+
+    rng = np.random.default_rng(5)
+    g = PlanarGrid(mx=23, my=17, dx=0.21, dy=0.37, xl=-1.9, yl=0.4)
+    pn, px, py = rng.random((3, 23, 17))
+    f = TractionField(grid=g, pn=pn, px=px, py=py, status=np.ones((23, 17), np.int8))
+    X, Y = g.mesh()
+    FN, FX, FY, MZ = f.totals()
+    assert (FN, FX, FY) == (float(pn.sum() * g.area), float(px.sum() * g.area), float(py.sum() * g.area))
+    assert MZ == float((X * py - Y * px).sum() * g.area)
+
+
+def test_planar_result_patches_extent_and_edges():
+    """Two pressure patches on a planar grid, the second touching the grid's y = yh side: patch_FN
+    holds each patch's sum p dA (largest first, parts from ndimage.label), a and b half the extent of
+    the contact rows and columns, and the one edge warning names y = yh only."""
+    from conformal.grid import PlanarGrid
+    from conformal.solvers.exact import _edge_warning, _patches, patch_extent
+
+    g = PlanarGrid(mx=30, my=20, dx=0.5, dy=0.25, xl=-7.5, yl=-2.5)
+    X, Y = g.mesh()
+    pn = np.maximum(0.0, 1.0 - ((X + 2.0) / 3.0) ** 2 - ((Y + 0.5) / 1.2) ** 2)
+    pn += 2.0 * np.maximum(0.0, 1.0 - ((X - 3.0) / 1.5) ** 2 - ((Y - 2.4) / 0.6) ** 2)
+    contact = pn > 0
+    labels, n = ndimage.label(contact)
+    assert n == 2
+    expected = sorted((float(pn[labels == k].sum() * g.area) for k in (1, 2)), reverse=True)
+    np.testing.assert_allclose(_patches(g, pn, contact), expected, rtol=1e-14)
+    ix, iy = np.flatnonzero(contact.any(axis=1)), np.flatnonzero(contact.any(axis=0))
+    a, b = patch_extent(g, contact)
+    assert (a, b) == (0.5 * (ix[-1] - ix[0] + 1) * g.dx, 0.5 * (iy[-1] - iy[0] + 1) * g.dy)
+    assert patch_extent(g, np.zeros_like(contact)) == (0.0, 0.0)
+    warning = _edge_warning(g, contact)
+    assert "y = yh" in warning and "y = yl" not in warning and "x = x" not in warning
+    assert _edge_warning(g, contact, contact.any(axis=1), contact.any(axis=0)) == warning
+    assert _edge_warning(g, np.zeros_like(contact)) is None
