@@ -176,11 +176,22 @@ class CurvedGrid:
         return np.meshgrid(self.x, self.s, indexing="ij")
 
 
+#: at most this many runs and run contacts are joined one by one in Python (:func:`_join_runs`);
+#: more go to the array form (:func:`_join_runs_arrays`), whose few dozen numpy calls cost less there
+PYTHON_JOIN_MAX = 600
+
+
 def connected_parts(mask: np.ndarray) -> tuple[np.ndarray, int]:
     """The edge-connected parts of a boolean grid array (e.g. the contact elements): labels of the
     array's shape, 0 outside ``mask`` and 1..n numbered in the raster order of each part's first
     element, and n (what ``scipy.ndimage.label`` gives with its default structure, without
     importing scipy.ndimage, whose import costs about 0.3 s of CPU).
+
+    1-D and 2-D arrays are labelled by runs: the runs of ``mask`` along each row, joined where
+    runs of neighbouring rows share a column (union-find, the root of a part its first run);
+    a contact patch of m rows has about m runs, so a patch costs a few numpy calls whatever the
+    grid.  Arrays of more axes go through a graph of neighbouring elements
+    (``scipy.sparse.csgraph.connected_components``).
 
     Parameters
     ----------
@@ -194,6 +205,82 @@ def connected_parts(mask: np.ndarray) -> tuple[np.ndarray, int]:
     [[1, 0, 2], [1, 0, 0], [0, 3, 3]]
     """
     m = np.asarray(mask, bool)
+    if m.ndim == 1:
+        labels, n = connected_parts(m.reshape(1, -1))
+        return labels.reshape(m.shape), n
+    if m.ndim != 2 or m.size == 0:
+        return _connected_parts_graph(m)
+    start = m.copy()                  # the first element of each run along a row
+    start[:, 1:] &= ~m[:, :-1]
+    nrun = int(np.count_nonzero(start))
+    if nrun == 0:
+        return np.zeros(m.shape, dtype=np.int32), 0
+    shared = m[:-1] & m[1:]           # elements whose neighbour in the next row is in the mask too
+    first = shared.copy()             # one per pair of runs of neighbouring rows that share columns
+    first[:, 1:] &= ~shared[:, :-1]
+    if int(np.count_nonzero(first)) == nrun - 1 and nrun == int(np.count_nonzero(m.any(axis=1))):
+        # one run per row in nrun rows, each sharing columns with the next: one part (a convex patch)
+        return m.astype(np.int32), 1
+    run = np.cumsum(start, dtype=np.int32).reshape(m.shape)   # run k = 1..nrun (raster order)
+    upper, lower = run[:-1][first], run[1:][first]
+    labels = np.zeros(m.shape, dtype=np.int32)
+    if nrun + upper.size <= PYTHON_JOIN_MAX:
+        part, n = _join_runs(nrun, upper.tolist(), lower.tolist())
+    else:
+        part, n = _join_runs_arrays(nrun, upper, lower)
+    labels[m] = part[run[m]]
+    return labels, n
+
+
+def _join_runs(nrun: int, upper: list, lower: list) -> tuple[np.ndarray, int]:
+    """Union-find of runs 1..nrun joined by the pairs (upper, lower): the part (1..n, in the order
+    of each part's first run) of every run, index 0 (outside) part 0, and n."""
+    parent = list(range(nrun + 1))
+    for a, b in zip(upper, lower):
+        while parent[a] != a:                    # roots, halving the paths on the way
+            parent[a] = a = parent[parent[a]]
+        while parent[b] != b:
+            parent[b] = b = parent[parent[b]]
+        if a < b:                                # the smaller run is the root: a part's first run
+            parent[b] = a
+        elif b < a:
+            parent[a] = b
+    part = [0] * (nrun + 1)
+    n = 0
+    for k in range(1, nrun + 1):                 # a run's root comes before it: numbered already
+        r = parent[k]
+        if r == k:
+            n += 1
+            part[k] = n
+        else:
+            part[k] = part[r]
+    return np.array(part, dtype=np.int32), n
+
+
+def _join_runs_arrays(nrun: int, upper: np.ndarray, lower: np.ndarray) -> tuple[np.ndarray, int]:
+    """:func:`_join_runs` in numpy calls: every root hooks onto the smallest root it touches, then
+    the trees are shortcut to their roots; the number of trees of a part at least halves in each
+    pass, so a part of k runs takes at most log2(k) + 1 passes."""
+    parent = np.arange(nrun + 1, dtype=np.int32)
+    a, b = upper, lower
+    while a.size:
+        pa, pb = parent[a], parent[b]
+        np.minimum.at(parent, np.maximum(pa, pb), np.minimum(pa, pb))
+        while True:
+            grand = parent[parent]
+            if np.array_equal(grand, parent):
+                break
+            parent = grand
+        open_ = parent[a] != parent[b]
+        a, b = a[open_], b[open_]
+    root = parent == np.arange(nrun + 1, dtype=np.int32)     # a part's root is its smallest run
+    number = np.cumsum(root, dtype=np.int32) - 1             # run 0 is a root of number 0
+    return number[parent], int(number[-1])
+
+
+def _connected_parts_graph(m: np.ndarray) -> tuple[np.ndarray, int]:
+    """:func:`connected_parts` of a boolean array of any number of axes by a graph of
+    neighbouring elements (``scipy.sparse.csgraph.connected_components``)."""
     labels = np.zeros(m.shape, dtype=np.int32)
     idx = np.flatnonzero(m)
     if idx.size == 0:

@@ -55,7 +55,11 @@ class TractionField:
     def totals(self) -> tuple[float, float, float, float]:
         """FN, FX, FY, MZ with MZ = sum(x py - y px) dA about the grid origin."""
         dA = self.grid.area
-        X, Y = self.grid.mesh()
+        g = self.grid
+        if isinstance(g, PlanarGrid):   # the centres broadcast: the products and sums of mesh() without the copies
+            X, Y = g.x[:, None], g.y[None, :]
+        else:
+            X, Y = g.mesh()
         return (float(self.pn.sum() * dA), float(self.px.sum() * dA), float(self.py.sum() * dA),
                 float((X * self.py - Y * self.px).sum() * dA))
 

@@ -55,23 +55,32 @@ def check_kinematics(problem: ContactProblem) -> None:
 
 def patch_extent(grid: PlanarGrid, contact: np.ndarray) -> tuple[float, float]:
     """Half the extent (mm) of the contact elements in x and y, element widths included."""
-    if not contact.any():
+    return _extent(grid, contact.any(axis=1), contact.any(axis=0))
+
+
+def _extent(grid, rows: np.ndarray, cols: np.ndarray) -> tuple[float, float]:
+    """:func:`patch_extent` from the rows (ix) and the columns (iy) that hold contact elements."""
+    ix = np.flatnonzero(rows)
+    if ix.size == 0:
         return 0.0, 0.0
-    ix = np.flatnonzero(contact.any(axis=1))
-    iy = np.flatnonzero(contact.any(axis=0))
+    iy = np.flatnonzero(cols)
     return 0.5 * (ix[-1] - ix[0] + 1) * grid.dx, 0.5 * (iy[-1] - iy[0] + 1) * grid.dy
 
 
-def _edge_warning(grid: PlanarGrid, contact: np.ndarray) -> str | None:
-    """A warning when the contact reaches the border of the potential contact area."""
+def _edge_warning(grid: PlanarGrid, contact: np.ndarray, rows: np.ndarray | None = None,
+                  cols: np.ndarray | None = None) -> str | None:
+    """A warning when the contact reaches the border of the potential contact area (``rows``,
+    ``cols``: ``contact.any(axis=1)`` and ``contact.any(axis=0)`` where the caller has them)."""
+    rows = contact.any(axis=1) if rows is None else rows
+    cols = contact.any(axis=0) if cols is None else cols
     sides = []
-    if contact[0].any():
+    if rows[0]:
         sides.append("x = xl (trailing edge)")
-    if contact[-1].any():
+    if rows[-1]:
         sides.append("x = xh (leading edge)")
-    if grid.my > 1 and contact[:, 0].any():
+    if grid.my > 1 and cols[0]:
         sides.append("y = yl")
-    if grid.my > 1 and contact[:, -1].any():
+    if grid.my > 1 and cols[-1]:
         sides.append("y = yh")
     if not sides:
         return None
@@ -292,7 +301,8 @@ def planar_result(problem, grid, h, op, stages: Stages) -> Result:
     field = TractionField(grid=grid, pn=normal.pn, px=tr.px, py=tr.py, status=tr.status, sx=tr.sx, sy=tr.sy,
                           un=tr.un, ux=tr.ux, uy=tr.uy)
     FN, FX, FY, MZ = field.totals()
-    a, b = patch_extent(grid, normal.contact)
+    rows, cols = normal.contact.any(axis=1), normal.contact.any(axis=0)   # for the extent and the edges
+    a, b = _extent(grid, rows, cols)
     patch_fn = _patches(grid, normal.pn, normal.contact)
     extra = solution_extra(problem, stages, tr, dA)
     extra.update({
@@ -307,7 +317,7 @@ def planar_result(problem, grid, h, op, stages: Stages) -> Result:
         extra["outer_iterations"] = 1 + len(stages.outer)
         extra["outer"] = stages.outer
     warnings = []
-    edge = _edge_warning(grid, normal.contact)
+    edge = _edge_warning(grid, normal.contact, rows, cols)
     if edge:
         warnings.append(edge)
     warnings += convergence_warnings(stages, tr, problem.model.tol, f"K = {op.K:.4g}")
