@@ -194,6 +194,41 @@ def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobe
 
 
 # ----------------------------------------------------------------------------- intersections
+# The Newton steps below work on coordinate arrays (one per axis) instead of (N, 3) arrays: the
+# same products and sums in the same order as numpy's cross and einsum("ij,ij->i") (which adds
+# the three products as (p0 + p2) + p1), i.e. the same numbers, at a third of the cost; one line
+# (a patch's reference point) takes Python floats.
+def _cross(a, b):
+    """a x b of 3-vectors given by their coordinates (arrays or floats), numpy.cross's arithmetic."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _dot(a, b):
+    """a . b of 3-vectors given by their coordinates, in the order of numpy.einsum("ij,ij->i")."""
+    return (a[0] * b[0] + a[2] * b[2]) + a[1] * b[1]
+
+
+def _cramer3(c0, c1, c2, b):
+    """The solution (d0, d1, d2) of [c0 c1 c2] d = b by Cramer's rule, columns and b given by
+    their coordinates (arrays of one shape, or floats); LinAlgError where singular."""
+    k12, k20, k01 = _cross(c1, c2), _cross(c2, c0), _cross(c0, c1)
+    det = _dot(c0, k12)
+    if not np.all(np.abs(det) > 0.0):
+        raise np.linalg.LinAlgError("singular matrix")
+    return _dot(b, k12) / det, _dot(b, k20) / det, _dot(b, k01) / det
+
+
+def _solve3(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solutions d (N, 3) of the 3 x 3 systems [c0 c1 c2] d = b (columns and b (N, 3)), by
+    Cramer's rule (a batched numpy.linalg.solve costs several times more at these sizes)."""
+    return np.stack(_cramer3(c0.T, c1.T, c2.T, b.T), axis=1)
+
+
+def _no_wheel(res) -> ConvergenceError:
+    return ConvergenceError(f"wheel surface: the normal lines do not meet the wheel (residual "
+                            f"{res:.2e} mm); the patch reaches beyond the wheel profile")
+
+
 def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: np.ndarray, *,
                    maxit: int = 30, tol: float = 1e-10):
     """Intersections of the lines Q + t n with the wheel surface: returns (s_w, theta, t).
@@ -201,40 +236,78 @@ def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: n
     Q (N, 3), n (3,) or (N, 3); Newton on r_w(s_w, theta) - Q - t n = 0, vectorised."""
     Q = np.asarray(Q, float)
     N = Q.shape[0]
-    n = np.broadcast_to(np.asarray(n, float), (N, 3))
+    n = np.asarray(n, float)
+    if N == 1:
+        return _wheel_on_line(wheel, Q[0], n.reshape(-1, 3)[0], s0, th0, maxit, tol)
+    q0, q1, q2 = (np.ascontiguousarray(c) for c in Q.T)
+    if n.ndim == 1:
+        n0, n1, n2 = (float(c) for c in n)
+    else:
+        n0, n1, n2 = (np.ascontiguousarray(c) for c in np.broadcast_to(n, (N, 3)).T)
+    m = (-n0, -n1, -n2)
     s = np.array(s0, float).reshape(N).copy()
     th = np.array(th0, float).reshape(N).copy()
     t = np.zeros(N)
     f = wheel.frame
+    (O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2) = (
+        tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
     L = wheel.curve.length
     for _ in range(maxit):
         u, rho, u1, rho1, _, _ = wheel.meridian(s)
-        er, et = wheel.e_r(th), wheel.e_t(th)
-        r = f.O + u[:, None] * f.a + rho[:, None] * er
-        F = r - Q - t[:, None] * n
-        d = _solve3(u1[:, None] * f.a + rho1[:, None] * er, rho[:, None] * et, -n, -F)
-        d[:, 0] = np.clip(d[:, 0], -2.0, 2.0)
-        d[:, 1] = np.clip(d[:, 1], -0.05, 0.05)
-        s = np.clip(s + d[:, 0], 0.0, L)
-        th += d[:, 1]
-        t += d[:, 2]
-        if np.max(np.abs(F)) < tol:
+        c, sn = np.cos(th), np.sin(th)
+        msn = -sn
+        er = (c * d0 + sn * e0, c * d1 + sn * e1, c * d2 + sn * e2)
+        et = (msn * d0 + c * e0, msn * d1 + c * e1, msn * d2 + c * e2)
+        F = (((O0 + u * a0) + rho * er[0] - q0) - t * n0,
+             ((O1 + u * a1) + rho * er[1] - q1) - t * n1,
+             ((O2 + u * a2) + rho * er[2] - q2) - t * n2)
+        c0 = (u1 * a0 + rho1 * er[0], u1 * a1 + rho1 * er[1], u1 * a2 + rho1 * er[2])
+        c1 = (rho * et[0], rho * et[1], rho * et[2])
+        ds, dth, dt = _cramer3(c0, c1, m, (-F[0], -F[1], -F[2]))
+        s = np.clip(s + np.clip(ds, -2.0, 2.0), 0.0, L)
+        th += np.clip(dth, -0.05, 0.05)
+        t += dt
+        res = np.max([np.max(np.abs(Fk)) for Fk in F])
+        if res < tol:
             break
-    if not np.max(np.abs(F)) < 1e-7:
-        raise ConvergenceError(f"wheel surface: the normal lines do not meet the wheel (residual "
-                               f"{np.max(np.abs(F)):.2e} mm); the patch reaches beyond the wheel profile")
+    if not res < 1e-7:
+        raise _no_wheel(res)
     return s, th, t
 
 
-def _solve3(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Solutions d (N, 3) of the 3 x 3 systems [c0 c1 c2] d = b (columns and b (N, 3)), by
-    Cramer's rule (a batched numpy.linalg.solve costs several times more at these sizes)."""
-    k12, k20, k01 = np.cross(c1, c2), np.cross(c2, c0), np.cross(c0, c1)
-    det = np.einsum("ij,ij->i", c0, k12)
-    if not np.all(np.abs(det) > 0.0):
-        raise np.linalg.LinAlgError("singular matrix")
-    return np.stack([np.einsum("ij,ij->i", b, k12), np.einsum("ij,ij->i", b, k20),
-                     np.einsum("ij,ij->i", b, k01)], axis=1) / det[:, None]
+def _wheel_on_line(wheel: WheelSurface, Q, n, s0, th0, maxit: int, tol: float):
+    """:func:`wheel_on_lines` for one line, in Python floats (the same arithmetic)."""
+    q0, q1, q2 = (float(c) for c in Q)
+    n0, n1, n2 = (float(c) for c in n)
+    m = (-n0, -n1, -n2)
+    s, th, t = float(np.reshape(s0, -1)[0]), float(np.reshape(th0, -1)[0]), 0.0
+    f = wheel.frame
+    (O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2) = (
+        tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
+    L = wheel.curve.length
+    for _ in range(maxit):
+        u, rho, u1, rho1, _, _ = wheel.meridian(s)
+        c, sn = math.cos(th), math.sin(th)
+        msn = -sn
+        er = (c * d0 + sn * e0, c * d1 + sn * e1, c * d2 + sn * e2)
+        et = (msn * d0 + c * e0, msn * d1 + c * e1, msn * d2 + c * e2)
+        F = (((O0 + u * a0) + rho * er[0] - q0) - t * n0,
+             ((O1 + u * a1) + rho * er[1] - q1) - t * n1,
+             ((O2 + u * a2) + rho * er[2] - q2) - t * n2)
+        c0 = (u1 * a0 + rho1 * er[0], u1 * a1 + rho1 * er[1], u1 * a2 + rho1 * er[2])
+        c1 = (rho * et[0], rho * et[1], rho * et[2])
+        ds, dth, dt = _cramer3(c0, c1, m, (-F[0], -F[1], -F[2]))
+        s = min(max(s + min(max(ds, -2.0), 2.0), 0.0), L)
+        th += min(max(dth, -0.05), 0.05)
+        t += dt
+        res = max(abs(F[0]), abs(F[1]), abs(F[2]))
+        if math.isnan(F[0] + F[1] + F[2]):
+            res = math.nan                # as numpy's max: a NaN is the largest
+        if res < tol:
+            break
+    if not res < 1e-7:
+        raise _no_wheel(res)
+    return np.array([s]), np.array([th]), np.array([t])
 
 
 def rail_on_lines(rail: RailSurface, Q: np.ndarray, n: np.ndarray, s0: np.ndarray, *,
