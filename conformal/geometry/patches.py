@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from conformal.errors import ConvergenceError, InputError, NoContactError
-from conformal.geometry.search import ContactPoint, Locus, RailTop, newton_contact, wheel_locus
+from conformal.geometry.search import ContactPoint, Locus, RailTop, _cross_x, newton_contact, wheel_locus
 from conformal.geometry.surfaces import RailSurface, WheelSurface
 from conformal.grid import CurvedGrid, PlanarGrid
 from conformal.scene import check_grid_memory
@@ -178,7 +178,7 @@ def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobe
     nr = rail.normal(s_r)
     delta = float(np.sum(w * np.arctan2(-nr[:, 0], nr[:, 1])) / np.sum(w))
     n = np.array([0.0, -math.sin(delta), math.cos(delta)])
-    t2 = np.cross(n, np.array([1.0, 0.0, 0.0]))
+    t2 = _cross_x(n)
     P = np.array([x_ref, Y, Z])
     # the wheel point on the normal line through P (start from the deepest point)
     q = wheel_on_lines(wheel, P[None, :], n, np.array([deepest.s_w]), np.array([deepest.theta]))

@@ -289,10 +289,16 @@ def _curvatures(wheel: WheelSurface, rail: RailSurface, v: dict) -> tuple[np.nda
     return Kr - Kw, float(kr), float(Kw[1, 1])
 
 
+def _cross_x(n: np.ndarray) -> np.ndarray:
+    """n x e_x, with numpy.cross's arithmetic (signed zeros included), without its per-call cost."""
+    n0, n1, n2 = (float(c) for c in n)
+    return np.array([n1 * 0.0 - n2 * 0.0, n2 * 1.0 - n0 * 0.0, n0 * 0.0 - n1 * 1.0])
+
+
 def newton_contact(wheel: WheelSurface, rail: RailSurface, q0, *, tol: float = 1e-11,
                    maxit: int = 40) -> ContactPoint:
     """Refine a contact point from the start q0 = (s_w, theta, x, s_r) (seed Eqs. 54-55)."""
-    q = np.array(q0, dtype=float)
+    q = [float(v) for v in q0]            # Python floats: the arithmetic of numpy's, per entry
     Lw, Lr = wheel.curve.length, rail.curve.length
     res = np.inf
     f = wheel.frame
@@ -300,18 +306,20 @@ def newton_contact(wheel: WheelSurface, rail: RailSurface, q0, *, tol: float = 1
     for it in range(1, maxit + 1):
         F, J = _newton_system(wheel, rail, q, frame)
         try:
-            dq = np.linalg.solve(np.array(J), -np.array(F))
+            dq = np.linalg.solve(np.array(J), -np.array(F)).tolist()
         except np.linalg.LinAlgError:
             raise ConvergenceError("contact search: singular Jacobian (seed Eq. 55) at "
                                    f"s_w = {q[0]:.3f}, s_r = {q[3]:.3f} mm") from None
         # limit the step (a Newton step may jump across the profile where curvatures change fast)
         scale = max(1.0, abs(dq[0]) / 2.0, abs(dq[3]) / 2.0, abs(dq[1]) / 0.05)
-        dq /= scale
-        q += dq
+        dq = [v / scale for v in dq]
+        q = [a + b for a, b in zip(q, dq)]
         q[0] = min(max(q[0], 0.0), Lw)
         q[3] = min(max(q[3], 0.0), Lr)
-        if np.all(np.abs(dq[[0, 2, 3]]) < 1e-9) and abs(dq[1]) < 1e-12 and scale == 1.0:
+        if (abs(dq[0]) < 1e-9 and abs(dq[2]) < 1e-9 and abs(dq[3]) < 1e-9 and abs(dq[1]) < 1e-12
+                and scale == 1.0):
             break
+    q = np.array(q)
     F, J, v = _residual_and_jacobian(wheel, rail, q)
     res = float(np.linalg.norm(F))
     if not res < max(tol, 1e-8):
@@ -319,8 +327,8 @@ def newton_contact(wheel: WheelSurface, rail: RailSurface, q0, *, tol: float = 1
                                f"in {maxit} iterations (residual {res:.2e})")
     K, kr, kw = _curvatures(wheel, rail, v)
     n = v["n"]
-    t2 = np.cross(n, np.array([1.0, 0.0, 0.0]))
-    y_w, z_w = (float(c) for c in wheel.curve.point(q[0]))
+    t2 = _cross_x(n)
+    y_w, z_w = wheel.curve.derivatives(float(q[0]))[:2]
     at_end = q[0] <= 1e-9 or q[0] >= Lw - 1e-9 or q[3] <= 1e-9 or q[3] >= Lr - 1e-9
     return ContactPoint(s_w=float(q[0]), theta=float(q[1]), x=float(q[2]), s_r=float(q[3]),
                         rail_point=v["rr"], wheel_point=v["rw"], normal=n, t2=t2,

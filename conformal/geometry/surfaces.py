@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -48,14 +49,22 @@ class RailSurface:
     def rotation(self) -> np.ndarray:
         return cant_matrix(self.cant)
 
-    def profile(self, s) -> tuple[np.ndarray, ...]:
-        """Y, Z, Y', Z', Y'', Z'' of the placed profile at arc length s (side frame)."""
-        y, z, y1, z1, y2, z2 = self.curve.derivatives(s)
+    @cached_property
+    def _placement(self) -> tuple[float, ...]:
+        """The rotation's entries and the origin as Python floats (r00, r01, r10, r11, y0, z0)."""
         R = self.rotation
-        Y = R[0, 0] * y + R[0, 1] * z + self.origin[0]
-        Z = R[1, 0] * y + R[1, 1] * z + self.origin[1]
-        return (Y, Z, R[0, 0] * y1 + R[0, 1] * z1, R[1, 0] * y1 + R[1, 1] * z1,
-                R[0, 0] * y2 + R[0, 1] * z2, R[1, 0] * y2 + R[1, 1] * z2)
+        return (float(R[0, 0]), float(R[0, 1]), float(R[1, 0]), float(R[1, 1]),
+                float(self.origin[0]), float(self.origin[1]))
+
+    def profile(self, s) -> tuple[np.ndarray, ...]:
+        """Y, Z, Y', Z', Y'', Z'' of the placed profile at arc length s (side frame; floats for a
+        scalar s)."""
+        y, z, y1, z1, y2, z2 = self.curve.derivatives(s)
+        r00, r01, r10, r11, y0, z0 = self._placement
+        Y = r00 * y + r01 * z + y0
+        Z = r10 * y + r11 * z + z0
+        return (Y, Z, r00 * y1 + r01 * z1, r10 * y1 + r11 * z1,
+                r00 * y2 + r01 * z2, r10 * y2 + r11 * z2)
 
     def point(self, s) -> np.ndarray:
         Y, Z = self.profile(s)[:2]
