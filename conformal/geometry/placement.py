@@ -93,6 +93,8 @@ class WheelRailPair:
     side: str = "right"
     #: the contact locus samples at z = 0 by sampling step (filled on first use, see locus_samples)
     _loci: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    #: the rail top under the locus samples by step (see rail_top_under_locus)
+    _tops: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def frame(self, z: float) -> WheelFrame:
         return WheelFrame.from_pose(self.pose.y, z, self.pose.roll, self.pose.yaw, self.radius)
@@ -106,15 +108,28 @@ class WheelRailPair:
         a vertical translation of the wheelset (theta depends on the orientation only), so it is
         computed once per pair at z = 0 and moved by z: a contact search at many trial heights of
         one position samples the wheel once."""
+        s, th, pts = self._locus_at_zero(step)
+        return s, th, pts + np.array([0.0, 0.0, z])
+
+    def _locus_at_zero(self, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         hit = self._loci.get(step)
         if hit is None:
             wheel = self.wheel(0.0)
-            s, _ = wheel.curve.sample(step)
-            th = wheel.locus_theta(s)
-            hit = (s, th, wheel.point(s, np.nan_to_num(th)))
+            s, y, z, y1, z1, _, _ = wheel.curve.sampled(step)     # the meridian of WheelSurface
+            th = wheel.locus_theta_of(y1, z1)
+            hit = (s, th, wheel.point_of(wheel.offset + y, wheel.radius + z, np.nan_to_num(th)))
             self._loci[step] = hit
-        s, th, pts = hit
-        return s, th, pts + np.array([0.0, 0.0, z])
+        return hit
+
+    def rail_top_under_locus(self, top, step: float) -> np.ndarray:
+        """``top.z_at`` (a :class:`~conformal.geometry.search.RailTop`) at the lateral positions of
+        the locus samples of :meth:`locus_samples`: they do not change with the height z, so it is
+        computed once per rail top and step."""
+        hit = self._tops.get(step)
+        if hit is None or hit[0] is not top:
+            hit = (top, top.z_at(self._locus_at_zero(step)[2][:, 1]))
+            self._tops[step] = hit
+        return hit[1]
 
     @property
     def mirror(self) -> float:

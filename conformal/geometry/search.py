@@ -129,11 +129,13 @@ def pair_locus(pair, top: RailTop, z: float, step: float = LOCUS_STEP) -> Locus:
     at wheelset height z: the pair's locus sampled once and moved by z
     (:meth:`~conformal.geometry.placement.WheelRailPair.locus_samples`), equal to
     ``wheel_locus(pair.wheel(z), top)`` to rounding."""
-    return _locus(*pair.locus_samples(z, step), top)
+    s, th, pts = pair.locus_samples(z, step)
+    return _locus(s, th, pts, top, pair.rail_top_under_locus(top, step))
 
 
-def _locus(s: np.ndarray, th: np.ndarray, pts: np.ndarray, top: RailTop) -> Locus:
-    gap = top.z_at(pts[:, 1]) - pts[:, 2]
+def _locus(s: np.ndarray, th: np.ndarray, pts: np.ndarray, top: RailTop, z_top: np.ndarray | None = None) -> Locus:
+    """The locus with its vertical gap; ``z_top``: the rail top at the points' y if known."""
+    gap = (top.z_at(pts[:, 1]) if z_top is None else z_top) - pts[:, 2]
     gap = np.where(np.isnan(th), np.nan, gap)
     return Locus(s, th, pts, gap)
 

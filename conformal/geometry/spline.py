@@ -94,9 +94,28 @@ class ProfileCurve:
 
     def sample(self, step: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
         """Arc lengths and points at about ``step`` spacing, both ends included."""
-        n = max(2, int(math.ceil(self.length / step)) + 1)
-        s = np.linspace(0.0, self.length, n)
+        s = self._sample_s(step)
         return s, self.point(s)
+
+    def _sample_s(self, step: float) -> np.ndarray:
+        n = max(2, int(math.ceil(self.length / step)) + 1)
+        return np.linspace(0.0, self.length, n)
+
+    @cached_property
+    def _samples(self) -> dict:
+        return {}
+
+    def sampled(self, step: float) -> tuple[np.ndarray, ...]:
+        """(s, y, z, y', z', y'', z'') at the arc lengths of :meth:`sample` (read-only arrays,
+        computed once per step: a contact search samples the same profile at every position)."""
+        hit = self._samples.get(step)
+        if hit is None:
+            s = self._sample_s(step)
+            hit = (s, *self.derivatives(s))
+            for a in hit:
+                a.flags.writeable = False
+            self._samples[step] = hit
+        return hit
 
     def s_at_y(self, y: float) -> float:
         """Arc length of the first point (from s = 0) where the curve reaches lateral position y."""

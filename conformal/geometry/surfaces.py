@@ -142,6 +142,10 @@ class WheelSurface:
 
     def point(self, s, theta) -> np.ndarray:
         u, rho = self.meridian(s)[:2]
+        return self.point_of(u, rho, theta)
+
+    def point_of(self, u, rho, theta) -> np.ndarray:
+        """The surface point of axial position u, radius rho (the meridian's values) and rotation theta."""
         return self.frame.O + np.asarray(u)[..., None] * self.frame.a + np.asarray(rho)[..., None] * self.e_r(theta)
 
     def locus_theta(self, s) -> np.ndarray:
@@ -150,6 +154,10 @@ class WheelSurface:
         component, so a contact point must lie there).  NaN where no such point exists near the
         bottom (a wheel flank parallel to the wheel's plane)."""
         _, _, u1, rho1, _, _ = self.meridian(s)
+        return self.locus_theta_of(u1, rho1)
+
+    def locus_theta_of(self, u1, rho1) -> np.ndarray:
+        """:meth:`locus_theta` from the meridian's slopes u', rho' at the profile points."""
         f = self.frame
         # meridian normal N = rho' a - u' e_r;  N . e_x = 0  <=>  A cos + B sin = C
         A, B, C = u1 * f.e_d[0], u1 * f.e_f[0], rho1 * f.a[0]
