@@ -85,6 +85,12 @@ def locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locu
     locus if known (:func:`~conformal.geometry.search.pair_locus`).  Samples more than NEAR_GAP
     above the rail top get pen = -gap and s_r = A = NaN (all samples are projected when none is
     that near)."""
+    return _locus_penetration(wheel, rail, top, locus)[:4]
+
+
+def _locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locus: Locus | None):
+    """:func:`locus_penetration` and the rail points (Y, Z) and inner normals (n_y, n_z) at s_r
+    (NaN where s_r is)."""
     loc = locus if locus is not None else wheel_locus(wheel, top)
     ok = np.isfinite(loc.theta) & np.isfinite(loc.gap)
     near = ok & (loc.gap < NEAR_GAP)
@@ -106,7 +112,9 @@ def locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locu
     s_r, A = np.full(n, np.nan), np.full(n, np.nan)
     pen = np.where(ok, -loc.gap, np.nan)
     s_r[k], A[k], pen[k] = s_k, A_k, np.where(inside, pen_k, np.nan)
-    return loc, s_r, pen, A
+    rail_yzn = np.full((4, n), np.nan)
+    rail_yzn[:, k] = (Y, Z, ny, nz)
+    return loc, s_r, pen, A, rail_yzn
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -124,7 +132,7 @@ def find_patches(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = N
 
     Raises NoContactError (with the smallest gap) when the wheel does not touch the rail."""
     top = top or RailTop.of(rail)
-    loc, s_r, pen, A = locus_penetration(wheel, rail, top, locus)
+    loc, s_r, pen, A, rail_yzn = _locus_penetration(wheel, rail, top, locus)
     if not np.isfinite(pen).any():
         raise NoContactError("wheel-rail contact: the wheel is not over the rail")
     pmax = float(np.nanmax(pen))
@@ -158,12 +166,13 @@ def find_patches(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = N
     patches = []
     for grp in groups:
         idx = np.concatenate([np.arange(a, b + 1) for a, b in grp])
-        patches.append(_patch(wheel, rail, loc, s_r[idx], pen[idx], A[idx], idx, len(grp)))
+        patches.append(_patch(wheel, rail, loc, s_r[idx], pen[idx], A[idx], idx, len(grp), rail_yzn[:, idx]))
     patches.sort(key=lambda p: -p.penetration)
     return patches
 
 
-def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobes) -> Patch:
+def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobes, rail_yzn) -> Patch:
+    """The patch of the locus samples idx (``rail_yzn``: the rail points and normals at s_r)."""
     x = loc.points[idx, 0]
     k = int(np.argmax(pen))
     i = int(idx[k])
@@ -175,8 +184,8 @@ def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobe
     Y, Z = (float(v) for v in rail.profile(s_ref)[:2])
     # the reference normal: weighted mean of the contact angles (equal to the normal at s_ref on
     # narrow patches; on wide ones it follows the mean inclination, as CONTACT's does)
-    nr = rail.normal(s_r)
-    delta = float(np.sum(w * np.arctan2(-nr[:, 0], nr[:, 1])) / np.sum(w))
+    y_r, z_r, ny_r, nz_r = rail_yzn              # rail.point(s_r), rail.normal(s_r)
+    delta = float(np.sum(w * np.arctan2(-ny_r, nz_r)) / np.sum(w))
     n = np.array([0.0, -math.sin(delta), math.cos(delta)])
     t2 = _cross_x(n)
     P = np.array([x_ref, Y, Z])
@@ -184,8 +193,7 @@ def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobe
     q = wheel_on_lines(wheel, P[None, :], n, np.array([deepest.s_w]), np.array([deepest.theta]))
     sw, th, t = (float(v[0]) for v in q)
     half = np.sqrt(np.clip(pen, 0, None) / A)
-    pts = rail.point(s_r)
-    eta = (pts[:, 0] - Y) * t2[1] + (pts[:, 1] - Z) * t2[2]
+    eta = (y_r - Y) * t2[1] + (z_r - Z) * t2[2]
     return Patch(s_ref=s_ref, x_ref=x_ref, point=P, normal=n, t2=t2,
                  wheel_point=P + t * n, wheel_s=sw, wheel_theta=th, deepest=deepest,
                  penetration=float(pen.max()), s_range=(float(s_r.min()), float(s_r.max())),

@@ -140,7 +140,10 @@ class ProfileCurve:
             g = dy * y1 + dz * z1
             H = y1 * y1 + z1 * z1 + dy * y2 + dz * z2
             step = np.where(H > 0.1, g / np.where(H > 0.1, H, 1.0), g)
-            s = np.clip(s - np.clip(step, -2.0, 2.0), 0.0, self.length)
+            s_new = np.clip(s - np.clip(step, -2.0, 2.0), 0.0, self.length)
+            if np.array_equal(s_new, s):
+                break                   # a fixed point: the remaining iterations would repeat it
+            s = s_new
         return s
 
 
