@@ -103,8 +103,8 @@ def _locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, loc
     g = np.hypot(Y1, Z1)
     ny, nz = -Z1 / g, Y1 / g
     pen_k = (pts[:, 1] - Y) * ny + (pts[:, 2] - Z) * nz
-    er = wheel.e_r(np.nan_to_num(loc.theta[k]))
-    rho = wheel.rolling_radius(loc.s[k])
+    er = wheel.e_r(np.nan_to_num(loc.theta[k])) if loc.e_r is None else loc.e_r[k]
+    rho = wheel.rolling_radius(loc.s[k]) if loc.rho is None else loc.rho[k]
     A_k = np.clip((er[:, 1] * ny + er[:, 2] * nz) / (2 * rho), 1e-6, None)
     # points that project onto an end of the rail are not over the rail
     inside = (s_k > 1e-6) & (s_k < rail.curve.length - 1e-6)

@@ -108,16 +108,24 @@ class WheelRailPair:
         a vertical translation of the wheelset (theta depends on the orientation only), so it is
         computed once per pair at z = 0 and moved by z: a contact search at many trial heights of
         one position samples the wheel once."""
-        s, th, pts = self._locus_at_zero(step)
+        s, th, pts = self._locus_at_zero(step)[:3]
         return s, th, pts + np.array([0.0, 0.0, z])
 
-    def _locus_at_zero(self, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def locus_radial(self, step: float) -> tuple[np.ndarray, np.ndarray]:
+        """(e_r (n, 3), rho (n,)) at the locus samples of :meth:`locus_samples`: the radial
+        direction at the locus angle (0 where there is none) and the wheel radius, both independent
+        of the height."""
+        return self._locus_at_zero(step)[3:]
+
+    def _locus_at_zero(self, step: float) -> tuple[np.ndarray, ...]:
         hit = self._loci.get(step)
         if hit is None:
             wheel = self.wheel(0.0)
             s, y, z, y1, z1, _, _ = wheel.curve.sampled(step)     # the meridian of WheelSurface
             th = wheel.locus_theta_of(y1, z1)
-            hit = (s, th, wheel.point_of(wheel.offset + y, wheel.radius + z, np.nan_to_num(th)))
+            er = wheel.e_r(np.nan_to_num(th))
+            rho = wheel.radius + z
+            hit = (s, th, wheel.point_of(wheel.offset + y, rho, e_r=er), er, rho)
             self._loci[step] = hit
         return hit
 

@@ -115,6 +115,8 @@ class Locus:
     theta: np.ndarray      # rotation angle (NaN: no locus point)
     points: np.ndarray     # (n, 3) side frame
     gap: np.ndarray        # vertical gap to the rail top (NaN outside the rail / no locus)
+    e_r: np.ndarray | None = None   # (n, 3) radial direction at theta (NaN theta: 0), if known
+    rho: np.ndarray | None = None   # wheel radius at s, if known
 
 
 def wheel_locus(wheel: WheelSurface, top: RailTop, step: float = LOCUS_STEP) -> Locus:
@@ -130,7 +132,9 @@ def pair_locus(pair, top: RailTop, z: float, step: float = LOCUS_STEP) -> Locus:
     (:meth:`~conformal.geometry.placement.WheelRailPair.locus_samples`), equal to
     ``wheel_locus(pair.wheel(z), top)`` to rounding."""
     s, th, pts = pair.locus_samples(z, step)
-    return _locus(s, th, pts, top, pair.rail_top_under_locus(top, step))
+    loc = _locus(s, th, pts, top, pair.rail_top_under_locus(top, step))
+    er, rho = pair.locus_radial(step)
+    return Locus(loc.s, loc.theta, loc.points, loc.gap, er, rho)
 
 
 def _locus(s: np.ndarray, th: np.ndarray, pts: np.ndarray, top: RailTop, z_top: np.ndarray | None = None) -> Locus:

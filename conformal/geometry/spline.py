@@ -132,19 +132,35 @@ class ProfileCurve:
         return float(sa)
 
     def project(self, q: np.ndarray, s0: np.ndarray) -> np.ndarray:
-        """Closest-point arc lengths of points q (..., 2) by Newton from s0 (...)."""
+        """Closest-point arc lengths of points q (..., 2) by Newton from s0 (...): eight steps, or
+        fewer for a point whose step no longer changes its arc length (a fixed point of the steps,
+        which the remaining ones would repeat: such points drop out of the iteration)."""
         s = np.array(s0, dtype=float, copy=True)
+        shape = s.shape
+        s = s.reshape(-1)
+        q = np.asarray(q, dtype=float)
+        qy, qz = q[..., 0].reshape(-1), q[..., 1].reshape(-1)
+        act, sa = None, s          # the moving points (None: all) and their arc lengths
         for _ in range(8):
-            y, z, y1, z1, y2, z2 = self.derivatives(s)
-            dy, dz = y - q[..., 0], z - q[..., 1]
+            y, z, y1, z1, y2, z2 = self.derivatives(sa)
+            dy, dz = y - qy, z - qz
             g = dy * y1 + dz * z1
             H = y1 * y1 + z1 * z1 + dy * y2 + dz * z2
             step = np.where(H > 0.1, g / np.where(H > 0.1, H, 1.0), g)
-            s_new = np.clip(s - np.clip(step, -2.0, 2.0), 0.0, self.length)
-            if np.array_equal(s_new, s):
-                break                   # a fixed point: the remaining iterations would repeat it
-            s = s_new
-        return s
+            s_new = np.clip(sa - np.clip(step, -2.0, 2.0), 0.0, self.length)
+            moved = s_new != sa
+            if act is None:
+                s = s_new
+            else:
+                s[act] = s_new
+            if not moved.all():
+                act = np.nonzero(moved)[0] if act is None else act[moved]
+                if act.size == 0:
+                    break
+                sa, qy, qz = s_new[moved], qy[moved], qz[moved]
+            else:
+                sa = s_new
+        return s.reshape(shape)
 
 
 @dataclass(frozen=True, eq=False)
@@ -170,10 +186,14 @@ class _Pieces:
         rows = np.ascontiguousarray(a.transpose(0, 2, 1).reshape(8, -1))
         return cls(x, a, x.tolist(), rows, np.ascontiguousarray(rows.T))
 
+    @cached_property
+    def _inner(self) -> np.ndarray:
+        return self.x[1:-1]
+
     def _index(self, s: np.ndarray) -> np.ndarray:
-        i = np.searchsorted(self.x, s, side="right")
-        i -= 1
-        return np.minimum(np.maximum(i, 0), self.x.size - 2)
+        """The piece of each s: the last break <= s, the end pieces extended (NaN: the last piece).
+        The count of inner breaks <= s, i.e. searchsorted(x, s, "right") - 1 clipped to the pieces."""
+        return np.searchsorted(self._inner, s, side="right")
 
     def eval(self, s, nu: int = 0) -> np.ndarray:
         """The curve (nu = 0) or its derivative of order nu (1, 2, 3) at s, shape s.shape + (2,)."""
@@ -181,7 +201,7 @@ class _Pieces:
             raise ValueError(f"derivative order {nu} of a cubic")
         s = np.asarray(s, dtype=float)
         i = self._index(s)
-        t = s - self.x[i]
+        t = s - self.x.take(i)
         a0y, a0z, a1y, a1z, a2y, a2z, a3y, a3z = self.rows.take(i, axis=1)
         out = []
         for a0, a1, a2, a3 in ((a0y, a1y, a2y, a3y), (a0z, a1z, a2z, a3z)):
@@ -198,7 +218,7 @@ class _Pieces:
     def derivatives(self, s) -> tuple[np.ndarray, ...]:
         s = np.asarray(s, dtype=float)
         i = self._index(s)
-        t = s - self.x[i]
+        t = s - self.x.take(i)
         a0y, a0z, a1y, a1z, a2y, a2z, a3y, a3z = self.rows.take(i, axis=1)
         out = []
         for a0, a1, a2, a3 in ((a0y, a1y, a2y, a3y), (a0z, a1z, a2z, a3z)):

@@ -144,9 +144,11 @@ class WheelSurface:
         u, rho = self.meridian(s)[:2]
         return self.point_of(u, rho, theta)
 
-    def point_of(self, u, rho, theta) -> np.ndarray:
-        """The surface point of axial position u, radius rho (the meridian's values) and rotation theta."""
-        return self.frame.O + np.asarray(u)[..., None] * self.frame.a + np.asarray(rho)[..., None] * self.e_r(theta)
+    def point_of(self, u, rho, theta=None, *, e_r=None) -> np.ndarray:
+        """The surface point of axial position u, radius rho (the meridian's values) and rotation
+        theta (or its radial direction ``e_r`` = :meth:`e_r` (theta))."""
+        er = self.e_r(theta) if e_r is None else e_r
+        return self.frame.O + np.asarray(u)[..., None] * self.frame.a + np.asarray(rho)[..., None] * er
 
     def locus_theta(self, s) -> np.ndarray:
         """Rotation angle theta(s_w) of the contact locus: the point of each wheel circle where the
