@@ -323,24 +323,44 @@ def rail_on_lines(rail: RailSurface, Q: np.ndarray, n: np.ndarray, s0: np.ndarra
     """Intersections of the (y, z) lines Q + t n with the rail profile: returns (s_r, t)."""
     Q = np.asarray(Q, float)
     N = Q.shape[0]
-    n = np.broadcast_to(np.asarray(n, float), (N, 2))
+    n = np.asarray(n, float)
+    if n.ndim == 1:
+        n0, n1 = float(n[0]), float(n[1])
+    else:
+        n0, n1 = (np.ascontiguousarray(c) for c in np.broadcast_to(n, (N, 2)).T)
+    mn0, mn1 = -n0, -n1
+    q0, q1 = (np.ascontiguousarray(c) for c in Q.T)
     s = np.array(s0, float).reshape(N).copy()
     t = np.zeros(N)
     L = rail.curve.length
     for _ in range(maxit):
         Y, Z, Y1, Z1, _, _ = rail.profile(s)
-        F = np.stack([Y - Q[:, 0] - t * n[:, 0], Z - Q[:, 1] - t * n[:, 1]], axis=1)
-        det = Y1 * (-n[:, 1]) - (-n[:, 0]) * Z1
-        ds = (-F[:, 0] * (-n[:, 1]) + n[:, 0] * -F[:, 1]) / det
-        dt = (Y1 * -F[:, 1] - Z1 * -F[:, 0]) / det
+        F0, F1 = (Y - q0) - t * n0, (Z - q1) - t * n1
+        mF0, mF1 = -F0, -F1
+        det = Y1 * mn1 - mn0 * Z1
+        ds = (mF0 * mn1 + n0 * mF1) / det
+        dt = (Y1 * mF1 - Z1 * mF0) / det
         s = np.clip(s + np.clip(ds, -2.0, 2.0), 0.0, L)
         t += dt
-        if np.max(np.abs(F)) < tol:
+        res = np.max([np.max(np.abs(F0)), np.max(np.abs(F1))])
+        if res < tol:
             break
-    if not np.max(np.abs(F)) < 1e-7:
+    if not res < 1e-7:
         raise ConvergenceError(f"rail surface: the normal lines do not meet the rail profile (residual "
-                               f"{np.max(np.abs(F)):.2e} mm); the patch reaches beyond the rail profile")
+                               f"{res:.2e} mm); the patch reaches beyond the rail profile")
     return s, t
+
+
+def _unique(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``numpy.unique(v.ravel(), return_inverse=True)``; without sorting for a 2-D v whose rows are
+    one increasing row (a grid's lateral coordinate)."""
+    if v.ndim == 2 and v.shape[0] > 0 and v.shape[1] > 0:
+        row = v[0]
+        if np.all(row[1:] > row[:-1]):
+            bits = np.ascontiguousarray(v).view(np.uint64)
+            if np.array_equal(bits, np.broadcast_to(bits[0], bits.shape)):
+                return row.copy(), np.tile(np.arange(v.shape[1]), v.shape[0])
+    return np.unique(v.ravel(), return_inverse=True)
 
 
 # ----------------------------------------------------------------------------- planar grid
@@ -352,7 +372,7 @@ def planar_distance(wheel: WheelSurface, rail: RailSurface, patch: Patch, xi: np
     P, n, t2 = patch.point, patch.normal, patch.t2
     e1 = np.array([1.0, 0.0, 0.0])
     # rail: depends on eta only
-    eta_u, inv = np.unique(eta.ravel(), return_inverse=True)
+    eta_u, inv = _unique(eta)
     Qr = P[1:][None, :] + eta_u[:, None] * t2[1:][None, :]
     s_r, t_r = rail_on_lines(rail, Qr, n[1:], patch.s_ref + eta_u)
     # wheel: start from the linear prediction at the reference wheel point
