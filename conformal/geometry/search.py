@@ -151,8 +151,9 @@ def local_minima(g: np.ndarray, merge: float = MERGE_DEPTH) -> list[int]:
     if not valid.any():
         return []
     gg = np.where(valid, g, np.inf)
-    left = np.r_[np.inf, gg[:-1]]
-    right = np.r_[gg[1:], np.inf]
+    inf = np.array([np.inf])
+    left = np.concatenate((inf, gg[:-1]))
+    right = np.concatenate((gg[1:], inf))
     cand = np.nonzero(valid & (gg <= left) & (gg < right))[0]
     # plateaus that end with an equal value on the right
     cand = list(cand)
@@ -277,6 +278,39 @@ def _newton_system(wheel: WheelSurface, rail: RailSurface, q, frame: tuple) -> t
     return F, J
 
 
+def _dot3(a, b) -> float:
+    """a . b of 3-tuples with the arithmetic of numpy's ``@`` on 3-vectors ((p0 + p1) + p2)."""
+    return (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2]
+
+
+def _contact_values(wheel: WheelSurface, rail: RailSurface, q) -> tuple[list, dict]:
+    """The residual F and the vectors ``v`` of :func:`_residual_and_jacobian` at a converged q, the
+    same expressions in Python floats (numpy arrays in ``v``, as there)."""
+    s_w, th, x, s_r = (float(c) for c in q)
+    u, rho, u1, rho1, u2, rho2 = wheel.meridian(s_w)
+    f = wheel.frame
+    O, a, ed, ef = (tuple(float(c) for c in vec) for vec in (f.O, f.a, f.e_d, f.e_f))
+    c, sn = math.cos(th), math.sin(th)
+    msn = -sn
+    er = tuple(c * ed[k] + sn * ef[k] for k in range(3))
+    et = tuple(msn * ed[k] + c * ef[k] for k in range(3))
+    rw = tuple((O[k] + u * a[k]) + rho * er[k] for k in range(3))
+    t1w = tuple(u1 * a[k] + rho1 * er[k] for k in range(3))
+    t2w = tuple(rho * et[k] for k in range(3))
+    Y, Z, Y1, Z1, Y2, Z2 = rail.profile(s_r)
+    rr = (x, Y, Z)
+    g = math.hypot(Y1, Z1)
+    t2r = (0.0, Y1, Z1)
+    n = (0.0 / g, -Z1 / g, Y1 / g)
+    d = tuple(rw[k] - rr[k] for k in range(3))
+    F = [d[0], _dot3(t2r, d), _dot3(t1w, n), _dot3(et, n)]
+    arr = np.array
+    v = dict(rw=arr(rw), rr=arr(rr), n=arr(n), t1w=arr(t1w), t2w=arr(t2w), er=arr(er), et=arr(et), u1=u1,
+             rho1=rho1, u2=u2, rho2=rho2, rho=rho, t2r=arr((0.0 / g, Y1 / g, Z1 / g)), d=arr(d),
+             Y1=Y1, Z1=Z1, Y2=Y2, Z2=Z2)
+    return F, v
+
+
 def _curvatures(wheel: WheelSurface, rail: RailSurface, v: dict) -> tuple[np.ndarray, float, float]:
     """Relative curvature matrix in (t1 = e_x, t2) and the lateral profile curvatures."""
     n, f = v["n"], wheel.frame
@@ -326,7 +360,7 @@ def newton_contact(wheel: WheelSurface, rail: RailSurface, q0, *, tol: float = 1
                 and scale == 1.0):
             break
     q = np.array(q)
-    F, J, v = _residual_and_jacobian(wheel, rail, q)
+    F, v = _contact_values(wheel, rail, q)
     res = float(np.linalg.norm(F))
     if not res < max(tol, 1e-8):
         raise ConvergenceError(f"contact search: Newton-Raphson (seed Eq. 55) did not converge "
