@@ -27,6 +27,7 @@ import numpy as np
 
 from conformal.errors import ConvergenceError, InputError, NoContactError
 from conformal.geometry.search import ContactPoint, Locus, RailTop, _cross_x, newton_contact, wheel_locus
+from conformal.geometry.spline import clip
 from conformal.geometry.surfaces import RailSurface, WheelSurface
 from conformal.grid import CurvedGrid, PlanarGrid
 from conformal.scene import check_grid_memory
@@ -272,8 +273,8 @@ def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: n
         c0 = (u1 * a0 + rho1 * er[0], u1 * a1 + rho1 * er[1], u1 * a2 + rho1 * er[2])
         c1 = (rho * et[0], rho * et[1], rho * et[2])
         ds, dth, dt = _cramer3(c0, c1, m, (-F[0], -F[1], -F[2]))
-        s = np.clip(s + np.clip(ds, -2.0, 2.0), 0.0, L)
-        th += np.clip(dth, -0.05, 0.05)
+        s = clip(s + clip(ds, -2.0, 2.0), 0.0, L)
+        th += clip(dth, -0.05, 0.05)
         t += dt
         res = np.max([np.max(np.abs(Fk)) for Fk in F])
         if res < tol:
@@ -340,7 +341,7 @@ def rail_on_lines(rail: RailSurface, Q: np.ndarray, n: np.ndarray, s0: np.ndarra
         det = Y1 * mn1 - mn0 * Z1
         ds = (mF0 * mn1 + n0 * mF1) / det
         dt = (Y1 * mF1 - Z1 * mF0) / det
-        s = np.clip(s + np.clip(ds, -2.0, 2.0), 0.0, L)
+        s = clip(s + clip(ds, -2.0, 2.0), 0.0, L)
         t += dt
         res = np.max([np.max(np.abs(F0)), np.max(np.abs(F1))])
         if res < tol:

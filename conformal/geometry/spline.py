@@ -38,6 +38,11 @@ from conformal.errors import InputError
 
 ARC_STEP = 0.025   # mm, spacing of the arc-length re-parametrisation
 
+try:   # the ufunc that numpy.clip calls (the same numbers), without its per-call argument handling
+    from numpy._core.umath import clip
+except ImportError:                     # pragma: no cover - other numpy layouts
+    clip = np.clip
+
 
 @dataclass(frozen=True, eq=False)
 class ProfileCurve:
@@ -146,8 +151,9 @@ class ProfileCurve:
             dy, dz = y - qy, z - qz
             g = dy * y1 + dz * z1
             H = y1 * y1 + z1 * z1 + dy * y2 + dz * z2
-            step = np.where(H > 0.1, g / np.where(H > 0.1, H, 1.0), g)
-            s_new = np.clip(sa - np.clip(step, -2.0, 2.0), 0.0, self.length)
+            curved = H > 0.1
+            step = np.where(curved, g / np.where(curved, H, 1.0), g)
+            s_new = clip(sa - clip(step, -2.0, 2.0), 0.0, self.length)
             moved = s_new != sa
             if act is None:
                 s = s_new
