@@ -298,18 +298,18 @@ def fit_curve(points: np.ndarray, smoothing: float = 0.0, name: str = "profile")
     if smoothing > 0:
         dt = t[-1] / (len(t) - 1)
         lam = dt * (smoothing / (2 * math.pi)) ** 4
-        fy = make_smoothing_spline(t, p[:, 0], lam=lam)
-        fz = make_smoothing_spline(t, p[:, 1], lam=lam)
+        # y and z in one solve: the coefficients of one solve per coordinate, set up once
+        fyz = make_smoothing_spline(t, p, lam=lam)
     else:
-        fy = make_interp_spline(t, p[:, 0], k=3)
-        fz = make_interp_spline(t, p[:, 1], k=3)
+        fyz = make_interp_spline(t, p, k=3)
     # arc length of the fitted curve on a fine t grid (Gauss-Legendre per sub-interval)
     sub = max(4, int(math.ceil(t[-1] / ARC_STEP / (len(t) - 1))))
     tf = np.unique(np.concatenate([t, np.linspace(0.0, t[-1], (len(t) - 1) * sub + 1)]))
     gx, gw = np.polynomial.legendre.leggauss(4)
     a, b = tf[:-1, None], tf[1:, None]
     tm = 0.5 * (a + b) + 0.5 * (b - a) * gx[None, :]
-    speed = np.hypot(fy(tm, 1), fz(tm, 1))
+    dyz = fyz(tm, 1)
+    speed = np.hypot(dyz[..., 0], dyz[..., 1])
     seg = 0.5 * (b - a)[:, 0] * (speed * gw[None, :]).sum(axis=1)
     s_of_t = np.r_[0.0, np.cumsum(seg)]
     length = float(s_of_t[-1])
@@ -317,7 +317,7 @@ def fit_curve(points: np.ndarray, smoothing: float = 0.0, name: str = "profile")
     n = max(8, int(math.ceil(length / ARC_STEP)) + 1)
     su = np.linspace(0.0, length, n)
     tu = np.interp(su, s_of_t, tf)   # |dc/dt| is close to 1, so linear inversion is accurate to ~1e-9 mm
-    cyz = make_interp_spline(su, np.stack([fy(tu), fz(tu)], axis=-1), k=3)
+    cyz = make_interp_spline(su, fyz(tu), k=3)
     # smoothing error: distance of each input point from the curve
     s_pts = np.interp(t, tf, s_of_t)
     if p is not p_in:   # the given points, not the ones inserted at kinks
