@@ -95,9 +95,20 @@ class WheelRailPair:
     _loci: dict = field(default_factory=dict, init=False, repr=False, compare=False)
     #: the rail top under the locus samples by step (see rail_top_under_locus)
     _tops: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    #: the wheelset axes (a, e_d, e_f) of the pose (filled on first use, see frame)
+    _axes: tuple | None = field(default=None, init=False, repr=False, compare=False)
 
     def frame(self, z: float) -> WheelFrame:
-        return WheelFrame.from_pose(self.pose.y, z, self.pose.roll, self.pose.yaw, self.radius)
+        """The wheelset frame at height z: the axes of the pose (the same at every height, computed
+        once per pair, read-only) and the centre at (0, y, z - radius)."""
+        axes = self._axes
+        if axes is None:
+            f = WheelFrame.from_pose(self.pose.y, 0.0, self.pose.roll, self.pose.yaw, self.radius)
+            for v in (f.a, f.e_d, f.e_f):
+                v.flags.writeable = False
+            axes = (f.a, f.e_d, f.e_f)
+            object.__setattr__(self, "_axes", axes)
+        return WheelFrame(np.array([0.0, self.pose.y, z - self.radius]), *axes)
 
     def wheel(self, z: float) -> WheelSurface:
         return WheelSurface(self.wheel_curve, self.radius, self.offset, self.frame(z))

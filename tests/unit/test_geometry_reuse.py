@@ -210,3 +210,18 @@ def test_both_coordinates_in_one_smoothing_solve():
                       (make_interp_spline(t, p, k=3), lambda y: make_interp_spline(t, y, k=3))):
         for k in range(2):
             np.testing.assert_allclose(both.c[:, k], one(p[:, k]).c, rtol=0, atol=1e-12)
+
+
+def test_pair_frame_equals_the_pose_at_that_height(placed):
+    """The pair's wheelset frame with its axes computed once equals the frame of the pose at each
+    height, and the shared axes are read-only."""
+    from conformal.geometry.surfaces import WheelFrame
+
+    pair = placed.pair
+    for z in (0.0, placed.z_touch, placed.z_touch + 0.123):
+        got = pair.frame(z)
+        ref = WheelFrame.from_pose(pair.pose.y, z, pair.pose.roll, pair.pose.yaw, pair.radius)
+        for k in ("O", "a", "e_d", "e_f"):
+            np.testing.assert_array_equal(getattr(got, k), getattr(ref, k))
+    with pytest.raises(ValueError):
+        pair.frame(0.0).a[0] = 1.0
