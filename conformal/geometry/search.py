@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -189,15 +189,34 @@ class ContactPoint:
     normal: np.ndarray           # (3,) unit inner normal of the rail
     t2: np.ndarray               # (3,) lateral unit tangent, t2 = n x t1
     penetration: float           # mm, d . n_r > 0 = overlap (seed Eq. 56, sign flipped)
-    curvature: np.ndarray        # (2, 2) relative curvature K = K_rail - K_wheel in (t1, t2)
-    kappa_rail: float            # lateral curvature of the rail profile (1/mm)
-    kappa_wheel: float           # lateral curvature of the wheel profile (1/mm)
     rolling_radius: float        # distance of the wheel point from the axle (mm)
     y_wheel: float               # wheel-profile coordinates of the wheel point
     z_wheel: float
     iterations: int
     residual: float
     at_end: bool = False         # the solution sits on an end of a profile
+    #: (wheel, rail, vectors at the point) for the curvatures, computed when first asked for (a
+    #: search for the touching height needs none of them)
+    surfaces: tuple = field(default=(), repr=False)
+
+    @cached_property
+    def _curvature_parts(self) -> tuple[np.ndarray, float, float]:
+        return _curvatures(*self.surfaces)
+
+    @property
+    def curvature(self) -> np.ndarray:
+        """(2, 2) relative curvature K = K_rail - K_wheel (1/mm) in (t1, t2)."""
+        return self._curvature_parts[0]
+
+    @property
+    def kappa_rail(self) -> float:
+        """Lateral curvature of the rail profile (1/mm)."""
+        return self._curvature_parts[1]
+
+    @property
+    def kappa_wheel(self) -> float:
+        """Lateral curvature of the wheel profile (1/mm)."""
+        return self._curvature_parts[2]
 
     @property
     def delta(self) -> float:
@@ -365,16 +384,15 @@ def newton_contact(wheel: WheelSurface, rail: RailSurface, q0, *, tol: float = 1
     if not res < max(tol, 1e-8):
         raise ConvergenceError(f"contact search: Newton-Raphson (seed Eq. 55) did not converge "
                                f"in {maxit} iterations (residual {res:.2e})")
-    K, kr, kw = _curvatures(wheel, rail, v)
     n = v["n"]
     t2 = _cross_x(n)
     y_w, z_w = wheel.curve.derivatives(float(q[0]))[:2]
     at_end = q[0] <= 1e-9 or q[0] >= Lw - 1e-9 or q[3] <= 1e-9 or q[3] >= Lr - 1e-9
     return ContactPoint(s_w=float(q[0]), theta=float(q[1]), x=float(q[2]), s_r=float(q[3]),
                         rail_point=v["rr"], wheel_point=v["rw"], normal=n, t2=t2,
-                        penetration=float(v["d"] @ n), curvature=K, kappa_rail=kr, kappa_wheel=kw,
+                        penetration=float(v["d"] @ n),
                         rolling_radius=float(v["rho"]), y_wheel=y_w, z_wheel=z_w, iterations=it,
-                        residual=res, at_end=bool(at_end))
+                        residual=res, at_end=bool(at_end), surfaces=(wheel, rail, v))
 
 
 # ----------------------------------------------------------------------------- global search

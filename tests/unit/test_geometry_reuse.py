@@ -182,6 +182,12 @@ def test_contact_point_vectors_in_floats_equal_numpy(placed):
         for k in v:
             np.testing.assert_allclose(v2[k], v[k], rtol=1e-13, atol=1e-13)
     np.testing.assert_array_equal(gs._cross_x(c.normal), np.cross(c.normal, [1.0, 0.0, 0.0]))
+    # the curvatures, computed when first asked for, from the numpy vectors at the converged point
+    _, _, v = gs._residual_and_jacobian(wheel, placed.pair.rail, np.array([c.s_w, c.theta, c.x, c.s_r]))
+    K, kr, kw = gs._curvatures(wheel, placed.pair.rail, v)
+    np.testing.assert_allclose(c.curvature, K, rtol=1e-12, atol=1e-15)
+    assert c.kappa_rail == pytest.approx(kr, rel=1e-12) and c.kappa_wheel == pytest.approx(kw, rel=1e-12)
+    assert c.curvature is c.curvature
 
 
 def test_rail_profile_floats_equal_arrays(placed):
