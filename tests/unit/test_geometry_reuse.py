@@ -231,3 +231,22 @@ def test_pair_frame_equals_the_pose_at_that_height(placed):
             np.testing.assert_array_equal(getattr(got, k), getattr(ref, k))
     with pytest.raises(ValueError):
         pair.frame(0.0).a[0] = 1.0
+
+
+def test_roll_search_places_each_roll_once(monkeypatch):
+    """The wheelset roll's root search builds each trial roll's pairs once (the bracket's rolls are
+    not searched again by Brent's method or for the height at the root)."""
+    from conformal.geometry import wheelrail as gw
+
+    sc = mbench_scene(3.0, element_size=0.4, roll=None)
+    built = []
+    build = gw.build_pair
+
+    def counting(geo, base_dir=".", **kw):
+        built.append((kw.get("side"), float(kw.get("roll"))))
+        return build(geo, base_dir, **kw)
+
+    monkeypatch.setattr(gw, "build_pair", counting)
+    roll, z = gw.wheelset_roll(sc.geometry, sc.base_dir)
+    assert len(built) == len(set(built)) > 6
+    assert ("right", roll) in built and abs(roll) < 0.01
