@@ -26,7 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from conformal.errors import ConvergenceError, InputError, NoContactError
-from conformal.geometry.search import ContactPoint, Locus, RailTop, newton_contact, wheel_locus
+from conformal.geometry.search import ContactPoint, Locus, RailTop, _cross_x, newton_contact, wheel_locus
+from conformal.geometry.spline import clip
 from conformal.geometry.surfaces import RailSurface, WheelSurface
 from conformal.grid import CurvedGrid, PlanarGrid
 from conformal.scene import check_grid_memory
@@ -88,6 +89,12 @@ def locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locu
     locus if known (:func:`~conformal.geometry.search.pair_locus`).  Samples more than NEAR_GAP
     above the rail top get pen = -gap and s_r = A = NaN (all samples are projected when none is
     that near)."""
+    return _locus_penetration(wheel, rail, top, locus)[:4]
+
+
+def _locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locus: Locus | None):
+    """:func:`locus_penetration` and the rail points (Y, Z) and inner normals (n_y, n_z) at s_r
+    (NaN where s_r is)."""
     loc = locus if locus is not None else wheel_locus(wheel, top)
     ok = np.isfinite(loc.theta) & np.isfinite(loc.gap)
     near = ok & (loc.gap < NEAR_GAP)
@@ -100,8 +107,8 @@ def locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locu
     g = np.hypot(Y1, Z1)
     ny, nz = -Z1 / g, Y1 / g
     pen_k = (pts[:, 1] - Y) * ny + (pts[:, 2] - Z) * nz
-    er = wheel.e_r(np.nan_to_num(loc.theta[k]))
-    rho = wheel.rolling_radius(loc.s[k])
+    er = wheel.e_r(np.nan_to_num(loc.theta[k])) if loc.e_r is None else loc.e_r[k]
+    rho = wheel.rolling_radius(loc.s[k]) if loc.rho is None else loc.rho[k]
     A_k = np.clip((er[:, 1] * ny + er[:, 2] * nz) / (2 * rho), 1e-6, None)
     # points that project onto an end of the rail are not over the rail
     inside = (s_k > 1e-6) & (s_k < rail.curve.length - 1e-6)
@@ -109,7 +116,9 @@ def locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locu
     s_r, A = np.full(n, np.nan), np.full(n, np.nan)
     pen = np.where(ok, -loc.gap, np.nan)
     s_r[k], A[k], pen[k] = s_k, A_k, np.where(inside, pen_k, np.nan)
-    return loc, s_r, pen, A
+    rail_yzn = np.full((4, n), np.nan)
+    rail_yzn[:, k] = (Y, Z, ny, nz)
+    return loc, s_r, pen, A, rail_yzn
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -127,7 +136,7 @@ def find_patches(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = N
 
     Raises NoContactError (with the smallest gap) when the wheel does not touch the rail."""
     top = top or RailTop.of(rail)
-    loc, s_r, pen, A = locus_penetration(wheel, rail, top, locus)
+    loc, s_r, pen, A, rail_yzn = _locus_penetration(wheel, rail, top, locus)
     if not np.isfinite(pen).any():
         raise NoContactError("wheel-rail contact: the wheel is not over the rail")
     pmax = float(np.nanmax(pen))
@@ -161,12 +170,13 @@ def find_patches(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = N
     patches = []
     for grp in groups:
         idx = np.concatenate([np.arange(a, b + 1) for a, b in grp])
-        patches.append(_patch(wheel, rail, loc, s_r[idx], pen[idx], A[idx], idx, len(grp)))
+        patches.append(_patch(wheel, rail, loc, s_r[idx], pen[idx], A[idx], idx, len(grp), rail_yzn[:, idx]))
     patches.sort(key=lambda p: -p.penetration)
     return patches
 
 
-def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobes) -> Patch:
+def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobes, rail_yzn) -> Patch:
+    """The patch of the locus samples idx (``rail_yzn``: the rail points and normals at s_r)."""
     x = loc.points[idx, 0]
     k = int(np.argmax(pen))
     i = int(idx[k])
@@ -178,21 +188,20 @@ def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobe
     Y, Z = (float(v) for v in rail.profile(s_ref)[:2])
     # the reference normal: weighted mean of the contact angles (equal to the normal at s_ref on
     # narrow patches; on wide ones it follows the mean inclination, as CONTACT's does)
-    nr = rail.normal(s_r)
-    angles = np.arctan2(-nr[:, 0], nr[:, 1])
+    y_r, z_r, ny_r, nz_r = rail_yzn              # rail.point(s_r), rail.normal(s_r)
+    angles = np.arctan2(-ny_r, nz_r)
     delta = float(np.sum(w * angles) / np.sum(w))
     # each sample's overlap grows by dz cos(delta_i) and its rail point moves by dz sin(delta_i)
     dw = (REF_EXPONENT + 0.5) * w / pen * np.cos(angles)           # pen > 0 on a patch
     s_ref_rate = float(np.sum(dw * (s_r - s_ref) + w * np.sin(angles)) / np.sum(w))
     n = np.array([0.0, -math.sin(delta), math.cos(delta)])
-    t2 = np.cross(n, np.array([1.0, 0.0, 0.0]))
+    t2 = _cross_x(n)
     P = np.array([x_ref, Y, Z])
     # the wheel point on the normal line through P (start from the deepest point)
     q = wheel_on_lines(wheel, P[None, :], n, np.array([deepest.s_w]), np.array([deepest.theta]))
     sw, th, t = (float(v[0]) for v in q)
     half = np.sqrt(np.clip(pen, 0, None) / A)
-    pts = rail.point(s_r)
-    eta = (pts[:, 0] - Y) * t2[1] + (pts[:, 1] - Z) * t2[2]
+    eta = (y_r - Y) * t2[1] + (z_r - Z) * t2[2]
     return Patch(s_ref=s_ref, x_ref=x_ref, point=P, normal=n, t2=t2,
                  wheel_point=P + t * n, wheel_s=sw, wheel_theta=th, deepest=deepest,
                  penetration=float(pen.max()), s_range=(float(s_r.min()), float(s_r.max())),
@@ -201,6 +210,41 @@ def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobe
 
 
 # ----------------------------------------------------------------------------- intersections
+# The Newton steps below work on coordinate arrays (one per axis) instead of (N, 3) arrays: the
+# same products and sums in the same order as numpy's cross and einsum("ij,ij->i") (which adds
+# the three products as (p0 + p2) + p1), i.e. the same numbers, at a third of the cost; one line
+# (a patch's reference point) takes Python floats.
+def _cross(a, b):
+    """a x b of 3-vectors given by their coordinates (arrays or floats), numpy.cross's arithmetic."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _dot(a, b):
+    """a . b of 3-vectors given by their coordinates, in the order of numpy.einsum("ij,ij->i")."""
+    return (a[0] * b[0] + a[2] * b[2]) + a[1] * b[1]
+
+
+def _cramer3(c0, c1, c2, b):
+    """The solution (d0, d1, d2) of [c0 c1 c2] d = b by Cramer's rule, columns and b given by
+    their coordinates (arrays of one shape, or floats); LinAlgError where singular."""
+    k12, k20, k01 = _cross(c1, c2), _cross(c2, c0), _cross(c0, c1)
+    det = _dot(c0, k12)
+    if not np.all(np.abs(det) > 0.0):
+        raise np.linalg.LinAlgError("singular matrix")
+    return _dot(b, k12) / det, _dot(b, k20) / det, _dot(b, k01) / det
+
+
+def _solve3(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solutions d (N, 3) of the 3 x 3 systems [c0 c1 c2] d = b (columns and b (N, 3)), by
+    Cramer's rule (a batched numpy.linalg.solve costs several times more at these sizes)."""
+    return np.stack(_cramer3(c0.T, c1.T, c2.T, b.T), axis=1)
+
+
+def _no_wheel(res) -> ConvergenceError:
+    return ConvergenceError(f"wheel surface: the normal lines do not meet the wheel (residual "
+                            f"{res:.2e} mm); the patch reaches beyond the wheel profile")
+
+
 def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: np.ndarray, *,
                    maxit: int = 30, tol: float = 1e-10):
     """Intersections of the lines Q + t n with the wheel surface: returns (s_w, theta, t).
@@ -208,40 +252,78 @@ def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: n
     Q (N, 3), n (3,) or (N, 3); Newton on r_w(s_w, theta) - Q - t n = 0, vectorised."""
     Q = np.asarray(Q, float)
     N = Q.shape[0]
-    n = np.broadcast_to(np.asarray(n, float), (N, 3))
+    n = np.asarray(n, float)
+    if N == 1:
+        return _wheel_on_line(wheel, Q[0], n.reshape(-1, 3)[0], s0, th0, maxit, tol)
+    q0, q1, q2 = (np.ascontiguousarray(c) for c in Q.T)
+    if n.ndim == 1:
+        n0, n1, n2 = (float(c) for c in n)
+    else:
+        n0, n1, n2 = (np.ascontiguousarray(c) for c in np.broadcast_to(n, (N, 3)).T)
+    m = (-n0, -n1, -n2)
     s = np.array(s0, float).reshape(N).copy()
     th = np.array(th0, float).reshape(N).copy()
     t = np.zeros(N)
     f = wheel.frame
+    (O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2) = (
+        tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
     L = wheel.curve.length
     for _ in range(maxit):
         u, rho, u1, rho1, _, _ = wheel.meridian(s)
-        er, et = wheel.e_r(th), wheel.e_t(th)
-        r = f.O + u[:, None] * f.a + rho[:, None] * er
-        F = r - Q - t[:, None] * n
-        d = _solve3(u1[:, None] * f.a + rho1[:, None] * er, rho[:, None] * et, -n, -F)
-        d[:, 0] = np.clip(d[:, 0], -2.0, 2.0)
-        d[:, 1] = np.clip(d[:, 1], -0.05, 0.05)
-        s = np.clip(s + d[:, 0], 0.0, L)
-        th += d[:, 1]
-        t += d[:, 2]
-        if np.max(np.abs(F)) < tol:
+        c, sn = np.cos(th), np.sin(th)
+        msn = -sn
+        er = (c * d0 + sn * e0, c * d1 + sn * e1, c * d2 + sn * e2)
+        et = (msn * d0 + c * e0, msn * d1 + c * e1, msn * d2 + c * e2)
+        F = (((O0 + u * a0) + rho * er[0] - q0) - t * n0,
+             ((O1 + u * a1) + rho * er[1] - q1) - t * n1,
+             ((O2 + u * a2) + rho * er[2] - q2) - t * n2)
+        c0 = (u1 * a0 + rho1 * er[0], u1 * a1 + rho1 * er[1], u1 * a2 + rho1 * er[2])
+        c1 = (rho * et[0], rho * et[1], rho * et[2])
+        ds, dth, dt = _cramer3(c0, c1, m, (-F[0], -F[1], -F[2]))
+        s = clip(s + clip(ds, -2.0, 2.0), 0.0, L)
+        th += clip(dth, -0.05, 0.05)
+        t += dt
+        res = np.max([np.max(np.abs(Fk)) for Fk in F])
+        if res < tol:
             break
-    if not np.max(np.abs(F)) < 1e-7:
-        raise ConvergenceError(f"wheel surface: the normal lines do not meet the wheel (residual "
-                               f"{np.max(np.abs(F)):.2e} mm); the patch reaches beyond the wheel profile")
+    if not res < 1e-7:
+        raise _no_wheel(res)
     return s, th, t
 
 
-def _solve3(c0: np.ndarray, c1: np.ndarray, c2: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Solutions d (N, 3) of the 3 x 3 systems [c0 c1 c2] d = b (columns and b (N, 3)), by
-    Cramer's rule (a batched numpy.linalg.solve costs several times more at these sizes)."""
-    k12, k20, k01 = np.cross(c1, c2), np.cross(c2, c0), np.cross(c0, c1)
-    det = np.einsum("ij,ij->i", c0, k12)
-    if not np.all(np.abs(det) > 0.0):
-        raise np.linalg.LinAlgError("singular matrix")
-    return np.stack([np.einsum("ij,ij->i", b, k12), np.einsum("ij,ij->i", b, k20),
-                     np.einsum("ij,ij->i", b, k01)], axis=1) / det[:, None]
+def _wheel_on_line(wheel: WheelSurface, Q, n, s0, th0, maxit: int, tol: float):
+    """:func:`wheel_on_lines` for one line, in Python floats (the same arithmetic)."""
+    q0, q1, q2 = (float(c) for c in Q)
+    n0, n1, n2 = (float(c) for c in n)
+    m = (-n0, -n1, -n2)
+    s, th, t = float(np.reshape(s0, -1)[0]), float(np.reshape(th0, -1)[0]), 0.0
+    f = wheel.frame
+    (O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2) = (
+        tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
+    L = wheel.curve.length
+    for _ in range(maxit):
+        u, rho, u1, rho1, _, _ = wheel.meridian(s)
+        c, sn = math.cos(th), math.sin(th)
+        msn = -sn
+        er = (c * d0 + sn * e0, c * d1 + sn * e1, c * d2 + sn * e2)
+        et = (msn * d0 + c * e0, msn * d1 + c * e1, msn * d2 + c * e2)
+        F = (((O0 + u * a0) + rho * er[0] - q0) - t * n0,
+             ((O1 + u * a1) + rho * er[1] - q1) - t * n1,
+             ((O2 + u * a2) + rho * er[2] - q2) - t * n2)
+        c0 = (u1 * a0 + rho1 * er[0], u1 * a1 + rho1 * er[1], u1 * a2 + rho1 * er[2])
+        c1 = (rho * et[0], rho * et[1], rho * et[2])
+        ds, dth, dt = _cramer3(c0, c1, m, (-F[0], -F[1], -F[2]))
+        s = min(max(s + min(max(ds, -2.0), 2.0), 0.0), L)
+        th += min(max(dth, -0.05), 0.05)
+        t += dt
+        res = max(abs(F[0]), abs(F[1]), abs(F[2]))
+        if math.isnan(F[0] + F[1] + F[2]):
+            res = math.nan                # as numpy's max: a NaN is the largest
+        if res < tol:
+            break
+    if not res < 1e-7:
+        raise _no_wheel(res)
+    return np.array([s]), np.array([th]), np.array([t])
 
 
 def rail_on_lines(rail: RailSurface, Q: np.ndarray, n: np.ndarray, s0: np.ndarray, *,
@@ -249,24 +331,44 @@ def rail_on_lines(rail: RailSurface, Q: np.ndarray, n: np.ndarray, s0: np.ndarra
     """Intersections of the (y, z) lines Q + t n with the rail profile: returns (s_r, t)."""
     Q = np.asarray(Q, float)
     N = Q.shape[0]
-    n = np.broadcast_to(np.asarray(n, float), (N, 2))
+    n = np.asarray(n, float)
+    if n.ndim == 1:
+        n0, n1 = float(n[0]), float(n[1])
+    else:
+        n0, n1 = (np.ascontiguousarray(c) for c in np.broadcast_to(n, (N, 2)).T)
+    mn0, mn1 = -n0, -n1
+    q0, q1 = (np.ascontiguousarray(c) for c in Q.T)
     s = np.array(s0, float).reshape(N).copy()
     t = np.zeros(N)
     L = rail.curve.length
     for _ in range(maxit):
         Y, Z, Y1, Z1, _, _ = rail.profile(s)
-        F = np.stack([Y - Q[:, 0] - t * n[:, 0], Z - Q[:, 1] - t * n[:, 1]], axis=1)
-        det = Y1 * (-n[:, 1]) - (-n[:, 0]) * Z1
-        ds = (-F[:, 0] * (-n[:, 1]) + n[:, 0] * -F[:, 1]) / det
-        dt = (Y1 * -F[:, 1] - Z1 * -F[:, 0]) / det
-        s = np.clip(s + np.clip(ds, -2.0, 2.0), 0.0, L)
+        F0, F1 = (Y - q0) - t * n0, (Z - q1) - t * n1
+        mF0, mF1 = -F0, -F1
+        det = Y1 * mn1 - mn0 * Z1
+        ds = (mF0 * mn1 + n0 * mF1) / det
+        dt = (Y1 * mF1 - Z1 * mF0) / det
+        s = clip(s + clip(ds, -2.0, 2.0), 0.0, L)
         t += dt
-        if np.max(np.abs(F)) < tol:
+        res = np.max([np.max(np.abs(F0)), np.max(np.abs(F1))])
+        if res < tol:
             break
-    if not np.max(np.abs(F)) < 1e-7:
+    if not res < 1e-7:
         raise ConvergenceError(f"rail surface: the normal lines do not meet the rail profile (residual "
-                               f"{np.max(np.abs(F)):.2e} mm); the patch reaches beyond the rail profile")
+                               f"{res:.2e} mm); the patch reaches beyond the rail profile")
     return s, t
+
+
+def _unique(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``numpy.unique(v.ravel(), return_inverse=True)``; without sorting for a 2-D v whose rows are
+    one increasing row (a grid's lateral coordinate)."""
+    if v.ndim == 2 and v.shape[0] > 0 and v.shape[1] > 0:
+        row = v[0]
+        if np.all(row[1:] > row[:-1]):
+            bits = np.ascontiguousarray(v).view(np.uint64)
+            if np.array_equal(bits, np.broadcast_to(bits[0], bits.shape)):
+                return row.copy(), np.tile(np.arange(v.shape[1]), v.shape[0])
+    return np.unique(v.ravel(), return_inverse=True)
 
 
 # ----------------------------------------------------------------------------- planar grid
@@ -278,7 +380,7 @@ def planar_distance(wheel: WheelSurface, rail: RailSurface, patch: Patch, xi: np
     P, n, t2 = patch.point, patch.normal, patch.t2
     e1 = np.array([1.0, 0.0, 0.0])
     # rail: depends on eta only
-    eta_u, inv = np.unique(eta.ravel(), return_inverse=True)
+    eta_u, inv = _unique(eta)
     Qr = P[1:][None, :] + eta_u[:, None] * t2[1:][None, :]
     s_r, t_r = rail_on_lines(rail, Qr, n[1:], patch.s_ref + eta_u)
     # wheel: start from the linear prediction at the reference wheel point

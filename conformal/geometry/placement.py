@@ -93,9 +93,22 @@ class WheelRailPair:
     side: str = "right"
     #: the contact locus samples at z = 0 by sampling step (filled on first use, see locus_samples)
     _loci: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    #: the rail top under the locus samples by step (see rail_top_under_locus)
+    _tops: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    #: the wheelset axes (a, e_d, e_f) of the pose (filled on first use, see frame)
+    _axes: tuple | None = field(default=None, init=False, repr=False, compare=False)
 
     def frame(self, z: float) -> WheelFrame:
-        return WheelFrame.from_pose(self.pose.y, z, self.pose.roll, self.pose.yaw, self.radius)
+        """The wheelset frame at height z: the axes of the pose (the same at every height, computed
+        once per pair, read-only) and the centre at (0, y, z - radius)."""
+        axes = self._axes
+        if axes is None:
+            f = WheelFrame.from_pose(self.pose.y, 0.0, self.pose.roll, self.pose.yaw, self.radius)
+            for v in (f.a, f.e_d, f.e_f):
+                v.flags.writeable = False
+            axes = (f.a, f.e_d, f.e_f)
+            object.__setattr__(self, "_axes", axes)
+        return WheelFrame(np.array([0.0, self.pose.y, z - self.radius]), *axes)
 
     def wheel(self, z: float) -> WheelSurface:
         return WheelSurface(self.wheel_curve, self.radius, self.offset, self.frame(z))
@@ -106,15 +119,36 @@ class WheelRailPair:
         a vertical translation of the wheelset (theta depends on the orientation only), so it is
         computed once per pair at z = 0 and moved by z: a contact search at many trial heights of
         one position samples the wheel once."""
+        s, th, pts = self._locus_at_zero(step)[:3]
+        return s, th, pts + np.array([0.0, 0.0, z])
+
+    def locus_radial(self, step: float) -> tuple[np.ndarray, np.ndarray]:
+        """(e_r (n, 3), rho (n,)) at the locus samples of :meth:`locus_samples`: the radial
+        direction at the locus angle (0 where there is none) and the wheel radius, both independent
+        of the height."""
+        return self._locus_at_zero(step)[3:]
+
+    def _locus_at_zero(self, step: float) -> tuple[np.ndarray, ...]:
         hit = self._loci.get(step)
         if hit is None:
             wheel = self.wheel(0.0)
-            s, _ = wheel.curve.sample(step)
-            th = wheel.locus_theta(s)
-            hit = (s, th, wheel.point(s, np.nan_to_num(th)))
+            s, y, z, y1, z1, _, _ = wheel.curve.sampled(step)     # the meridian of WheelSurface
+            th = wheel.locus_theta_of(y1, z1)
+            er = wheel.e_r(np.nan_to_num(th))
+            rho = wheel.radius + z
+            hit = (s, th, wheel.point_of(wheel.offset + y, rho, e_r=er), er, rho)
             self._loci[step] = hit
-        s, th, pts = hit
-        return s, th, pts + np.array([0.0, 0.0, z])
+        return hit
+
+    def rail_top_under_locus(self, top, step: float) -> np.ndarray:
+        """``top.z_at`` (a :class:`~conformal.geometry.search.RailTop`) at the lateral positions of
+        the locus samples of :meth:`locus_samples`: they do not change with the height z, so it is
+        computed once per rail top and step."""
+        hit = self._tops.get(step)
+        if hit is None or hit[0] is not top:
+            hit = (top, top.z_at(self._locus_at_zero(step)[2][:, 1]))
+            self._tops[step] = hit
+        return hit[1]
 
     @property
     def mirror(self) -> float:

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -115,6 +115,8 @@ class Locus:
     theta: np.ndarray      # rotation angle (NaN: no locus point)
     points: np.ndarray     # (n, 3) side frame
     gap: np.ndarray        # vertical gap to the rail top (NaN outside the rail / no locus)
+    e_r: np.ndarray | None = None   # (n, 3) radial direction at theta (NaN theta: 0), if known
+    rho: np.ndarray | None = None   # wheel radius at s, if known
 
 
 def wheel_locus(wheel: WheelSurface, top: RailTop, step: float = LOCUS_STEP) -> Locus:
@@ -129,11 +131,15 @@ def pair_locus(pair, top: RailTop, z: float, step: float = LOCUS_STEP) -> Locus:
     at wheelset height z: the pair's locus sampled once and moved by z
     (:meth:`~conformal.geometry.placement.WheelRailPair.locus_samples`), equal to
     ``wheel_locus(pair.wheel(z), top)`` to rounding."""
-    return _locus(*pair.locus_samples(z, step), top)
+    s, th, pts = pair.locus_samples(z, step)
+    loc = _locus(s, th, pts, top, pair.rail_top_under_locus(top, step))
+    er, rho = pair.locus_radial(step)
+    return Locus(loc.s, loc.theta, loc.points, loc.gap, er, rho)
 
 
-def _locus(s: np.ndarray, th: np.ndarray, pts: np.ndarray, top: RailTop) -> Locus:
-    gap = top.z_at(pts[:, 1]) - pts[:, 2]
+def _locus(s: np.ndarray, th: np.ndarray, pts: np.ndarray, top: RailTop, z_top: np.ndarray | None = None) -> Locus:
+    """The locus with its vertical gap; ``z_top``: the rail top at the points' y if known."""
+    gap = (top.z_at(pts[:, 1]) if z_top is None else z_top) - pts[:, 2]
     gap = np.where(np.isnan(th), np.nan, gap)
     return Locus(s, th, pts, gap)
 
@@ -145,8 +151,9 @@ def local_minima(g: np.ndarray, merge: float = MERGE_DEPTH) -> list[int]:
     if not valid.any():
         return []
     gg = np.where(valid, g, np.inf)
-    left = np.r_[np.inf, gg[:-1]]
-    right = np.r_[gg[1:], np.inf]
+    inf = np.array([np.inf])
+    left = np.concatenate((inf, gg[:-1]))
+    right = np.concatenate((gg[1:], inf))
     cand = np.nonzero(valid & (gg <= left) & (gg < right))[0]
     # plateaus that end with an equal value on the right
     cand = list(cand)
@@ -182,15 +189,34 @@ class ContactPoint:
     normal: np.ndarray           # (3,) unit inner normal of the rail
     t2: np.ndarray               # (3,) lateral unit tangent, t2 = n x t1
     penetration: float           # mm, d . n_r > 0 = overlap (seed Eq. 56, sign flipped)
-    curvature: np.ndarray        # (2, 2) relative curvature K = K_rail - K_wheel in (t1, t2)
-    kappa_rail: float            # lateral curvature of the rail profile (1/mm)
-    kappa_wheel: float           # lateral curvature of the wheel profile (1/mm)
     rolling_radius: float        # distance of the wheel point from the axle (mm)
     y_wheel: float               # wheel-profile coordinates of the wheel point
     z_wheel: float
     iterations: int
     residual: float
     at_end: bool = False         # the solution sits on an end of a profile
+    #: (wheel, rail, vectors at the point) for the curvatures, computed when first asked for (a
+    #: search for the touching height needs none of them)
+    surfaces: tuple = field(default=(), repr=False)
+
+    @cached_property
+    def _curvature_parts(self) -> tuple[np.ndarray, float, float]:
+        return _curvatures(*self.surfaces)
+
+    @property
+    def curvature(self) -> np.ndarray:
+        """(2, 2) relative curvature K = K_rail - K_wheel (1/mm) in (t1, t2)."""
+        return self._curvature_parts[0]
+
+    @property
+    def kappa_rail(self) -> float:
+        """Lateral curvature of the rail profile (1/mm)."""
+        return self._curvature_parts[1]
+
+    @property
+    def kappa_wheel(self) -> float:
+        """Lateral curvature of the wheel profile (1/mm)."""
+        return self._curvature_parts[2]
 
     @property
     def delta(self) -> float:
@@ -271,6 +297,39 @@ def _newton_system(wheel: WheelSurface, rail: RailSurface, q, frame: tuple) -> t
     return F, J
 
 
+def _dot3(a, b) -> float:
+    """a . b of 3-tuples with the arithmetic of numpy's ``@`` on 3-vectors ((p0 + p1) + p2)."""
+    return (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2]
+
+
+def _contact_values(wheel: WheelSurface, rail: RailSurface, q) -> tuple[list, dict]:
+    """The residual F and the vectors ``v`` of :func:`_residual_and_jacobian` at a converged q, the
+    same expressions in Python floats (numpy arrays in ``v``, as there)."""
+    s_w, th, x, s_r = (float(c) for c in q)
+    u, rho, u1, rho1, u2, rho2 = wheel.meridian(s_w)
+    f = wheel.frame
+    O, a, ed, ef = (tuple(float(c) for c in vec) for vec in (f.O, f.a, f.e_d, f.e_f))
+    c, sn = math.cos(th), math.sin(th)
+    msn = -sn
+    er = tuple(c * ed[k] + sn * ef[k] for k in range(3))
+    et = tuple(msn * ed[k] + c * ef[k] for k in range(3))
+    rw = tuple((O[k] + u * a[k]) + rho * er[k] for k in range(3))
+    t1w = tuple(u1 * a[k] + rho1 * er[k] for k in range(3))
+    t2w = tuple(rho * et[k] for k in range(3))
+    Y, Z, Y1, Z1, Y2, Z2 = rail.profile(s_r)
+    rr = (x, Y, Z)
+    g = math.hypot(Y1, Z1)
+    t2r = (0.0, Y1, Z1)
+    n = (0.0 / g, -Z1 / g, Y1 / g)
+    d = tuple(rw[k] - rr[k] for k in range(3))
+    F = [d[0], _dot3(t2r, d), _dot3(t1w, n), _dot3(et, n)]
+    arr = np.array
+    v = dict(rw=arr(rw), rr=arr(rr), n=arr(n), t1w=arr(t1w), t2w=arr(t2w), er=arr(er), et=arr(et), u1=u1,
+             rho1=rho1, u2=u2, rho2=rho2, rho=rho, t2r=arr((0.0 / g, Y1 / g, Z1 / g)), d=arr(d),
+             Y1=Y1, Z1=Z1, Y2=Y2, Z2=Z2)
+    return F, v
+
+
 def _curvatures(wheel: WheelSurface, rail: RailSurface, v: dict) -> tuple[np.ndarray, float, float]:
     """Relative curvature matrix in (t1 = e_x, t2) and the lateral profile curvatures."""
     n, f = v["n"], wheel.frame
@@ -289,10 +348,16 @@ def _curvatures(wheel: WheelSurface, rail: RailSurface, v: dict) -> tuple[np.nda
     return Kr - Kw, float(kr), float(Kw[1, 1])
 
 
+def _cross_x(n: np.ndarray) -> np.ndarray:
+    """n x e_x, with numpy.cross's arithmetic (signed zeros included), without its per-call cost."""
+    n0, n1, n2 = (float(c) for c in n)
+    return np.array([n1 * 0.0 - n2 * 0.0, n2 * 1.0 - n0 * 0.0, n0 * 0.0 - n1 * 1.0])
+
+
 def newton_contact(wheel: WheelSurface, rail: RailSurface, q0, *, tol: float = 1e-11,
                    maxit: int = 40) -> ContactPoint:
     """Refine a contact point from the start q0 = (s_w, theta, x, s_r) (seed Eqs. 54-55)."""
-    q = np.array(q0, dtype=float)
+    q = [float(v) for v in q0]            # Python floats: the arithmetic of numpy's, per entry
     Lw, Lr = wheel.curve.length, rail.curve.length
     res = np.inf
     f = wheel.frame
@@ -300,33 +365,34 @@ def newton_contact(wheel: WheelSurface, rail: RailSurface, q0, *, tol: float = 1
     for it in range(1, maxit + 1):
         F, J = _newton_system(wheel, rail, q, frame)
         try:
-            dq = np.linalg.solve(np.array(J), -np.array(F))
+            dq = np.linalg.solve(np.array(J), -np.array(F)).tolist()
         except np.linalg.LinAlgError:
             raise ConvergenceError("contact search: singular Jacobian (seed Eq. 55) at "
                                    f"s_w = {q[0]:.3f}, s_r = {q[3]:.3f} mm") from None
         # limit the step (a Newton step may jump across the profile where curvatures change fast)
         scale = max(1.0, abs(dq[0]) / 2.0, abs(dq[3]) / 2.0, abs(dq[1]) / 0.05)
-        dq /= scale
-        q += dq
+        dq = [v / scale for v in dq]
+        q = [a + b for a, b in zip(q, dq)]
         q[0] = min(max(q[0], 0.0), Lw)
         q[3] = min(max(q[3], 0.0), Lr)
-        if np.all(np.abs(dq[[0, 2, 3]]) < 1e-9) and abs(dq[1]) < 1e-12 and scale == 1.0:
+        if (abs(dq[0]) < 1e-9 and abs(dq[2]) < 1e-9 and abs(dq[3]) < 1e-9 and abs(dq[1]) < 1e-12
+                and scale == 1.0):
             break
-    F, J, v = _residual_and_jacobian(wheel, rail, q)
+    q = np.array(q)
+    F, v = _contact_values(wheel, rail, q)
     res = float(np.linalg.norm(F))
     if not res < max(tol, 1e-8):
         raise ConvergenceError(f"contact search: Newton-Raphson (seed Eq. 55) did not converge "
                                f"in {maxit} iterations (residual {res:.2e})")
-    K, kr, kw = _curvatures(wheel, rail, v)
     n = v["n"]
-    t2 = np.cross(n, np.array([1.0, 0.0, 0.0]))
-    y_w, z_w = (float(c) for c in wheel.curve.point(q[0]))
+    t2 = _cross_x(n)
+    y_w, z_w = wheel.curve.derivatives(float(q[0]))[:2]
     at_end = q[0] <= 1e-9 or q[0] >= Lw - 1e-9 or q[3] <= 1e-9 or q[3] >= Lr - 1e-9
     return ContactPoint(s_w=float(q[0]), theta=float(q[1]), x=float(q[2]), s_r=float(q[3]),
                         rail_point=v["rr"], wheel_point=v["rw"], normal=n, t2=t2,
-                        penetration=float(v["d"] @ n), curvature=K, kappa_rail=kr, kappa_wheel=kw,
+                        penetration=float(v["d"] @ n),
                         rolling_radius=float(v["rho"]), y_wheel=y_w, z_wheel=z_w, iterations=it,
-                        residual=res, at_end=bool(at_end))
+                        residual=res, at_end=bool(at_end), surfaces=(wheel, rail, v))
 
 
 # ----------------------------------------------------------------------------- global search

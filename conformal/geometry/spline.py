@@ -38,6 +38,11 @@ from conformal.errors import InputError
 
 ARC_STEP = 0.025   # mm, spacing of the arc-length re-parametrisation
 
+try:   # the ufunc that numpy.clip calls (the same numbers), without its per-call argument handling
+    from numpy._core.umath import clip
+except ImportError:                     # pragma: no cover - other numpy layouts
+    clip = np.clip
+
 
 @dataclass(frozen=True, eq=False)
 class ProfileCurve:
@@ -94,9 +99,28 @@ class ProfileCurve:
 
     def sample(self, step: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
         """Arc lengths and points at about ``step`` spacing, both ends included."""
-        n = max(2, int(math.ceil(self.length / step)) + 1)
-        s = np.linspace(0.0, self.length, n)
+        s = self._sample_s(step)
         return s, self.point(s)
+
+    def _sample_s(self, step: float) -> np.ndarray:
+        n = max(2, int(math.ceil(self.length / step)) + 1)
+        return np.linspace(0.0, self.length, n)
+
+    @cached_property
+    def _samples(self) -> dict:
+        return {}
+
+    def sampled(self, step: float) -> tuple[np.ndarray, ...]:
+        """(s, y, z, y', z', y'', z'') at the arc lengths of :meth:`sample` (read-only arrays,
+        computed once per step: a contact search samples the same profile at every position)."""
+        hit = self._samples.get(step)
+        if hit is None:
+            s = self._sample_s(step)
+            hit = (s, *self.derivatives(s))
+            for a in hit:
+                a.flags.writeable = False
+            self._samples[step] = hit
+        return hit
 
     def s_at_y(self, y: float) -> float:
         """Arc length of the first point (from s = 0) where the curve reaches lateral position y."""
@@ -113,16 +137,36 @@ class ProfileCurve:
         return float(sa)
 
     def project(self, q: np.ndarray, s0: np.ndarray) -> np.ndarray:
-        """Closest-point arc lengths of points q (..., 2) by Newton from s0 (...)."""
+        """Closest-point arc lengths of points q (..., 2) by Newton from s0 (...): eight steps, or
+        fewer for a point whose step no longer changes its arc length (a fixed point of the steps,
+        which the remaining ones would repeat: such points drop out of the iteration)."""
         s = np.array(s0, dtype=float, copy=True)
+        shape = s.shape
+        s = s.reshape(-1)
+        q = np.asarray(q, dtype=float)
+        qy, qz = q[..., 0].reshape(-1), q[..., 1].reshape(-1)
+        act, sa = None, s          # the moving points (None: all) and their arc lengths
         for _ in range(8):
-            y, z, y1, z1, y2, z2 = self.derivatives(s)
-            dy, dz = y - q[..., 0], z - q[..., 1]
+            y, z, y1, z1, y2, z2 = self.derivatives(sa)
+            dy, dz = y - qy, z - qz
             g = dy * y1 + dz * z1
             H = y1 * y1 + z1 * z1 + dy * y2 + dz * z2
-            step = np.where(H > 0.1, g / np.where(H > 0.1, H, 1.0), g)
-            s = np.clip(s - np.clip(step, -2.0, 2.0), 0.0, self.length)
-        return s
+            curved = H > 0.1
+            step = np.where(curved, g / np.where(curved, H, 1.0), g)
+            s_new = clip(sa - clip(step, -2.0, 2.0), 0.0, self.length)
+            moved = s_new != sa
+            if act is None:
+                s = s_new
+            else:
+                s[act] = s_new
+            if not moved.all():
+                act = np.nonzero(moved)[0] if act is None else act[moved]
+                if act.size == 0:
+                    break
+                sa, qy, qz = s_new[moved], qy[moved], qz[moved]
+            else:
+                sa = s_new
+        return s.reshape(shape)
 
 
 @dataclass(frozen=True, eq=False)
@@ -148,10 +192,14 @@ class _Pieces:
         rows = np.ascontiguousarray(a.transpose(0, 2, 1).reshape(8, -1))
         return cls(x, a, x.tolist(), rows, np.ascontiguousarray(rows.T))
 
+    @cached_property
+    def _inner(self) -> np.ndarray:
+        return self.x[1:-1]
+
     def _index(self, s: np.ndarray) -> np.ndarray:
-        i = np.searchsorted(self.x, s, side="right")
-        i -= 1
-        return np.minimum(np.maximum(i, 0), self.x.size - 2)
+        """The piece of each s: the last break <= s, the end pieces extended (NaN: the last piece).
+        The count of inner breaks <= s, i.e. searchsorted(x, s, "right") - 1 clipped to the pieces."""
+        return np.searchsorted(self._inner, s, side="right")
 
     def eval(self, s, nu: int = 0) -> np.ndarray:
         """The curve (nu = 0) or its derivative of order nu (1, 2, 3) at s, shape s.shape + (2,)."""
@@ -159,7 +207,7 @@ class _Pieces:
             raise ValueError(f"derivative order {nu} of a cubic")
         s = np.asarray(s, dtype=float)
         i = self._index(s)
-        t = s - self.x[i]
+        t = s - self.x.take(i)
         a0y, a0z, a1y, a1z, a2y, a2z, a3y, a3z = self.rows.take(i, axis=1)
         out = []
         for a0, a1, a2, a3 in ((a0y, a1y, a2y, a3y), (a0z, a1z, a2z, a3z)):
@@ -176,7 +224,7 @@ class _Pieces:
     def derivatives(self, s) -> tuple[np.ndarray, ...]:
         s = np.asarray(s, dtype=float)
         i = self._index(s)
-        t = s - self.x[i]
+        t = s - self.x.take(i)
         a0y, a0z, a1y, a1z, a2y, a2z, a3y, a3z = self.rows.take(i, axis=1)
         out = []
         for a0, a1, a2, a3 in ((a0y, a1y, a2y, a3y), (a0z, a1z, a2z, a3z)):
@@ -250,18 +298,18 @@ def fit_curve(points: np.ndarray, smoothing: float = 0.0, name: str = "profile")
     if smoothing > 0:
         dt = t[-1] / (len(t) - 1)
         lam = dt * (smoothing / (2 * math.pi)) ** 4
-        fy = make_smoothing_spline(t, p[:, 0], lam=lam)
-        fz = make_smoothing_spline(t, p[:, 1], lam=lam)
+        # y and z in one solve: the coefficients of one solve per coordinate, set up once
+        fyz = make_smoothing_spline(t, p, lam=lam)
     else:
-        fy = make_interp_spline(t, p[:, 0], k=3)
-        fz = make_interp_spline(t, p[:, 1], k=3)
+        fyz = make_interp_spline(t, p, k=3)
     # arc length of the fitted curve on a fine t grid (Gauss-Legendre per sub-interval)
     sub = max(4, int(math.ceil(t[-1] / ARC_STEP / (len(t) - 1))))
     tf = np.unique(np.concatenate([t, np.linspace(0.0, t[-1], (len(t) - 1) * sub + 1)]))
     gx, gw = np.polynomial.legendre.leggauss(4)
     a, b = tf[:-1, None], tf[1:, None]
     tm = 0.5 * (a + b) + 0.5 * (b - a) * gx[None, :]
-    speed = np.hypot(fy(tm, 1), fz(tm, 1))
+    dyz = fyz(tm, 1)
+    speed = np.hypot(dyz[..., 0], dyz[..., 1])
     seg = 0.5 * (b - a)[:, 0] * (speed * gw[None, :]).sum(axis=1)
     s_of_t = np.r_[0.0, np.cumsum(seg)]
     length = float(s_of_t[-1])
@@ -269,7 +317,7 @@ def fit_curve(points: np.ndarray, smoothing: float = 0.0, name: str = "profile")
     n = max(8, int(math.ceil(length / ARC_STEP)) + 1)
     su = np.linspace(0.0, length, n)
     tu = np.interp(su, s_of_t, tf)   # |dc/dt| is close to 1, so linear inversion is accurate to ~1e-9 mm
-    cyz = make_interp_spline(su, np.stack([fy(tu), fz(tu)], axis=-1), k=3)
+    cyz = make_interp_spline(su, fyz(tu), k=3)
     # smoothing error: distance of each input point from the curve
     s_pts = np.interp(t, tf, s_of_t)
     if p is not p_in:   # the given points, not the ones inserted at kinks

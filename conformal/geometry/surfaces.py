@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -48,14 +49,22 @@ class RailSurface:
     def rotation(self) -> np.ndarray:
         return cant_matrix(self.cant)
 
-    def profile(self, s) -> tuple[np.ndarray, ...]:
-        """Y, Z, Y', Z', Y'', Z'' of the placed profile at arc length s (side frame)."""
-        y, z, y1, z1, y2, z2 = self.curve.derivatives(s)
+    @cached_property
+    def _placement(self) -> tuple[float, ...]:
+        """The rotation's entries and the origin as Python floats (r00, r01, r10, r11, y0, z0)."""
         R = self.rotation
-        Y = R[0, 0] * y + R[0, 1] * z + self.origin[0]
-        Z = R[1, 0] * y + R[1, 1] * z + self.origin[1]
-        return (Y, Z, R[0, 0] * y1 + R[0, 1] * z1, R[1, 0] * y1 + R[1, 1] * z1,
-                R[0, 0] * y2 + R[0, 1] * z2, R[1, 0] * y2 + R[1, 1] * z2)
+        return (float(R[0, 0]), float(R[0, 1]), float(R[1, 0]), float(R[1, 1]),
+                float(self.origin[0]), float(self.origin[1]))
+
+    def profile(self, s) -> tuple[np.ndarray, ...]:
+        """Y, Z, Y', Z', Y'', Z'' of the placed profile at arc length s (side frame; floats for a
+        scalar s)."""
+        y, z, y1, z1, y2, z2 = self.curve.derivatives(s)
+        r00, r01, r10, r11, y0, z0 = self._placement
+        Y = r00 * y + r01 * z + y0
+        Z = r10 * y + r11 * z + z0
+        return (Y, Z, r00 * y1 + r01 * z1, r10 * y1 + r11 * z1,
+                r00 * y2 + r01 * z2, r10 * y2 + r11 * z2)
 
     def point(self, s) -> np.ndarray:
         Y, Z = self.profile(s)[:2]
@@ -133,7 +142,13 @@ class WheelSurface:
 
     def point(self, s, theta) -> np.ndarray:
         u, rho = self.meridian(s)[:2]
-        return self.frame.O + np.asarray(u)[..., None] * self.frame.a + np.asarray(rho)[..., None] * self.e_r(theta)
+        return self.point_of(u, rho, theta)
+
+    def point_of(self, u, rho, theta=None, *, e_r=None) -> np.ndarray:
+        """The surface point of axial position u, radius rho (the meridian's values) and rotation
+        theta (or its radial direction ``e_r`` = :meth:`e_r` (theta))."""
+        er = self.e_r(theta) if e_r is None else e_r
+        return self.frame.O + np.asarray(u)[..., None] * self.frame.a + np.asarray(rho)[..., None] * er
 
     def locus_theta(self, s) -> np.ndarray:
         """Rotation angle theta(s_w) of the contact locus: the point of each wheel circle where the
@@ -141,6 +156,10 @@ class WheelSurface:
         component, so a contact point must lie there).  NaN where no such point exists near the
         bottom (a wheel flank parallel to the wheel's plane)."""
         _, _, u1, rho1, _, _ = self.meridian(s)
+        return self.locus_theta_of(u1, rho1)
+
+    def locus_theta_of(self, u1, rho1) -> np.ndarray:
+        """:meth:`locus_theta` from the meridian's slopes u', rho' at the profile points."""
         f = self.frame
         # meridian normal N = rho' a - u' e_r;  N . e_x = 0  <=>  A cos + B sin = C
         A, B, C = u1 * f.e_d[0], u1 * f.e_f[0], rho1 * f.a[0]

@@ -117,10 +117,15 @@ def wheelset_roll(geo: WheelRailGeometry, base_dir: str | Path = ".", lateral_sh
                   ) -> tuple[float, float]:
     """Roll angle (rad, track frame) and height z at which both wheels of the wheelset touch their
     rails (rigid profiles, the given lateral shift and yaw)."""
+    seen: dict[float, tuple[float, float]] = {}    # the root search asks again for rolls of the bracket
+
     def f(roll):
-        zr = first_touch(build_pair(geo, base_dir, side="right", roll=roll, lateral_shift=lateral_shift))
-        zl = first_touch(build_pair(geo, base_dir, side="left", roll=roll, lateral_shift=lateral_shift))
-        return zr - zl, zr
+        key = float(roll)
+        if key not in seen:
+            zr = first_touch(build_pair(geo, base_dir, side="right", roll=roll, lateral_shift=lateral_shift))
+            zl = first_touch(build_pair(geo, base_dir, side="left", roll=roll, lateral_shift=lateral_shift))
+            seen[key] = (zr - zl, zr)
+        return seen[key]
 
     arm = max(geo.flange_back / 2.0 + 70.0, 1.0)
     f0, _ = f(0.0)
