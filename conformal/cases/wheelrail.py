@@ -318,6 +318,9 @@ GEOMETRY_KEEP = 2e-3
 #: on a wide tread patch moves 100-230 mm per mm of lowering (Manchester A-2.2 at 0-0.5 mm and
 #: 5 mm; FX moves about 27 N per mm of it at 0.5 mm)
 REFERENCE_KEEP = 5e-3
+#: ... and where that range is shorter than this (mm; the error of a neighbour's extrapolated
+#: height is 1e-4 to 5e-3 mm), the height is first set by force-prescribed normal solves
+SETTLE_BELOW = 1e-3
 #: the passes of solve_wheel_rail keep a searched geometry while the height moves at most this (mm)
 #: from it (the first-order gap change dz cos d; the tangential shift dz sin d is left out)
 GEOMETRY_REUSE = 1e-2
@@ -957,6 +960,14 @@ def _geometry_extra(scene: Scene, pl: Placement) -> dict:
             "smoothing_error_rail": r.smoothing_error}
 
 
+def _keep_range(st: PairState) -> float:
+    """How far (mm) the height may move from the searched geometry of a one-patch state before it is
+    searched again: GEOMETRY_KEEP, less where the reference point would move more than
+    REFERENCE_KEEP along the rail profile (Patch.s_ref_rate)."""
+    rate = abs(st.patches[0].patch.s_ref_rate)
+    return GEOMETRY_KEEP if rate * GEOMETRY_KEEP <= REFERENCE_KEEP else REFERENCE_KEEP / rate
+
+
 def _reaches_edge(field) -> bool:
     """Whether the contact of a solved field lies in an outermost row or column of its grid."""
     c = np.asarray(field.pn) > 0
@@ -984,6 +995,20 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
     W = scene.load.wheel_load
     mirror = pl.pair.mirror
     passes: list[tuple[float, float]] = []
+    normal_solves = [0]
+    for _ in range(MAX_SEARCHES):
+        # a geometry whose reference point moves fast with the height is kept over a short range
+        # only: a force-prescribed normal solve (cheaper than a contact solve) finds the height first
+        if st is None or len(st.patches) != 1 or st.z_geometry is not None or _keep_range(st) >= SETTLE_BELOW:
+            break
+        dz, _ = linear_balance(st, scene, None, counts=normal_solves, fields=fields, normal_force=fn)
+        if abs(dz) <= _keep_range(st):
+            st = st.lowered(dz)
+            break
+        try:
+            st = search(st.z + dz)
+        except NoContactError:
+            return None
     for k in range(1, max_outer + 1):
         if st is None or len(st.patches) != 1:
             return None
@@ -1003,7 +1028,7 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
         balanced = abs(FZ - W) <= ONE_PATCH_TOL * W
         edge = r.field is not None and _reaches_edge(r.field)
         if balanced and abs(dz) <= DZ_FINAL and not edge:
-            return st, [r], [problem], ratios, k, fields, 0
+            return st, [r], [problem], ratios, k, fields, normal_solves[0]
         passes.append((fn, FZ))
         fn_next = fn
         if not balanced:
@@ -1015,8 +1040,7 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
                 fn_next = sec if 0.5 * f1 < sec < 2.0 * f1 else fn_next
         z_next = st.z + dz + r.approach * ((fn_next / fn) ** (2.0 / 3.0) - 1.0) / c
         z_geo = st.z if st.z_geometry is None else st.z_geometry
-        off = abs(z_next - z_geo)
-        if off > GEOMETRY_KEEP or off * abs(pg.patch.s_ref_rate) > REFERENCE_KEEP or edge:
+        if abs(z_next - z_geo) > _keep_range(st) or edge:
             try:   # (a little deeper when the grid was too small: it then covers the patch)
                 st = search(z_next + (GEOMETRY_KEEP / 2 if edge else 0.0))
             except NoContactError:
