@@ -268,18 +268,10 @@ def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: n
     (O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2) = (
         tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
     L = wheel.curve.length
+    frame = ((O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2))
     for _ in range(maxit):
-        u, rho, u1, rho1, _, _ = wheel.meridian(s)
-        c, sn = np.cos(th), np.sin(th)
-        msn = -sn
-        er = (c * d0 + sn * e0, c * d1 + sn * e1, c * d2 + sn * e2)
-        et = (msn * d0 + c * e0, msn * d1 + c * e1, msn * d2 + c * e2)
-        F = (((O0 + u * a0) + rho * er[0] - q0) - t * n0,
-             ((O1 + u * a1) + rho * er[1] - q1) - t * n1,
-             ((O2 + u * a2) + rho * er[2] - q2) - t * n2)
-        c0 = (u1 * a0 + rho1 * er[0], u1 * a1 + rho1 * er[1], u1 * a2 + rho1 * er[2])
-        c1 = (rho * et[0], rho * et[1], rho * et[2])
-        ds, dth, dt = _cramer3(c0, c1, m, (-F[0], -F[1], -F[2]))
+        F, (ds, dth, dt) = _wheel_line_step(wheel.meridian(s), th, t, np.cos, np.sin, frame, (q0, q1, q2),
+                                            (n0, n1, n2), m)
         s = clip(s + clip(ds, -2.0, 2.0), 0.0, L)
         th += clip(dth, -0.05, 0.05)
         t += dt
@@ -289,6 +281,25 @@ def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: n
     if not res < 1e-7:
         raise _no_wheel(res)
     return s, th, t
+
+
+def _wheel_line_step(meridian, th, t, cos, sin, frame, q, n, m):
+    """One Newton step of r_w(s_w, theta) - Q - t n = 0 for coordinate arrays or Python floats
+    (``cos``, ``sin`` of numpy or math; the same operations in the same order either way): the
+    residual F and the steps (ds, dtheta, dt)."""
+    u, rho, u1, rho1, _, _ = meridian
+    (O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2) = frame
+    (q0, q1, q2), (n0, n1, n2) = q, n
+    c, sn = cos(th), sin(th)
+    msn = -sn
+    er = (c * d0 + sn * e0, c * d1 + sn * e1, c * d2 + sn * e2)
+    et = (msn * d0 + c * e0, msn * d1 + c * e1, msn * d2 + c * e2)
+    F = (((O0 + u * a0) + rho * er[0] - q0) - t * n0,
+         ((O1 + u * a1) + rho * er[1] - q1) - t * n1,
+         ((O2 + u * a2) + rho * er[2] - q2) - t * n2)
+    c0 = (u1 * a0 + rho1 * er[0], u1 * a1 + rho1 * er[1], u1 * a2 + rho1 * er[2])
+    c1 = (rho * et[0], rho * et[1], rho * et[2])
+    return F, _cramer3(c0, c1, m, (-F[0], -F[1], -F[2]))
 
 
 def _wheel_on_line(wheel: WheelSurface, Q, n, s0, th0, maxit: int, tol: float):
@@ -301,18 +312,10 @@ def _wheel_on_line(wheel: WheelSurface, Q, n, s0, th0, maxit: int, tol: float):
     (O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2) = (
         tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
     L = wheel.curve.length
+    frame = ((O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2))
     for _ in range(maxit):
-        u, rho, u1, rho1, _, _ = wheel.meridian(s)
-        c, sn = math.cos(th), math.sin(th)
-        msn = -sn
-        er = (c * d0 + sn * e0, c * d1 + sn * e1, c * d2 + sn * e2)
-        et = (msn * d0 + c * e0, msn * d1 + c * e1, msn * d2 + c * e2)
-        F = (((O0 + u * a0) + rho * er[0] - q0) - t * n0,
-             ((O1 + u * a1) + rho * er[1] - q1) - t * n1,
-             ((O2 + u * a2) + rho * er[2] - q2) - t * n2)
-        c0 = (u1 * a0 + rho1 * er[0], u1 * a1 + rho1 * er[1], u1 * a2 + rho1 * er[2])
-        c1 = (rho * et[0], rho * et[1], rho * et[2])
-        ds, dth, dt = _cramer3(c0, c1, m, (-F[0], -F[1], -F[2]))
+        F, (ds, dth, dt) = _wheel_line_step(wheel.meridian(s), th, t, math.cos, math.sin, frame, (q0, q1, q2),
+                                            (n0, n1, n2), m)
         s = min(max(s + min(max(ds, -2.0), 2.0), 0.0), L)
         th += min(max(dth, -0.05), 0.05)
         t += dt
