@@ -75,3 +75,22 @@ n = 6
 theory = "conformal"
 fe_body_size = 0.7
 """
+
+
+def tight_general_balance(scene):
+    """The general vertical balance of a wheel-rail scene run cold with the force and height
+    tolerances 1e-8 W and 1e-7 mm, its geometry searched at the balanced height (the reference the
+    sweep's one-patch passes are checked against): (combined result, wheelset height z)."""
+    import conformal.cases.wheelrail as wr
+
+    pl = wr.place_scene(scene)
+    tight = {"BALANCE_TOL": 1e-8, "BALANCE_ZTOL": 1e-7}
+    old = {k: getattr(wr, k) for k in tight}
+    try:
+        for k, v in tight.items():
+            setattr(wr, k, v)
+        _, z, res, probs, _, _, _ = wr._general_passes(scene, pl, None, None, [], [], 40)
+    finally:
+        for k, v in old.items():
+            setattr(wr, k, v)
+    return wr.combine_patches(res, probs, scene.model.theory, {}, pl.pair), z

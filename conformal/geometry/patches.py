@@ -264,11 +264,8 @@ def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: n
     s = np.array(s0, float).reshape(N).copy()
     th = np.array(th0, float).reshape(N).copy()
     t = np.zeros(N)
-    f = wheel.frame
-    (O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2) = (
-        tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
+    frame = _frame_floats(wheel)
     L = wheel.curve.length
-    frame = ((O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2))
     for _ in range(maxit):
         F, (ds, dth, dt) = _wheel_line_step(wheel.meridian(s), th, t, np.cos, np.sin, frame, (q0, q1, q2),
                                             (n0, n1, n2), m)
@@ -281,6 +278,12 @@ def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: n
     if not res < 1e-7:
         raise _no_wheel(res)
     return s, th, t
+
+
+def _frame_floats(wheel: WheelSurface) -> tuple:
+    """The wheel frame's origin and axes (O, a, e_d, e_f) as tuples of Python floats."""
+    f = wheel.frame
+    return tuple(tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
 
 
 def _wheel_line_step(meridian, th, t, cos, sin, frame, q, n, m):
@@ -308,11 +311,8 @@ def _wheel_on_line(wheel: WheelSurface, Q, n, s0, th0, maxit: int, tol: float):
     n0, n1, n2 = (float(c) for c in n)
     m = (-n0, -n1, -n2)
     s, th, t = float(np.reshape(s0, -1)[0]), float(np.reshape(th0, -1)[0]), 0.0
-    f = wheel.frame
-    (O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2) = (
-        tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
+    frame = _frame_floats(wheel)
     L = wheel.curve.length
-    frame = ((O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2))
     for _ in range(maxit):
         F, (ds, dth, dt) = _wheel_line_step(wheel.meridian(s), th, t, math.cos, math.sin, frame, (q0, q1, q2),
                                             (n0, n1, n2), m)

@@ -17,7 +17,7 @@ import conformal.cases.wheelrail as wr
 from conformal.geometry.patches import planar_distance
 from conformal.models import solve_problem
 from _paths import CONTACT_CASES
-from _scenes import mbench_case_scene
+from _scenes import mbench_case_scene, tight_general_balance
 
 CASES = json.loads(CONTACT_CASES.read_text())["cases"]["mbench_a22"]["right"]
 
@@ -125,15 +125,5 @@ def test_fast_moving_reference_point_is_settled_and_searched_again():
         warm = wr.WarmStart.from_result(r, warm)
     b = r.extra["balance"]
     assert b["one_patch_passes"] and b["normal_solves"] >= 1 and b["searches"] >= 2
-    pl = wr.place_scene(sc)
-    tight = {"BALANCE_TOL": 1e-8, "BALANCE_ZTOL": 1e-7}
-    old = {k: getattr(wr, k) for k in tight}
-    try:
-        for k, v in tight.items():
-            setattr(wr, k, v)
-        _, _, res, probs, _, _, _ = wr._general_passes(sc, pl, None, None, [], [], 40)
-    finally:
-        for k, v in old.items():
-            setattr(wr, k, v)
-    ref = wr.combine_patches(res, probs, "exact", {}, pl.pair)
+    ref, _ = tight_general_balance(sc)
     assert abs(r.FX - ref.FX) < 0.2 and abs(r.FN - ref.FN) < 0.5

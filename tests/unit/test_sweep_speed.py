@@ -22,7 +22,7 @@ from conformal.geometry.search import pair_locus, wheel_locus
 from conformal.geometry.wheelrail import profile_curves
 from conformal.grid import PlanarGrid
 from _paths import CONTACT_CASES, REFERENCE, ROOT
-from _scenes import MBENCH, mbench_case_scene
+from _scenes import MBENCH, mbench_case_scene, tight_general_balance
 
 CASES = json.loads((CONTACT_CASES).read_text())["cases"]["mbench_a22"]["right"]
 BEFORE = json.loads((REFERENCE / "mbench_a22_right_sweep_before.json").read_text())["cases"]
@@ -219,17 +219,7 @@ def test_warm_sweep_equals_independent_balance_and_before():
             warm = wr.WarmStart.from_result(r, warm)
             assert r.extra["balance"]["one_patch_passes"] and len(r.patches) == 1
             assert abs(r.extra["FZ_track"] - W) <= 2e-5 * W
-            pl = wr.place_scene(sc)
-            tight = {"BALANCE_TOL": 1e-8, "BALANCE_ZTOL": 1e-7}
-            old = {k: getattr(wr, k) for k in tight}
-            try:
-                for k, v in tight.items():
-                    setattr(wr, k, v)
-                st, z, res, probs, _, _, _ = wr._general_passes(sc, pl, None, None, [], [], 40)
-            finally:
-                for k, v in old.items():
-                    setattr(wr, k, v)
-            ref = wr.combine_patches(res, probs, "exact", {}, pl.pair)
+            ref, z = tight_general_balance(sc)
             assert abs(r.FN - ref.FN) <= 5e-5 * W, y
             assert abs(r.FY - ref.FY) <= 5e-5 * W, y
             assert abs(r.FX - ref.FX) <= 1e-4 * W, y
