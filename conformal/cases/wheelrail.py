@@ -49,6 +49,7 @@ from conformal.registry import CONFORMAL_GEOMETRY, CURVED_STRIP, GRID, MODELS, W
 from conformal.result import Result
 from conformal.scene import Scene, WheelRailGeometry
 from conformal.solvers.conformal import DELTA_SPREAD_WARN
+from conformal.solvers.exact import border_sides
 from conformal.solvers.normal import solve_normal, warm_precondition
 from conformal.theories.hertz import hertz_from_curvatures
 
@@ -321,8 +322,8 @@ REFERENCE_KEEP = 5e-3
 #: ... and where that range is shorter than this (mm; the error of a neighbour's extrapolated
 #: height is 1e-4 to 5e-3 mm), the height is first set by force-prescribed normal solves
 SETTLE_BELOW = 1e-3
-#: the passes of solve_wheel_rail keep a searched geometry while the height moves at most this (mm)
-#: from it (the first-order gap change dz cos d; the tangential shift dz sin d is left out)
+#: the general balance of several patches keeps a searched geometry while the height moves at most
+#: this (mm) from it (PairState.lowered: each element's distance at its own rate)
 GEOMETRY_REUSE = 1e-2
 #: the one-patch passes (:func:`one_patch_passes`) end when the height at which the contact solve's
 #: normal force acts (from its approach) lies within this (mm) of the height its geometry and
@@ -968,12 +969,6 @@ def _keep_range(st: PairState) -> float:
     return GEOMETRY_KEEP if rate * GEOMETRY_KEEP <= REFERENCE_KEEP else REFERENCE_KEEP / rate
 
 
-def _reaches_edge(field) -> bool:
-    """Whether the contact of a solved field lies in an outermost row or column of its grid."""
-    c = np.asarray(field.pn) > 0
-    return bool(c[0].any() or c[-1].any() or (c.shape[1] > 1 and (c[:, 0].any() or c[:, -1].any())))
-
-
 def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fields: list, ratios, *,
                      max_outer: int = 12, search=None):
     """The vertical balance of a one-patch wheel with the contact solve as its normal solve (seed
@@ -983,9 +978,11 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
     next normal force (the fixed point W / (cos d + (FS/FN) sin d), then secant steps on FZ(FN)
     over the passes on one geometry).  The next pass keeps the searched geometry lowered to the
     predicted height (each element's distance moved at its own rate, :func:`gap_rate`, the
-    creepages taken at the new height) while that height lies within GEOMETRY_KEEP of the searched
-    one and the contact stays off the grid's outermost elements; else the geometry is searched
-    again there (``search(z)``).  Done when |FZ - W| <= ONE_PATCH_TOL W and the approach agrees
+    creepages taken at the new height) while that height lies within :func:`_keep_range` of the
+    searched one (GEOMETRY_KEEP, less where the reference point moves fast) and the contact stays
+    off the grid's outermost elements; else the geometry is searched again there (``search(z)``).
+    Where that range is below SETTLE_BELOW, force-prescribed normal solves set the height of a
+    fresh search before the first contact solve.  Done when |FZ - W| <= ONE_PATCH_TOL W and the approach agrees
     with the height within DZ_FINAL.  A pass costs one contact solve, started from the latest
     tractions of the patch (``fields``).
 
@@ -1001,9 +998,11 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
         # only: a force-prescribed normal solve (cheaper than a contact solve) finds the height first
         if st is None or len(st.patches) != 1 or st.z_geometry is not None or _keep_range(st) >= SETTLE_BELOW:
             break
-        dz, _ = linear_balance(st, scene, None, counts=normal_solves, fields=fields, normal_force=fn)
+        warn: list[str] = []
+        dz, _ = linear_balance(st, scene, None, counts=normal_solves, warnings=warn, fields=fields,
+                               normal_force=fn)
         if abs(dz) <= _keep_range(st):
-            st = st.lowered(dz)
+            st = replace(st.lowered(dz), warnings=tuple(warn))
             break
         try:
             st = search(st.z + dz)
@@ -1026,7 +1025,7 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
         ratio = mirror * r.FY / r.FN
         ratios = [(pg.patch.s_ref, ratio)]
         balanced = abs(FZ - W) <= ONE_PATCH_TOL * W
-        edge = r.field is not None and _reaches_edge(r.field)
+        edge = r.field is not None and bool(border_sides(r.field.grid, np.asarray(r.field.pn) > 0))
         if balanced and abs(dz) <= DZ_FINAL and not edge:
             return st, [r], [problem], ratios, k, fields, normal_solves[0]
         passes.append((fn, FZ))

@@ -67,10 +67,10 @@ def _extent(grid, rows: np.ndarray, cols: np.ndarray) -> tuple[float, float]:
     return 0.5 * (ix[-1] - ix[0] + 1) * grid.dx, 0.5 * (iy[-1] - iy[0] + 1) * grid.dy
 
 
-def _edge_warning(grid: PlanarGrid, contact: np.ndarray, rows: np.ndarray | None = None,
-                  cols: np.ndarray | None = None) -> str | None:
-    """A warning when the contact reaches the border of the potential contact area (``rows``,
-    ``cols``: ``contact.any(axis=1)`` and ``contact.any(axis=0)`` where the caller has them)."""
+def border_sides(grid: PlanarGrid, contact: np.ndarray, rows: np.ndarray | None = None,
+                 cols: np.ndarray | None = None) -> list[str]:
+    """The borders of the potential contact area that contact elements reach (``rows``, ``cols``:
+    ``contact.any(axis=1)`` and ``contact.any(axis=0)`` where the caller has them)."""
     rows = contact.any(axis=1) if rows is None else rows
     cols = contact.any(axis=0) if cols is None else cols
     sides = []
@@ -82,6 +82,14 @@ def _edge_warning(grid: PlanarGrid, contact: np.ndarray, rows: np.ndarray | None
         sides.append("y = yl")
     if grid.my > 1 and cols[-1]:
         sides.append("y = yh")
+    return sides
+
+
+def _edge_warning(grid: PlanarGrid, contact: np.ndarray, rows: np.ndarray | None = None,
+                  cols: np.ndarray | None = None) -> str | None:
+    """A warning when the contact reaches the border of the potential contact area
+    (:func:`border_sides`)."""
+    sides = border_sides(grid, contact, rows, cols)
     if not sides:
         return None
     return ("the contact area reaches the border of the potential contact area at " + ", ".join(sides)
