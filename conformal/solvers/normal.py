@@ -362,10 +362,13 @@ def _direction(ga, actf, wa, ww, weighted, pc):
     """Preconditioned steepest-descent direction z on the contact set (zero elsewhere)."""
     if pc is None:
         return ga
-    z = pc(ga)
-    z *= actf
-    # keep the load: <z, w>_act = 0 (planar: zero sum over the contact set)
-    z -= (actf * weighted.w) * (_dot(z, wa) / ww)
+    z = np.multiply(pc(ga), actf)
+    # keep the load: <z, w>_act = 0 (planar: zero sum over the contact set, where the sum of z,
+    # already zero outside it, is its masked sum)
+    if weighted.unit:
+        z -= actf * (float(z.sum()) / ww)
+    else:
+        z -= (actf * weighted.w) * (_dot(z, wa) / ww)
     return z
 
 
@@ -374,11 +377,20 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None):
     sum(p) = FN / dxdy).  On the contact set the gap is g - lambda w with lambda the weighted mean
     of g (:class:`_Weighted`); inner products carry the relative areas a.
 
-    Returns (p, u = A p, iterations, last relative change)."""
+    Returns (p, u = A p, iterations, last relative change).
+
+    With a = w = 1 (planar grids) the products with a and w are left out, which changes no bit:
+    multiplying by 1.0 is exact, the sum of the 0/1 contact indicator is the element count, and
+    a sum over a field that is already zero outside the contact set equals its masked sum.  The
+    displacement u is kept up to date by the step (u - tau r) s where the contact set keeps its
+    elements and the pressure stays positive, and recomputed (A p) where it changes; the last
+    product is left out where u already is A p of the final pressure."""
     weighted = weighted or _Weighted()
     a, w = weighted.a, weighted.w
+    plain = weighted.unit
     u = A(p)
-    t = np.zeros_like(p)
+    exact = True                  # u is A(p) of the current p (not the updated one)
+    t = None
     G_old, restart = 1.0, True
     eps, k = math.inf, 0
     for k in range(1, maxit + 1):
@@ -388,26 +400,35 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None):
             hw = h / w
             p = np.where(hw == hw.min(), 1.0, 0.0)
             p *= load / weighted.load(p)
-            u = A(p)
+            u, exact = A(p), True
             continue
         g = u + h
         actf = act.astype(float)
-        wa, ww = weighted.on(actf)
-        g -= w * (_dot(g, wa) / ww)   # the (weighted) mean over the contact set = the approach
+        if plain:
+            wa, ww = actf, float(na)
+            g -= float(np.multiply(g, actf).sum()) / ww   # the mean over the contact set = the approach
+        else:
+            wa, ww = weighted.on(actf)
+            g -= w * (_dot(g, wa) / ww)   # the (weighted) mean over the contact set = the approach
         ga = g * actf
         z = _direction(ga, actf, wa, ww, weighted, pc)
-        G = float(_dot(ga * a, z))
+        gaa = ga if plain else ga * a
+        G = _dot(gaa, z)
         if restart:
-            t = z.copy()
+            t = z if pc is not None else z.copy()   # with the preconditioner z is a new array
         else:
             t *= G / G_old
             t += z
             t *= actf
         G_old = G
         r = A(t)
-        rt = float(_dot(r * a, t)) - float(_dot(r, wa)) / ww * weighted.load(t)
+        if plain:
+            rt = _dot(r, t) - _dot(r, actf) / ww * float(t.sum())
+        else:
+            rt = float(_dot(r * a, t)) - float(_dot(r, wa)) / ww * weighted.load(t)
+        overlap = g < 0.0
+        np.greater(overlap, act, out=overlap)  # not in contact but interpenetrating: enter the contact set
         if not rt > 0.0:   # t = 0: the gap is already uniform on the contact set
-            overlap = (~act) & (g < 0.0)
             if overlap.any():
                 # ... but elements outside it interpenetrate (e.g. a start from the one-element
                 # pressure of a much smaller load): let them in, as in the step below, and go on.
@@ -416,16 +437,14 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None):
                 p = p.copy()
                 p[overlap] = -g[overlap] / (a_self if np.isscalar(a_self) else a_self[overlap])
                 p *= load / weighted.load(p)
-                u = A(p)
+                u, exact = A(p), True
                 restart, eps = True, math.inf
                 continue
             eps = 0.0 if G == 0.0 else eps
             break
-        tau = float(_dot(ga * a, t)) / rt
+        tau = (G if restart else _dot(gaa, t)) / rt   # restart: t = z
         p_new = p - tau * t
-        u_new = u - tau * r
         neg = p_new < 0.0
-        overlap = (~act) & (g < 0.0)  # not in contact but interpenetrating: enter the contact set
         changed = bool(neg.any())
         if changed:
             p_new[neg] = 0.0
@@ -437,11 +456,19 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None):
             changed, restart = True, True
         else:
             restart = False
-        s = load / weighted.load(p_new)
+        s = load / (float(p_new.sum()) if plain else weighted.load(p_new))
         p_new *= s
-        u = A(p_new) if changed else u_new * s
-        eps = weighted.norm(p_new - p) / (load if weighted.unit else weighted.norm(p_new))
+        if changed:
+            u, exact = A(p_new), True
+        else:
+            ur = np.multiply(r, tau)
+            np.subtract(u, ur, out=ur)    # (u - tau r) s
+            ur *= s
+            u, exact = ur, False
+        dp = p_new - p
+        np.abs(dp, out=dp)
+        eps = (float(dp.sum()) / load) if plain else weighted.norm(dp) / weighted.norm(p_new)
         p = p_new
         if eps < tol:
             break
-    return p, A(p), k, eps
+    return p, (u if exact else A(p)), k, eps
