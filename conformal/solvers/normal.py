@@ -325,18 +325,21 @@ def _solve_for_approach(op, pc, a_self, E_star, h, delta, dA, tol, maxit, p_star
     history: list[tuple[float, float]] = []
     total, mismatch = 0, math.inf
     inner_tol = 0.1 * tol
+    u = None      # A p of the last inner solve: the next one starts from both, rescaled (A is linear)
     for _ in range(60):
         if p is None or p.sum() <= 0:
-            p = np.full(h.shape, FN / (dA * h.size))
-        p = p * (FN / (weighted.load(p) * dA))
+            p, u = np.full(h.shape, FN / (dA * h.size)), None
+        c = FN / (weighted.load(p) * dA)
+        p = p * c
         loose = max(inner_tol, min(INEXACT_SECANT * mismatch, 1e-3)) if INEXACT_SECANT else inner_tol
-        p, u, k, eps = _pk_force(op.apply_normal, pc, a_self, h, FN / dA, p, loose, maxit, weighted)
+        p, u, k, eps = _pk_force(op.apply_normal, pc, a_self, h, FN / dA, p, loose, maxit, weighted,
+                                 u=None if u is None else u * c)
         total += k
         act = p > 0
         d = weighted.approach(u + h, act) - hmin
         mismatch = abs(d - d_target) / d_target
         if loose > inner_tol and mismatch < 10 * tol:   # nearly there: solve the same force tightly
-            p, u, k, eps = _pk_force(op.apply_normal, pc, a_self, h, FN / dA, p, inner_tol, maxit, weighted)
+            p, u, k, eps = _pk_force(op.apply_normal, pc, a_self, h, FN / dA, p, inner_tol, maxit, weighted, u=u)
             total += k
             d = weighted.approach(u + h, p > 0) - hmin
             mismatch = abs(d - d_target) / d_target
@@ -372,24 +375,24 @@ def _direction(ga, actf, wa, ww, weighted, pc):
     return z
 
 
-def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None):
+def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
     """Polonsky-Keer with the load sum(a w p) = load prescribed (load = FN / dA_ref; planar:
     sum(p) = FN / dxdy).  On the contact set the gap is g - lambda w with lambda the weighted mean
     of g (:class:`_Weighted`); inner products carry the relative areas a.
 
+    ``u``: A p where the caller has it (a start rescaled from an earlier solve), else computed.
     Returns (p, u = A p, iterations, last relative change).
 
     With a = w = 1 (planar grids) the products with a and w are left out, which changes no bit:
     multiplying by 1.0 is exact, the sum of the 0/1 contact indicator is the element count, and
     a sum over a field that is already zero outside the contact set equals its masked sum.  The
     displacement u is kept up to date by the step (u - tau r) s where the contact set keeps its
-    elements and the pressure stays positive, and recomputed (A p) where it changes; the last
-    product is left out where u already is A p of the final pressure."""
+    elements and the pressure stays positive, and recomputed (A p) where it changes; it is returned
+    as it is (it differs from a product A p of the final pressure by rounding only)."""
     weighted = weighted or _Weighted()
     a, w = weighted.a, weighted.w
     plain = weighted.unit
-    u = A(p)
-    exact = True                  # u is A(p) of the current p (not the updated one)
+    u = A(p) if u is None else u
     t = None
     G_old, restart = 1.0, True
     eps, k = math.inf, 0
@@ -400,7 +403,7 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None):
             hw = h / w
             p = np.where(hw == hw.min(), 1.0, 0.0)
             p *= load / weighted.load(p)
-            u, exact = A(p), True
+            u = A(p)
             continue
         g = u + h
         actf = act.astype(float)
@@ -437,7 +440,7 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None):
                 p = p.copy()
                 p[overlap] = -g[overlap] / (a_self if np.isscalar(a_self) else a_self[overlap])
                 p *= load / weighted.load(p)
-                u, exact = A(p), True
+                u = A(p)
                 restart, eps = True, math.inf
                 continue
             eps = 0.0 if G == 0.0 else eps
@@ -459,16 +462,16 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None):
         s = load / (float(p_new.sum()) if plain else weighted.load(p_new))
         p_new *= s
         if changed:
-            u, exact = A(p_new), True
+            u = A(p_new)
         else:
             ur = np.multiply(r, tau)
             np.subtract(u, ur, out=ur)    # (u - tau r) s
             ur *= s
-            u, exact = ur, False
+            u = ur
         dp = p_new - p
         np.abs(dp, out=dp)
         eps = (float(dp.sum()) / load) if plain else weighted.norm(dp) / weighted.norm(p_new)
         p = p_new
         if eps < tol:
             break
-    return p, (u if exact else A(p)), k, eps
+    return p, u, k, eps
