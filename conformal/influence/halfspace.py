@@ -286,27 +286,40 @@ class HalfSpaceInfluence:
         return self.G / (1.0 - self.nu)
 
     def normal_preconditioner(self) -> Callable[[np.ndarray], np.ndarray]:
-        """z = P g, an approximate inverse of A_zz by FFT on the padded grid (after CONTACT's NormCG).
+        """z = P g, an approximate inverse of A_zz by FFT (after CONTACT's NormCG).
 
         The half-space maps a pressure wave of wave number k to a displacement 2(1-nu)/(G |k|) times
         it (Boussinesq), so P multiplies by |k| (the constant does not matter to CG).  The discrete
         wave numbers 2 sin(k dx/2)/dx keep P positive definite.  (The inverse of the circulant
         embedding of the discrete kernel is better for square elements but indefinite for
         dx != dy: measured 146 to >1000 iterations at dx/dy = 0.3, against 13-16 with this P.)
+
+        P acts on the periodic grid of Nx x Ny >= mx x my elements (the next fast FFT lengths), not on
+        the zero-padded grid of the products: it only has to approximate the inverse on the contact
+        set, and a quarter of the transform size was measured to give the same iteration counts
+        (the 69 normal solves of the Manchester A-2.2 sequence: 662 iterations either way; Hertz
+        circles of 30² to 200² elements, 6-7 each; an ellipse of axis ratio 8, 11 instead of 10),
+        at 0.57 of the time of a cold 200 x 200 solve.
         """
-        if "pc_symbol" not in self._fhat:
-            Mx, My = self.padded_shape
-            kx = 2.0 * np.sin(np.pi * np.fft.fftfreq(Mx))[:, None] / self.dx
-            ky = 2.0 * np.sin(np.pi * np.fft.rfftfreq(My))[None, :] / self.dy
+        if "pc_periodic" not in self._fhat:
+            Nx, Ny = sfft.next_fast_len(self.mx, real=True), sfft.next_fast_len(self.my, real=True)
+            kx = 2.0 * np.sin(np.pi * np.fft.fftfreq(Nx))[:, None] / self.dx
+            ky = 2.0 * np.sin(np.pi * np.fft.rfftfreq(Ny))[None, :] / self.dy
             sym = np.hypot(kx, ky)
             sym[0, 0] = sym[sym > 0].min() if (sym > 0).any() else 1.0
-            self._fhat["pc_symbol"] = sym
-        sym = self._fhat["pc_symbol"]
+            self._fhat["pc_periodic"] = (Nx, Ny, sym)
+        Nx, Ny, sym = self._fhat["pc_periodic"]
+        mx, my = self.mx, self.my
 
         def apply(g: np.ndarray) -> np.ndarray:
-            gh = self._forward(g)
+            if (Nx, Ny) != (mx, my):
+                x = np.zeros((Nx, Ny))
+                x[:mx, :my] = g
+            else:
+                x = g
+            gh = ffts.rfft2(x)
             gh *= sym
-            return self._back(gh)
+            return ffts.irfft2(gh, (Nx, Ny))[:mx, :my]
 
         return apply
 
