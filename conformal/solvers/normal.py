@@ -361,7 +361,7 @@ def _dot(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.multiply(a, b).sum())
 
 
-def _direction(ga, actf, wa, ww, weighted, pc):
+def _direction(ga, act, actf, wa, ww, weighted, pc):
     """Preconditioned steepest-descent direction z on the contact set (zero elsewhere)."""
     if pc is None:
         return ga
@@ -369,7 +369,7 @@ def _direction(ga, actf, wa, ww, weighted, pc):
     # keep the load: <z, w>_act = 0 (planar: zero sum over the contact set, where the sum of z,
     # already zero outside it, is its masked sum)
     if weighted.unit:
-        z -= actf * (float(z.sum()) / ww)
+        np.subtract(z, float(z.sum()) / ww, out=z, where=act)
     else:
         z -= (actf * weighted.w) * (_dot(z, wa) / ww)
     return z
@@ -396,9 +396,11 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
     t = None
     G_old, restart = 1.0, True
     eps, k = math.inf, 0
+    na, kept = 0, False   # kept: the last step changed no element of the contact set
     for k in range(1, maxit + 1):
         act = p > 0
-        na = int(np.count_nonzero(act))
+        kept = kept and int(np.count_nonzero(act)) == na   # (a step without clipping only removes
+        na = int(np.count_nonzero(act))                     # elements whose pressure is exactly 0)
         if na == 0:  # cannot happen with a positive load; guard anyway
             hw = h / w
             p = np.where(hw == hw.min(), 1.0, 0.0)
@@ -407,14 +409,18 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
             continue
         g = u + h
         actf = act.astype(float)
+        # the gap is g - lam w with lam the (weighted) mean of g over the contact set = the approach;
+        # ga: the gap on the contact set, zero elsewhere
         if plain:
             wa, ww = actf, float(na)
-            g -= float(np.multiply(g, actf).sum()) / ww   # the mean over the contact set = the approach
+            ga = np.multiply(g, actf)
+            lam = float(ga.sum()) / ww
+            np.subtract(ga, lam, out=ga, where=act)
         else:
             wa, ww = weighted.on(actf)
-            g -= w * (_dot(g, wa) / ww)   # the (weighted) mean over the contact set = the approach
-        ga = g * actf
-        z = _direction(ga, actf, wa, ww, weighted, pc)
+            g -= w * (_dot(g, wa) / ww)
+            ga, lam = g * actf, 0.0
+        z = _direction(ga, act, actf, wa, ww, weighted, pc)
         gaa = ga if plain else ga * a
         G = _dot(gaa, z)
         if restart:
@@ -422,15 +428,16 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
         else:
             t *= G / G_old
             t += z
-            t *= actf
+            if not kept:
+                t *= actf
         G_old = G
         r = A(t)
         if plain:
             rt = _dot(r, t) - _dot(r, actf) / ww * float(t.sum())
         else:
             rt = float(_dot(r * a, t)) - float(_dot(r, wa)) / ww * weighted.load(t)
-        overlap = g < 0.0
-        np.greater(overlap, act, out=overlap)  # not in contact but interpenetrating: enter the contact set
+        overlap = g < lam     # the gap g - lam < 0 ...
+        np.greater(overlap, act, out=overlap)  # ... outside the contact set: interpenetrating, enter it
         if not rt > 0.0:   # t = 0: the gap is already uniform on the contact set
             if overlap.any():
                 # ... but elements outside it interpenetrate (e.g. a start from the one-element
@@ -438,7 +445,7 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
                 # Stopping here would freeze the contact set (a history's later steps kept one
                 # element, pmax 490 times too large).
                 p = p.copy()
-                p[overlap] = -g[overlap] / (a_self if np.isscalar(a_self) else a_self[overlap])
+                p[overlap] = -(g[overlap] - lam) / (a_self if np.isscalar(a_self) else a_self[overlap])
                 p *= load / weighted.load(p)
                 u = A(p)
                 restart, eps = True, math.inf
@@ -454,11 +461,12 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
         if overlap.any():
             # Polonsky-Keer's -tau g; with the preconditioner tau is no longer a compliance, so
             # close each gap as if the element were alone: -g / A_zz(0, 0)
-            p_new[overlap] = -g[overlap] * (tau if pc is None else 1.0 / (a_self if np.isscalar(a_self)
-                                                                           else a_self[overlap]))
+            p_new[overlap] = -(g[overlap] - lam) * (tau if pc is None else 1.0 / (a_self if np.isscalar(a_self)
+                                                                                     else a_self[overlap]))
             changed, restart = True, True
         else:
             restart = False
+        kept = not changed
         s = load / (float(p_new.sum()) if plain else weighted.load(p_new))
         p_new *= s
         if changed:
