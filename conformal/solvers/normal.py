@@ -275,9 +275,13 @@ def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, 
         act = p > 0
     un = u if extra_un is None else u + extra_un
     e = h - delta * w + un
-    scale = max(abs(delta), float(np.ptp(h_eff[act])) if act.any() else 0.0, 1e-300)
-    gap_res = max(float(np.abs(e[act]).max()) if act.any() else 0.0,
-                  float(np.maximum(-e[~act], 0.0).max()) if (~act).any() else 0.0) / scale
+    # the Signorini residuals, max |e| on the contact set and max(-e, 0) outside it (masked reductions:
+    # the values of max and min over the selected elements, without copying them out)
+    spread = float(np.max(h_eff, where=act, initial=-np.inf) - np.min(h_eff, where=act, initial=np.inf)) \
+        if act.any() else 0.0
+    scale = max(abs(delta), spread, 1e-300)
+    gap_res = max(float(np.max(np.abs(e), where=act, initial=0.0)),
+                  float(np.max(-e, where=~act, initial=0.0))) / scale
     return NormalSolution(pn=p, un=un, approach=delta, FN=float(np.multiply(p, a).sum() * dA), contact=act,
                           iterations=k, residual=eps, converged=bool(eps < tol), gap_residual=gap_res,
                           preconditioned=pc is not None, load=weighted.load(p) * dA)
