@@ -403,8 +403,8 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
     na, kept = 0, False   # kept: the last step changed no element of the contact set
     for k in range(1, maxit + 1):
         act = p > 0
-        kept = kept and int(np.count_nonzero(act)) == na   # (a step without clipping only removes
-        na = int(np.count_nonzero(act))                     # elements whose pressure is exactly 0)
+        n = int(np.count_nonzero(act))
+        kept, na = kept and n == na, n   # (a step without clipping only removes elements whose pressure is 0)
         if na == 0:  # cannot happen with a positive load; guard anyway
             hw = h / w
             p = np.where(hw == hw.min(), 1.0, 0.0)
