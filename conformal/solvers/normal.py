@@ -48,9 +48,14 @@ from conformal.influence.halfspace import Z
 from conformal.influence.operator import InfluenceOperator, build_operator
 from conformal.materials import Material
 
-#: use the FFT preconditioner from this many grid elements on (measured break-even, see
-#: studies/halfspace_scaling.py: at 50 x 50 both variants take about the same time, from 100 x 100 on
-#: the preconditioned iteration is faster and its iteration count grows much more slowly)
+#: use the FFT preconditioner from this many grid elements on (the break-even measured with the
+#: preconditioner on the zero-padded grid, studies/halfspace_scaling.py: at 50 x 50 both variants
+#: took about the same time, from 100 x 100 on the preconditioned iteration is faster and its
+#: iteration count grows much more slowly).  On the periodic grid (the operator's
+#: ``normal_preconditioner``) the preconditioned iteration of a cold Hertz circle is already faster
+#: from 15 x 15 on (0.6-0.85 of the plain time at 15² to 50², best of 7, loaded 2-core machine);
+#: the default stays, so that the planar grids of these sizes keep the arithmetic of the curved
+#: strips, whose operators have no preconditioner (the planar limit of the conformal theory)
 PRECONDITION_FROM = 2500
 #: ... and from this many on where a caller starts the iteration from a neighbouring solution (a
 #: sweep, a balance, the passes of a contact solve: :func:`warm_precondition`), where the
