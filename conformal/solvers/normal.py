@@ -20,9 +20,10 @@ pair), and inner products carry the element areas.
 Solver: projected conjugate gradients of Polonsky & Keer (1999), i.e. CG on the current contact
 set, restarted when the set grows, with the pressure projected onto p >= 0 (and rescaled to FN when
 the force is prescribed), plus an optional FFT preconditioner in the spirit of CONTACT's NormCG
-(Vollebregt 2014): the inverse of the circulant embedding of A_zz, applied by the same zero-padded
-FFTs as the product, restricted to the contact set.  Each product A p costs two FFTs of the padded
-grid (conformal.influence.halfspace).  Iterations stop when the pressure changes by less than
+(Vollebregt 2014): the operator's ``normal_preconditioner``, for the half-space a multiplication by
+|k| (the inverse of the Boussinesq symbol) by FFTs of the periodic grid of the elements, restricted
+to the contact set.  Each product A p costs two FFTs of the zero-padded grid
+(conformal.influence.halfspace), the preconditioner two of a quarter of its size.  Iterations stop when the pressure changes by less than
 ``tol`` (relative, sum |dp| / sum p) from one iteration to the next, as in Polonsky & Keer.
 
 >>> import numpy as np
