@@ -334,10 +334,12 @@ DZ_FINAL = 1e-4
 #: relative tolerance of the vertical force balance of the one-patch passes (a pass on a kept
 #: geometry costs a contact solve started from the previous one: 10 times tighter than BALANCE_TOL)
 ONE_PATCH_TOL = 1e-5
-#: the solver tolerance of the first pass of a position (``[model] tol`` where that is looser): its
-#: tractions only start the next pass and give the ratio FS/FN and the height for it, and it is
-#: never taken as the answer (the Manchester A-2.2 sequence: 6-7 instead of 9-10 normal and 1-2
-#: instead of 2-3 tangential iterations, the answers within 0.04 N of passes at 1e-6)
+#: the solver tolerance of a pass whose normal force comes from the ratio FS/FN of another geometry
+#: (the neighbour's, or one more than GEOMETRY_KEEP away), where ``[model] tol`` is tighter: it
+#: seldom balances, its tractions only start the next pass and give it the ratio and the height,
+#: and it is never taken as the answer (the Manchester A-2.2 sequence: 6-7 instead of 9-10 normal
+#: and 1-2 instead of 2-3 tangential iterations in the first pass, the answers within 0.04 N of
+#: passes all at 1e-6)
 FIRST_PASS_TOL = 1e-4
 
 
@@ -991,8 +993,9 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
     Where that range is below SETTLE_BELOW, a force-prescribed normal solve sets the height of a
     fresh search before the first contact solve.  Done when |FZ - W| <= ONE_PATCH_TOL W and the
     approach agrees with the height within DZ_FINAL.  A pass costs one contact solve, started from
-    the latest tractions of the patch (``fields``); the first, solved to FIRST_PASS_TOL, is never
-    the answer.
+    the latest tractions of the patch (``fields``); a pass whose normal force comes from another
+    geometry's ratio (the first, one after a search more than GEOMETRY_KEEP away) is solved to
+    FIRST_PASS_TOL and never the answer.
 
     Returns (state, results, problems, ratios, passes, fields, normal solves), or None when the contact leaves
     the one-patch case (another patch appears, the wheel lifts off, no convergence in
@@ -1014,6 +1017,7 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
         except NoContactError:
             return None
         st = replace(st, warnings=tuple(warn))
+    far = True          # the ratio FS/FN of this pass's normal force comes from another geometry
     for k in range(1, max_outer + 1):
         if st is None or len(st.patches) != 1:
             return None
@@ -1021,7 +1025,7 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
         c = math.cos(pg.patch.delta)
         problem = problems_at(scene, pl, st, [fn])[0]
         problem = replace(problem, start=_contact_start(fields, pg, problem))
-        loose = k == 1 and FIRST_PASS_TOL > problem.model.tol
+        loose = far and FIRST_PASS_TOL > problem.model.tol
         r = solve_problem(replace(problem, model=replace(problem.model, tol=FIRST_PASS_TOL)) if loose else problem)
         if r.field is not None:
             fields = [PatchField(pg.patch.s_ref, r.field.grid, r.field.pn, r.field.px, r.field.py)]
@@ -1046,6 +1050,7 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
                 fn_next = sec if 0.5 * f1 < sec < 2.0 * f1 else fn_next
         z_next = st.z + dz + r.approach * ((fn_next / fn) ** (2.0 / 3.0) - 1.0) / c
         z_geo = st.z if st.z_geometry is None else st.z_geometry
+        far = abs(z_next - z_geo) > GEOMETRY_KEEP
         if abs(z_next - z_geo) > _keep_range(st) or edge:
             try:   # (a little deeper when the grid was too small: it then covers the patch)
                 st = search(z_next + (GEOMETRY_KEEP / 2 if edge else 0.0))
