@@ -496,7 +496,6 @@ def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float 
     estimate from the overlap at a small trial lowering.  Falls back to the bracketing root
     search on the vertical force (:func:`balance_height_bracketing`) when the searches do not
     settle in MAX_SEARCHES.  ``counts_out`` receives a :class:`BalanceCounts`."""
-    W = scene.load.wheel_load
     on_grid = MODELS.accepts(scene.model.theory, GRID)
     warnings: list[str] = []
     counts = [0]
@@ -507,34 +506,19 @@ def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float 
         searches += 1
         return state_at(pl.pair, pl.top, z, pl.roll, scene, grids=on_grid)
 
+    def overlap(z):
+        nonlocal searches
+        searches += 1
+        return state_at(pl.pair, pl.top, z, pl.roll, scene, grids=False)
+
     st = start
     if st is None and lowering is not None and lowering > 0:
         try:
             st = search(pl.z_touch + lowering)
         except NoContactError:
             st = None
-    if st is None:          # a Hertz-like estimate from a small trial lowering (doubled until it overlaps)
-        trial, F1 = 0.01, 0.0
-        for _ in range(12):
-            try:
-                searches += 1
-                st0 = state_at(pl.pair, pl.top, pl.z_touch + trial, pl.roll, scene, grids=False)
-                if on_grid and not all(pg.hertzian for pg in st0.patches):
-                    st0 = search(pl.z_touch + trial)
-                F1 = sum(_trial_force(pg, scene, warnings, counts) * math.cos(pg.patch.delta) for pg in st0.patches)
-            except NoContactError:
-                F1 = 0.0
-            if F1 > 0:
-                break
-            trial *= 2.0
-        else:
-            raise ConvergenceError("[load] wheel_load: the vertical force does not grow when the wheel is lowered")
-        lowering = trial * (W / F1) ** (2.0 / 3.0)       # Hertz: the approach grows as FN^(2/3)
-        if not lowering <= MAX_APPROACH:      # beyond the profiles (wheel_load = 1e300: a search outside the rail)
-            raise InputError(f"[load] wheel_load: {W:g} N would press the wheel about {lowering:.3g} mm into the rail "
-                             f"(Hertz estimate), more than {MAX_APPROACH:g} mm: far beyond elastic contact "
-                             f"(the seed's wheels: below 0.1 mm)")
-        st = search(pl.z_touch + lowering)
+    if st is None:
+        st = search(pl.z_touch + _estimated_lowering(pl, scene, search, overlap, warnings, counts))
     for _ in range(MAX_SEARCHES):
         del warnings[:]
         dz, fns = linear_balance(st, scene, ratios, counts=counts, warnings=warnings, fields=fields,
@@ -562,6 +546,35 @@ def balance_height(pl: Placement, scene: Scene, ratios=None, *, lowering: float 
     if counts_out is not None:
         counts_out.append(BalanceCounts(searches, counts[0], bracketing=True))
     return z, st, fns
+
+
+def _estimated_lowering(pl: Placement, scene: Scene, search, overlap, warnings: list, counts: list) -> float:
+    """A Hertz-like estimate of the lowering (mm below the touching height) that carries the wheel
+    load, from the force at a small trial lowering (doubled until it overlaps): the approach grows
+    as FN^(2/3).  ``overlap(z)`` / ``search(z)``: the patches at height z without / with their
+    grids (the grids where a patch is not Hertzian: its grid normal problem, counted in ``counts``)."""
+    W = scene.load.wheel_load
+    on_grid = MODELS.accepts(scene.model.theory, GRID)
+    trial, F1 = 0.01, 0.0
+    for _ in range(12):
+        try:
+            st0 = overlap(pl.z_touch + trial)
+            if on_grid and not all(pg.hertzian for pg in st0.patches):
+                st0 = search(pl.z_touch + trial)
+            F1 = sum(_trial_force(pg, scene, warnings, counts) * math.cos(pg.patch.delta) for pg in st0.patches)
+        except NoContactError:
+            F1 = 0.0
+        if F1 > 0:
+            break
+        trial *= 2.0
+    else:
+        raise ConvergenceError("[load] wheel_load: the vertical force does not grow when the wheel is lowered")
+    lowering = trial * (W / F1) ** (2.0 / 3.0)       # Hertz: the approach grows as FN^(2/3)
+    if not lowering <= MAX_APPROACH:      # beyond the profiles (wheel_load = 1e300: a search outside the rail)
+        raise InputError(f"[load] wheel_load: {W:g} N would press the wheel about {lowering:.3g} mm into the rail "
+                         f"(Hertz estimate), more than {MAX_APPROACH:g} mm: far beyond elastic contact "
+                         f"(the seed's wheels: below 0.1 mm)")
+    return lowering
 
 
 def _trial_force(pg: PatchGeometry, scene: Scene, warnings: list, counts: list) -> float:
@@ -979,7 +992,7 @@ def _keep_range(st: PairState) -> float:
 
 
 def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fields: list, ratios, *,
-                     max_outer: int = 12, search=None):
+                     max_outer: int = 12, search=None, settle: bool = False):
     """The vertical balance of a one-patch wheel with the contact solve as its normal solve (seed
     Eq. 46, the height as the unknown; grid theory "exact"): each pass solves the contact problem
     on the patch geometry of ``st`` with the normal force ``fn`` prescribed; its approach a gives
@@ -990,8 +1003,9 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
     creepages taken at the new height) while that height lies within :func:`_keep_range` of the
     searched one (GEOMETRY_KEEP, less where the reference point moves fast) and the contact stays
     off the grid's outermost elements; else the geometry is searched again there (``search(z)``).
-    Where that range is below SETTLE_BELOW, a force-prescribed normal solve sets the height of a
-    fresh search before the first contact solve.  Done when |FZ - W| <= ONE_PATCH_TOL W and the
+    Where that range is below SETTLE_BELOW (or with ``settle``: a height estimated without a
+    neighbour), a force-prescribed normal solve sets the height of a fresh search before the first
+    contact solve.  Done when |FZ - W| <= ONE_PATCH_TOL W and the
     approach agrees with the height within DZ_FINAL.  A pass costs one contact solve, started from
     the latest tractions of the patch (``fields``); a pass whose normal force comes from another
     geometry's ratio (the first, one after a search more than GEOMETRY_KEEP away) is solved to
@@ -1008,7 +1022,7 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
     # a force-prescribed normal solve (cheaper than a contact solve) finds the height first and the
     # geometry is searched there once (the linearised step lands within 2.2e-6 mm over 3.7e-3 mm on
     # the wide tread patches at 0-1.5 mm; the first contact solve checks it)
-    if st is not None and len(st.patches) == 1 and st.z_geometry is None and _keep_range(st) < SETTLE_BELOW:
+    if st is not None and len(st.patches) == 1 and st.z_geometry is None and (settle or _keep_range(st) < SETTLE_BELOW):
         warn: list[str] = []
         dz, _ = linear_balance(st, scene, None, counts=normal_solves, warnings=warn, fields=fields,
                                normal_force=fn)
@@ -1146,12 +1160,21 @@ def _one_patch_start(scene: Scene, pl: Placement, warm: "WarmStart", fields: lis
         searches[0] += 1
         return state_at(pl.pair, pl.top, z, pl.roll, scene)
 
-    st, fn = None, None
+    st, fn, settle = None, None, False
     if warm.lowering is not None and warm.lowering > 0:
         try:
             st = search(pl.z_touch + warm.lowering)
         except NoContactError:
             st = None
+    else:       # no neighbour: the Hertz-like estimate, its height then set by one normal solve
+        def overlap(z):
+            searches[0] += 1
+            return state_at(pl.pair, pl.top, z, pl.roll, scene, grids=False)
+
+        trial = [0]
+        st = search(pl.z_touch + _estimated_lowering(pl, scene, search, overlap, [], trial))
+        counts.append(BalanceCounts(0, trial[0]))
+        settle = True
     # a one-patch neighbour's FS/FN starts every patch found, also one that jumped more than 5 mm
     # along the rail (5 mm, 6.5 mm: FS/FN -0.30 -> -0.28 and -0.29 -> -0.27, where 0 gave FN 8 %
     # and 60 % off): the wheelset's lateral creepage sets it on either
@@ -1183,7 +1206,8 @@ def _one_patch_start(scene: Scene, pl: Placement, warm: "WarmStart", fields: lis
         if not w > 0:
             return None
         fn = W / w
-    out = one_patch_passes(scene, pl, st, fn, list(fields), ratios, max_outer=max_outer, search=search)
+    out = one_patch_passes(scene, pl, st, fn, list(fields), ratios, max_outer=max_outer, search=search,
+                           settle=settle)
     if out is None:
         return None
     st, results, problems, ratios, n, _, n_normal = out
