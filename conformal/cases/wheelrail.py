@@ -842,7 +842,8 @@ class WarmStart:
     (:class:`PatchField`), the starting point of the next vertical balance and of its normal and
     contact solves.  With the neighbour's own neighbour (``from_result(..., previous)``) it also
     knows the slopes of the lowering and the ratios against the lateral shift and extrapolates
-    them (:meth:`at`)."""
+    them (:meth:`at`): the ratio of a patch with its own earlier value, the lowering where no
+    patch jumped along the rail and none changed its number of lobes."""
 
     lowering: float | None = None
     ratios: tuple[tuple[float, float], ...] = ()
@@ -851,6 +852,7 @@ class WarmStart:
     step: float | None = None                  # its distance from its own neighbour (mm)
     lowering_slope: float = 0.0                # d lowering / d shift
     ratio_slopes: tuple[float, ...] = ()       # d (FS/FN) / d shift per entry of ratios
+    lobes: tuple[int, ...] = ()                # the lobes of each patch (the contact's shape)
 
     @classmethod
     def from_result(cls, result: Result, previous: "WarmStart | None" = None) -> "WarmStart":
@@ -861,7 +863,8 @@ class WarmStart:
                        for p in result.patches if p.field is not None and "s_rail" in p.extra)
         ratios = tuple((float(s), float(r)) for s, r in b.get("ratios", ()))
         shift, lowering = b.get("lateral_shift"), b.get("lowering")
-        out = cls(lowering, ratios, fields, shift)
+        lobes = tuple(int(p.extra.get("n_lobes", 1)) for p in result.patches)
+        out = cls(lowering, ratios, fields, shift, lobes=lobes)
         p = previous
         if (p is None or p.shift is None or shift is None or p.lowering is None or lowering is None
                 or p.shift == shift or len(p.ratios) != len(ratios)):
@@ -871,8 +874,10 @@ class WarmStart:
         for s_ref, r in ratios:
             same.append(any(abs(s_ref - s0) < 5.0 for s0, _ in p.ratios))
             slopes.append((r - _ratio_near(p.ratios, s_ref)) / h if same[-1] else 0.0)
-        # the contact jumped (no patch near one of the neighbour's): no slope of the lowering either
-        slope = (lowering - p.lowering) / h if all(same) else 0.0
+        # the contact jumped (no patch near one of the neighbour's) or changed its shape (lobes): no
+        # slope of the lowering either (5 -> 5.5 mm, two lobes to one: the slope put the first
+        # search at 6 mm 2.9e-3 mm off, the lowering alone 1.2e-3 mm)
+        slope = (lowering - p.lowering) / h if all(same) and p.lobes == lobes else 0.0
         return replace(out, step=h, lowering_slope=slope, ratio_slopes=tuple(slopes))
 
     def at(self, shift: float) -> "WarmStart":

@@ -94,11 +94,17 @@ def test_contact_jump_leaves_no_slope_and_keeps_the_ratio():
     """Across the jump onto the flange (6 -> 6.5 mm: the reference point moves 9.7 mm along the
     rail, the lowering triples) the warm start keeps the neighbour's FS/FN for the new patch
     (within 0.02 of the balanced -0.270; 0 had given FN 60 % off) and extrapolates neither the
-    lowering nor the ratio; on the tread (2.5 -> 3 mm) it does."""
+    lowering nor the ratio; where the lobes change (5 -> 5.5 mm) not the lowering; on the tread
+    (2.5 -> 3 mm) both."""
     (_, r65), warm = sweep((6.0, 6.5))
     assert warm.lowering_slope == 0.0 and warm.ratio_slopes == (0.0,)
     (_, r3), warm3 = sweep((2.5, 3.0))
     assert warm3.lowering_slope != 0.0 and warm3.ratio_slopes[0] != 0.0
+    # the two-lobe patch at 5 mm becomes one lobe at 5.5 mm: the shape changed, no slope either
+    # (the slope of 5 -> 5.5 mm put the first search at 6 mm 2.9e-3 mm off, without it 1.2e-3)
+    (r5, r55), warm55 = sweep((5.0, 5.5))
+    assert r5.patches[0].extra["n_lobes"] == 2 and r55.patches[0].extra["n_lobes"] == 1
+    assert warm55.lowering_slope == 0.0 and warm55.ratio_slopes[0] != 0.0
     ref, z = tight_general_balance(mbench_case(6.5))
     assert abs(r65.FN - ref.FN) <= 5e-5 * W
     assert abs(r65.FY - ref.FY) <= 5e-5 * W
