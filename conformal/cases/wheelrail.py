@@ -1069,11 +1069,13 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
                 fn_next = sec if 0.5 * f1 < sec < 2.0 * f1 else fn_next
         z_next = st.z + dz + r.approach * ((fn_next / fn) ** (2.0 / 3.0) - 1.0) / c
         z_geo = st.z if st.z_geometry is None else st.z_geometry
+        warn_n: list[str] = []
         if not edge and fn_next != fn and abs(z_next - z_geo) > _keep_range(st) and _keep_range(st) < SETTLE_BELOW:
             # a fast-moving reference point (kept over less than SETTLE_BELOW): the height for the next
             # normal force from a force-prescribed normal solve on this geometry (Hertz's FN^(2/3) was
             # 4e-5 mm off on the wide patch at 0.5 mm, twice the range it is kept over)
-            dz_n, _ = linear_balance(st, scene, None, counts=normal_solves, fields=fields, normal_force=fn_next)
+            dz_n, _ = linear_balance(st, scene, None, counts=normal_solves, warnings=warn_n, fields=fields,
+                                     normal_force=fn_next)
             z_next = st.z + dz_n
         far = abs(z_next - z_geo) > GEOMETRY_KEEP
         if abs(z_next - z_geo) > _keep_range(st) or edge:
@@ -1084,6 +1086,8 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
             passes = []
         else:
             st = st.lowered(z_next - st.z)
+        if warn_n:    # a normal solve that set this height did not converge
+            st = replace(st, warnings=st.warnings + tuple(warn_n))
         fn = fn_next
     return None
 
