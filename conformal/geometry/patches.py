@@ -282,8 +282,7 @@ def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: n
 
 def _frame_floats(wheel: WheelSurface) -> tuple:
     """The wheel frame's origin and axes (O, a, e_d, e_f) as tuples of Python floats."""
-    f = wheel.frame
-    return tuple(tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
+    return wheel.frame_floats
 
 
 def _wheel_line_step(meridian, th, t, cos, sin, frame, q, n, m):

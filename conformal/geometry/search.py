@@ -150,7 +150,11 @@ def local_minima(g: np.ndarray, merge: float = MERGE_DEPTH) -> list[int]:
     valid = np.isfinite(g)
     if not valid.any():
         return []
-    gg = np.where(valid, g, np.inf)
+    return _local_minima(np.where(valid, g, np.inf), valid, merge)
+
+
+def _local_minima(gg: np.ndarray, valid: np.ndarray, merge: float) -> list[int]:
+    """:func:`local_minima` of gg = g with inf for NaN (``valid``: where g is finite, at least once)."""
     inf = np.array([np.inf])
     left = np.concatenate((inf, gg[:-1]))
     right = np.concatenate((gg[1:], inf))
@@ -307,8 +311,7 @@ def _contact_values(wheel: WheelSurface, rail: RailSurface, q) -> tuple[list, di
     same expressions in Python floats (numpy arrays in ``v``, as there)."""
     s_w, th, x, s_r = (float(c) for c in q)
     u, rho, u1, rho1, u2, rho2 = wheel.meridian(s_w)
-    f = wheel.frame
-    O, a, ed, ef = (tuple(float(c) for c in vec) for vec in (f.O, f.a, f.e_d, f.e_f))
+    O, a, ed, ef = wheel.frame_floats
     c, sn = math.cos(th), math.sin(th)
     msn = -sn
     er = tuple(c * ed[k] + sn * ef[k] for k in range(3))
@@ -354,33 +357,53 @@ def _cross_x(n: np.ndarray) -> np.ndarray:
     return np.array([n1 * 0.0 - n2 * 0.0, n2 * 1.0 - n0 * 0.0, n0 * 0.0 - n1 * 1.0])
 
 
+def _raise_singular(err, flag):
+    raise np.linalg.LinAlgError("Singular matrix")
+
+
+#: the floating-point error state numpy.linalg.solve sets around its LAPACK call (a singular matrix
+#: raises LinAlgError)
+_SOLVE_ERRSTATE = dict(call=_raise_singular, invalid="call", over="ignore", divide="ignore", under="ignore")
+
+try:   # the gufunc numpy.linalg.solve calls for one right-hand side (the same numbers), without its
+    from numpy.linalg import _umath_linalg    # per-call argument handling; under _SOLVE_ERRSTATE
+
+    def _solve1(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return _umath_linalg.solve1(a, b, signature="dd->d")
+except ImportError:                     # pragma: no cover - other numpy layouts
+    def _solve1(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return np.linalg.solve(a, b)
+
+
 def newton_contact(wheel: WheelSurface, rail: RailSurface, q0, *, tol: float = 1e-11,
                    maxit: int = 40) -> ContactPoint:
     """Refine a contact point from the start q0 = (s_w, theta, x, s_r) (seed Eqs. 54-55)."""
     q = [float(v) for v in q0]            # Python floats: the arithmetic of numpy's, per entry
     Lw, Lr = wheel.curve.length, rail.curve.length
     res = np.inf
-    f = wheel.frame
-    frame = tuple(tuple(float(c) for c in vec) for vec in (f.O, f.a, f.e_d, f.e_f))
-    for it in range(1, maxit + 1):
-        F, J = _newton_system(wheel, rail, q, frame)
-        try:
-            dq = np.linalg.solve(np.array(J), -np.array(F)).tolist()
-        except np.linalg.LinAlgError:
-            raise ConvergenceError("contact search: singular Jacobian (seed Eq. 55) at "
-                                   f"s_w = {q[0]:.3f}, s_r = {q[3]:.3f} mm") from None
-        # limit the step (a Newton step may jump across the profile where curvatures change fast)
-        scale = max(1.0, abs(dq[0]) / 2.0, abs(dq[3]) / 2.0, abs(dq[1]) / 0.05)
-        dq = [v / scale for v in dq]
-        q = [a + b for a, b in zip(q, dq)]
-        q[0] = min(max(q[0], 0.0), Lw)
-        q[3] = min(max(q[3], 0.0), Lr)
-        if (abs(dq[0]) < 1e-9 and abs(dq[2]) < 1e-9 and abs(dq[3]) < 1e-9 and abs(dq[1]) < 1e-12
-                and scale == 1.0):
-            break
+    frame = wheel.frame_floats
+    array = np.array
+    with np.errstate(**_SOLVE_ERRSTATE):  # numpy.linalg.solve's, once for the loop
+        for it in range(1, maxit + 1):
+            F, J = _newton_system(wheel, rail, q, frame)
+            try:
+                dq = _solve1(array(J), -array(F)).tolist()
+            except np.linalg.LinAlgError:
+                raise ConvergenceError("contact search: singular Jacobian (seed Eq. 55) at "
+                                       f"s_w = {q[0]:.3f}, s_r = {q[3]:.3f} mm") from None
+            # limit the step (a Newton step may jump across the profile where curvatures change fast)
+            scale = max(1.0, abs(dq[0]) / 2.0, abs(dq[3]) / 2.0, abs(dq[1]) / 0.05)
+            dq = [v / scale for v in dq]
+            q = [a + b for a, b in zip(q, dq)]
+            q[0] = min(max(q[0], 0.0), Lw)
+            q[3] = min(max(q[3], 0.0), Lr)
+            if (abs(dq[0]) < 1e-9 and abs(dq[2]) < 1e-9 and abs(dq[3]) < 1e-9 and abs(dq[1]) < 1e-12
+                    and scale == 1.0):
+                break
     q = np.array(q)
     F, v = _contact_values(wheel, rail, q)
-    res = float(np.linalg.norm(F))
+    Fa = np.array(F)
+    res = math.sqrt(Fa.dot(Fa))           # numpy.linalg.norm's arithmetic (a dot product, sqrt)
     if not res < max(tol, 1e-8):
         raise ConvergenceError(f"contact search: Newton-Raphson (seed Eq. 55) did not converge "
                                f"in {maxit} iterations (residual {res:.2e})")
@@ -410,18 +433,19 @@ def find_contacts(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = 
     if known (:func:`pair_locus`)."""
     top = top or RailTop.of(rail)
     loc = locus if locus is not None else wheel_locus(wheel, top)
-    if not np.isfinite(loc.gap).any():
+    valid = np.isfinite(loc.gap)
+    if not valid.any():
         raise NoContactError("contact search: the wheel does not lie over the rail "
                              "(no part of the wheel profile is above the rail profile)")
-    gmin = float(np.nanmin(loc.gap))
-    i_min = int(np.nanargmin(loc.gap))
-    valid = np.isfinite(loc.gap)
+    gg = np.where(valid, loc.gap, np.inf)      # numpy.nanmin / nanargmin's values, NaN as inf
+    i_min = int(np.argmin(gg))
+    gmin = float(gg[i_min])
     if i_min == 0 or i_min == valid.size - 1 or not (valid[i_min - 1] and valid[i_min + 1]):
         y_w = float(wheel.curve.y(loc.s[i_min]))
         raise InputError(f"the wheel would touch the rail at the end of a profile (wheel y = {y_w:.2f} mm, "
                          f"side-frame y = {loc.points[i_min, 1]:.2f} mm): the profiles do not cover "
                          "this position")
-    cands = [i for i in local_minima(loc.gap) if loc.gap[i] <= gmin + window]
+    cands = [i for i in _local_minima(gg, valid, MERGE_DEPTH) if loc.gap[i] <= gmin + window]
     contacts: list[ContactPoint] = []
     for i in cands:
         p = loc.points[i]

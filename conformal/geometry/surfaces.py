@@ -127,6 +127,13 @@ class WheelSurface:
     offset: float
     frame: WheelFrame
 
+    @cached_property
+    def frame_floats(self) -> tuple[tuple[float, float, float], ...]:
+        """The frame's origin and axes (O, a, e_d, e_f) as tuples of Python floats (for the
+        per-point Newton iterations of the contact search, computed once per wheel)."""
+        f = self.frame
+        return tuple(tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
+
     def meridian(self, s) -> tuple[np.ndarray, ...]:
         """u, rho, u', rho', u'', rho'' (axial position and radius along the profile)."""
         y, z, y1, z1, y2, z2 = self.curve.derivatives(s)
