@@ -78,6 +78,11 @@ class ProfileCurve:
             return self._pieces.scalar(float(s))
         return self._pieces.derivatives(s)
 
+    def stack(self, s) -> np.ndarray:
+        """[(y, z), (y', z'), (y'', z'')] at the arc lengths s (an array), (3, 2) + s.shape: the
+        values of :meth:`derivatives` in one array."""
+        return self._pieces.stack(s)
+
     def tangent(self, s) -> np.ndarray:
         t = self._pieces.eval(s, 1)
         return t / np.linalg.norm(t, axis=-1, keepdims=True)
@@ -222,16 +227,35 @@ class _Pieces:
         return np.stack(out, axis=-1)
 
     def derivatives(self, s) -> tuple[np.ndarray, ...]:
+        (y, z), (y1, z1), (y2, z2) = self.stack(s)
+        return (y, z, y1, z1, y2, z2)
+
+    def stack(self, s) -> np.ndarray:
+        """The curve and its first two derivatives at s, (3, 2) + s.shape: [(y, z), (y', z'),
+        (y'', z'')], the expressions of :meth:`scalar` per entry (y and z in one array operation)."""
         s = np.asarray(s, dtype=float)
         i = self._index(s)
         t = s - self.x.take(i)
-        a0y, a0z, a1y, a1z, a2y, a2z, a3y, a3z = self.rows.take(i, axis=1)
-        out = []
-        for a0, a1, a2, a3 in ((a0y, a1y, a2y, a3y), (a0z, a1z, a2z, a3z)):
-            out.append((((a3 * t + a2) * t + a1) * t + a0, (3.0 * a3 * t + 2.0 * a2) * t + a1,
-                        6.0 * a3 * t + 2.0 * a2))
-        (y, y1, y2), (z, z1, z2) = out
-        return (y, z, y1, z1, y2, z2)
+        r = self.rows.take(i, axis=1)
+        a0, a1, a2, a3 = r[0:2], r[2:4], r[4:6], r[6:8]
+        out = np.empty((3, 2) + s.shape)
+        c, d1, d2 = out
+        np.multiply(a3, t, out=c)               # ((a3 t + a2) t + a1) t + a0
+        c += a2
+        c *= t
+        c += a1
+        c *= t
+        c += a0
+        a2x2 = 2.0 * a2
+        np.multiply(3.0, a3, out=d1)            # (3 a3 t + 2 a2) t + a1
+        d1 *= t
+        d1 += a2x2
+        d1 *= t
+        d1 += a1
+        np.multiply(6.0, a3, out=d2)            # 6 a3 t + 2 a2
+        d2 *= t
+        d2 += a2x2
+        return out
 
     def scalar(self, s: float) -> tuple[float, ...]:
         """y, z, y', z', y'', z'' at one arc length (Python floats)."""

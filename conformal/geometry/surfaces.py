@@ -59,12 +59,17 @@ class RailSurface:
     def profile(self, s) -> tuple[np.ndarray, ...]:
         """Y, Z, Y', Z', Y'', Z'' of the placed profile at arc length s (side frame; floats for a
         scalar s)."""
-        y, z, y1, z1, y2, z2 = self.curve.derivatives(s)
         r00, r01, r10, r11, y0, z0 = self._placement
-        Y = r00 * y + r01 * z + y0
-        Z = r10 * y + r11 * z + z0
-        return (Y, Z, r00 * y1 + r01 * z1, r10 * y1 + r11 * z1,
-                r00 * y2 + r01 * z2, r10 * y2 + r11 * z2)
+        if isinstance(s, (float, int)) or (isinstance(s, np.ndarray) and s.ndim == 0):
+            y, z, y1, z1, y2, z2 = self.curve.derivatives(s)
+            Y = r00 * y + r01 * z + y0
+            Z = r10 * y + r11 * z + z0
+            return (Y, Z, r00 * y1 + r01 * z1, r10 * y1 + r11 * z1,
+                    r00 * y2 + r01 * z2, r10 * y2 + r11 * z2)
+        c = self.curve.stack(s)          # (3, 2, ...): the value and two derivatives of (y, z)
+        y, z = c[:, 0], c[:, 1]
+        Yd, Zd = r00 * y + r01 * z, r10 * y + r11 * z    # the same expressions, three rows at once
+        return (Yd[0] + y0, Zd[0] + z0, Yd[1], Zd[1], Yd[2], Zd[2])
 
     def point(self, s) -> np.ndarray:
         Y, Z = self.profile(s)[:2]
