@@ -92,14 +92,35 @@ def locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locu
     return _locus_penetration(wheel, rail, top, locus)[:4]
 
 
-def _locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locus: Locus | None):
+#: :func:`find_patches` first projects only the locus samples less than this (mm) above the rail
+#: top and their neighbours: an overlap (pen > 0) lies below the rail top, whose envelope follows
+#: the rail profile to well below 1e-4 mm (chords of 0.02 mm), and a patch needs the projections of
+#: its samples and of the two next to it only; all NEAR_GAP samples where no sample overlaps
+OVERLAP_GAP = 0.05
+
+
+def _locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locus: Locus | None,
+                       overlap_only: bool = False):
     """:func:`locus_penetration` and the rail points (Y, Z) and inner normals (n_y, n_z) at s_r
-    (NaN where s_r is)."""
+    (NaN where s_r is).  ``overlap_only``: of the NEAR_GAP samples, only those less than
+    OVERLAP_GAP above the rail top and their neighbours are projected (the others get pen = -gap,
+    s_r = A = NaN; each projected sample has the values of projecting all), None where there are
+    none."""
     loc = locus if locus is not None else wheel_locus(wheel, top)
     ok = np.isfinite(loc.theta) & np.isfinite(loc.gap)
     near = ok & (loc.gap < NEAR_GAP)
     if not near.any():
+        if overlap_only:
+            return None
         near = ok
+    if overlap_only:
+        close = ok & (loc.gap < OVERLAP_GAP)
+        if not close.any():
+            return None
+        around = close.copy()
+        around[1:] |= close[:-1]
+        around[:-1] |= close[1:]
+        near &= around
     k = np.nonzero(near)[0]
     pts = loc.points[k]
     s_k = rail.project(pts[:, 1:], top.s_near(pts[:, 1:]))     # closest rail point, from the nearest sample
@@ -136,7 +157,11 @@ def find_patches(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = N
 
     Raises NoContactError (with the smallest gap) when the wheel does not touch the rail."""
     top = top or RailTop.of(rail)
-    loc, s_r, pen, A, rail_yzn = _locus_penetration(wheel, rail, top, locus)
+    # the samples near the overlap first (the same patches); all NEAR_GAP samples where none overlaps
+    found = _locus_penetration(wheel, rail, top, locus, overlap_only=True)
+    if found is None or not np.nanmax(found[2], initial=-np.inf) > 0.0:
+        found = _locus_penetration(wheel, rail, top, locus)
+    loc, s_r, pen, A, rail_yzn = found
     if not np.isfinite(pen).any():
         raise NoContactError("wheel-rail contact: the wheel is not over the rail")
     pmax = float(np.nanmax(pen))
