@@ -291,13 +291,17 @@ def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: n
     t = np.zeros(N)
     frame = _frame_floats(wheel)
     L = wheel.curve.length
+    work = np.empty((_STEP_ARRAYS, N))
     for _ in range(maxit):
-        F, (ds, dth, dt) = _wheel_line_step(wheel.meridian(s), th, t, np.cos, np.sin, frame, (q0, q1, q2),
-                                            (n0, n1, n2), m)
-        s = clip(s + clip(ds, -2.0, 2.0), 0.0, L)
-        th += clip(dth, -0.05, 0.05)
+        F, (ds, dth, dt) = _wheel_lines_step(wheel.curve.stack(s, 1), wheel.offset, wheel.radius, th, t, frame,
+                                             (q0, q1, q2), (n0, n1, n2), m, work)
+        clip(ds, -2.0, 2.0, out=ds)
+        ds += s
+        s = clip(ds, 0.0, L)
+        clip(dth, -0.05, 0.05, out=dth)
+        th += dth
         t += dt
-        res = np.max([np.max(np.abs(Fk)) for Fk in F])
+        res = np.max([np.max(np.abs(Fk, out=Fk)) for Fk in F])
         if res < tol:
             break
     if not res < 1e-7:
@@ -327,6 +331,55 @@ def _wheel_line_step(meridian, th, t, cos, sin, frame, q, n, m):
     c0 = (u1 * a0 + rho1 * er[0], u1 * a1 + rho1 * er[1], u1 * a2 + rho1 * er[2])
     c1 = (rho * et[0], rho * et[1], rho * et[2])
     return F, _cramer3(c0, c1, m, (-F[0], -F[1], -F[2]))
+
+
+_STEP_ARRAYS = 21       # the work arrays of _wheel_lines_step
+
+
+def _wheel_lines_step(pieces, offset, radius, th, t, frame, q, n, m, work):
+    """:func:`_wheel_line_step` for coordinate arrays, from the wheel profile's values and slopes
+    (``pieces`` = ProfileCurve.stack(s, 1)), the same operations in the same order written into
+    the rows of ``work`` (``_STEP_ARRAYS`` x N; the returned arrays are rows of it)."""
+    (y, z), (y1, z1) = pieces
+    (O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2) = frame
+    (q0, q1, q2), (n0, n1, n2) = q, n
+    mul, w = np.multiply, work[20]
+    u, rho = np.add(y, offset, out=work[0]), np.add(z, radius, out=work[1])     # the meridian u, rho
+    c, sn = np.cos(th, out=work[2]), np.sin(th, out=work[3])
+    msn = np.negative(sn, out=work[4])
+    er, et, F, c0 = work[5:8], work[8:11], work[11:14], work[14:17]
+    for k, (dk, ek, Ok, ak, qk, nk) in enumerate(((d0, e0, O0, a0, q0, n0), (d1, e1, O1, a1, q1, n1),
+                                                  (d2, e2, O2, a2, q2, n2))):
+        erk, etk, Fk, c0k = er[k], et[k], F[k], c0[k]
+        mul(c, dk, out=erk)                       # er = c d + sn e
+        erk += mul(sn, ek, out=w)
+        mul(msn, dk, out=etk)                     # et = -sn d + c e
+        etk += mul(c, ek, out=w)
+        mul(u, ak, out=Fk)                        # F = ((O + u a) + rho er - q) - t n
+        Fk += Ok
+        Fk += mul(rho, erk, out=w)
+        Fk -= qk
+        Fk -= mul(t, nk, out=w)
+        mul(y1, ak, out=c0k)                      # c0 = u' a + rho' er (u' = y', rho' = z')
+        c0k += mul(z1, erk, out=w)
+        etk *= rho                                # c1 = rho et
+    return F, _cramer3_into(c0, et, m, F, work[17:20], w)
+
+
+def _cramer3_into(c0, c1, m, F, out, w):
+    """:func:`_cramer3` (c0, c1, m, -F) for coordinate arrays, the same operations in the same
+    order; the solution written into ``out`` (3 rows), ``w`` a work row; c1 is overwritten."""
+    k12, k20, k01 = _cross(c1, m), _cross(m, c0), _cross(c0, c1)
+    det = _dot(c0, k12)
+    if not np.all(np.abs(det) > 0.0):
+        raise np.linalg.LinAlgError("singular matrix")
+    b = (-F[0], -F[1], -F[2])
+    for row, k in zip(out, (k12, k20, k01)):
+        np.multiply(b[0], k[0], out=row)          # ((b0 k0 + b2 k2) + b1 k1) / det
+        row += np.multiply(b[2], k[2], out=w)
+        row += np.multiply(b[1], k[1], out=w)
+        row /= det
+    return out
 
 
 def _wheel_on_line(wheel: WheelSurface, Q, n, s0, th0, maxit: int, tol: float):

@@ -133,12 +133,30 @@ class WheelRailPair:
         if hit is None:
             wheel = self.wheel(0.0)
             s, y, z, y1, z1, _, _ = wheel.curve.sampled(step)     # the meridian of WheelSurface
-            th = wheel.locus_theta_of(y1, z1)
-            er = wheel.e_r(np.nan_to_num(th))
-            rho = wheel.radius + z
+            shared = self._loci.get(("shared", step))
+            if shared is None:
+                th = wheel.locus_theta_of(y1, z1)
+                er = wheel.e_r(np.nan_to_num(th))
+                rho = wheel.radius + z
+            else:
+                th, er, rho = shared
             hit = (s, th, wheel.point_of(wheel.offset + y, rho, e_r=er), er, rho)
             self._loci[step] = hit
         return hit
+
+    def share_locus(self, other: "WheelRailPair") -> None:
+        """Take the contact locus angles, radial directions and radii of ``other`` (what
+        :meth:`locus_samples` computes once per pair) where they are this pair's: the same wheel
+        profile, radius, axial offset and orientation (roll and yaw), i.e. another lateral shift
+        of the same wheelset; the locus points follow from this pair's centre.  Otherwise
+        nothing is taken."""
+        same = (float(a).hex() == float(b).hex() for a, b in ((other.radius, self.radius),
+                (other.offset, self.offset), (other.pose.roll, self.pose.roll), (other.pose.yaw, self.pose.yaw)))
+        if other.wheel_curve is not self.wheel_curve or not all(same):      # bitwise, signed zeros apart
+            return
+        for step, hit in list(other._loci.items()):
+            if not isinstance(step, tuple) and step not in self._loci:
+                self._loci[("shared", step)] = hit[1], hit[3], hit[4]
 
     def rail_top_under_locus(self, top, step: float) -> np.ndarray:
         """``top.z_at`` (a :class:`~conformal.geometry.search.RailTop`) at the lateral positions of

@@ -78,10 +78,10 @@ class ProfileCurve:
             return self._pieces.scalar(float(s))
         return self._pieces.derivatives(s)
 
-    def stack(self, s) -> np.ndarray:
+    def stack(self, s, order: int = 2) -> np.ndarray:
         """[(y, z), (y', z'), (y'', z'')] at the arc lengths s (an array), (3, 2) + s.shape: the
-        values of :meth:`derivatives` in one array."""
-        return self._pieces.stack(s)
+        values of :meth:`derivatives` in one array; ``order`` = 1: the first two rows only."""
+        return self._pieces.stack(s, order)
 
     def tangent(self, s) -> np.ndarray:
         t = self._pieces.eval(s, 1)
@@ -230,16 +230,17 @@ class _Pieces:
         (y, z), (y1, z1), (y2, z2) = self.stack(s)
         return (y, z, y1, z1, y2, z2)
 
-    def stack(self, s) -> np.ndarray:
+    def stack(self, s, order: int = 2) -> np.ndarray:
         """The curve and its first two derivatives at s, (3, 2) + s.shape: [(y, z), (y', z'),
-        (y'', z'')], the expressions of :meth:`scalar` per entry (y and z in one array operation)."""
+        (y'', z'')], the expressions of :meth:`scalar` per entry (y and z in one array operation);
+        ``order`` = 1: the curve and its first derivative, (2, 2) + s.shape."""
         s = np.asarray(s, dtype=float)
         i = self._index(s)
         t = s - self.x.take(i)
         r = self.rows.take(i, axis=1)
         a0, a1, a2, a3 = r[0:2], r[2:4], r[4:6], r[6:8]
-        out = np.empty((3, 2) + s.shape)
-        c, d1, d2 = out
+        out = np.empty((order + 1, 2) + s.shape)
+        c, d1 = out[0], out[1]
         np.multiply(a3, t, out=c)               # ((a3 t + a2) t + a1) t + a0
         c += a2
         c *= t
@@ -252,6 +253,9 @@ class _Pieces:
         d1 += a2x2
         d1 *= t
         d1 += a1
+        if order == 1:
+            return out
+        d2 = out[2]
         np.multiply(6.0, a3, out=d2)            # 6 a3 t + 2 a2
         d2 *= t
         d2 += a2x2
