@@ -422,7 +422,7 @@ def rail_on_lines(rail: RailSurface, Q: np.ndarray, n: np.ndarray, s0: np.ndarra
     t = np.zeros(N)
     L = rail.curve.length
     for _ in range(maxit):
-        Y, Z, Y1, Z1, _, _ = rail.profile(s)
+        Y, Z, Y1, Z1 = rail.profile_slopes(s)
         F0, F1 = (Y - q0) - t * n0, (Z - q1) - t * n1
         mF0, mF1 = -F0, -F1
         det = Y1 * mn1 - mn0 * Z1

@@ -71,6 +71,15 @@ class RailSurface:
         Yd, Zd = r00 * y + r01 * z, r10 * y + r11 * z    # the same expressions, three rows at once
         return (Yd[0] + y0, Zd[0] + z0, Yd[1], Zd[1], Yd[2], Zd[2])
 
+    def profile_slopes(self, s: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Y, Z, Y', Z' of :meth:`profile` at the arc lengths s (an array): the same values, without
+        the second derivatives."""
+        r00, r01, r10, r11, y0, z0 = self._placement
+        c = self.curve.stack(s, 1)
+        y, z = c[:, 0], c[:, 1]
+        Yd, Zd = r00 * y + r01 * z, r10 * y + r11 * z
+        return (Yd[0] + y0, Zd[0] + z0, Yd[1], Zd[1])
+
     def point(self, s) -> np.ndarray:
         Y, Z = self.profile(s)[:2]
         return np.stack([Y, Z], axis=-1)
