@@ -112,7 +112,7 @@ class Locus:
     """The wheel's contact locus sampled along the wheel profile."""
 
     s: np.ndarray          # wheel-profile arc length
-    theta: np.ndarray      # rotation angle (NaN: no locus point)
+    theta: np.ndarray      # rotation angle (NaN: no locus point, or none that can lie over the rail)
     points: np.ndarray     # (n, 3) side frame
     gap: np.ndarray        # vertical gap to the rail top (NaN outside the rail / no locus)
     e_r: np.ndarray | None = None   # (n, 3) radial direction at theta (NaN theta: 0), if known
@@ -120,8 +120,13 @@ class Locus:
 
 
 def wheel_locus(wheel: WheelSurface, top: RailTop, step: float = LOCUS_STEP) -> Locus:
+    """The wheel's contact locus sampled every ``step`` mm of wheel profile, theta NaN where there is
+    none or where the sample cannot lie over the rail (:meth:`WheelSurface.locus_reach`)."""
     s, _ = wheel.curve.sample(step)
-    th = wheel.locus_theta(s)
+    u, rho = wheel.meridian(s)[:2]
+    reach = wheel.locus_reach(u, rho, top.y_min, top.y_max)
+    th = np.full(s.shape, np.nan)
+    th[reach] = wheel.locus_theta(s[reach])
     pts = wheel.point(s, np.nan_to_num(th))
     return _locus(s, th, pts, top)
 
@@ -131,9 +136,10 @@ def pair_locus(pair, top: RailTop, z: float, step: float = LOCUS_STEP) -> Locus:
     at wheelset height z: the pair's locus sampled once and moved by z
     (:meth:`~conformal.geometry.placement.WheelRailPair.locus_samples`), equal to
     ``wheel_locus(pair.wheel(z), top)`` to rounding."""
-    s, th, pts = pair.locus_samples(z, step)
-    loc = _locus(s, th, pts, top, pair.rail_top_under_locus(top, step))
-    er, rho = pair.locus_radial(step)
+    span = (top.y_min, top.y_max)
+    s, th, pts = pair.locus_samples(z, step, span)
+    loc = _locus(s, th, pts, top, pair.rail_top_under_locus(top, step, span))
+    er, rho = pair.locus_radial(step, span)
     return Locus(loc.s, loc.theta, loc.points, loc.gap, er, rho)
 
 

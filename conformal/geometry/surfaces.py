@@ -128,6 +128,22 @@ class WheelFrame:
         return WheelFrame(self.O + np.array([0.0, 0.0, dz]), self.a, self.e_d, self.e_f)
 
 
+#: mm: :meth:`WheelSurface.locus_reach` keeps the samples up to this far outside a rail's lateral range
+LOCUS_REACH_MARGIN = 1.0
+
+
+def _wrap(th: np.ndarray) -> np.ndarray:
+    """(th + pi) % (2 pi) - pi, the remainder taken only where th + pi lies outside (0, 2 pi) (inside,
+    numpy's remainder returns its argument: the same numbers)."""
+    x = th + np.pi
+    if np.ndim(x) == 0:
+        return x % (2 * np.pi) - np.pi
+    out = ~((x > 0.0) & (x < 2 * np.pi))
+    if out.any():
+        x[out] = x[out] % (2 * np.pi)
+    return x - np.pi
+
+
 @dataclass(frozen=True, eq=False)
 class WheelSurface:
     """A wheel profile curve revolved about the axle of ``frame``.
@@ -171,6 +187,16 @@ class WheelSurface:
         er = self.e_r(theta) if e_r is None else e_r
         return self.frame.O + np.asarray(u)[..., None] * self.frame.a + np.asarray(rho)[..., None] * er
 
+    def locus_reach(self, u: np.ndarray, rho: np.ndarray, y_min: float, y_max: float) -> np.ndarray:
+        """Where the profile samples of axial positions u and radii rho (the meridian's values) can
+        have their locus point at a side-frame lateral position in [y_min, y_max] (a rail's range),
+        with LOCUS_REACH_MARGIN mm to spare: the point's y = O_y + u a_y + rho e_r,y and
+        |e_r,y| <= hypot(e_d,y, e_f,y) at every rotation."""
+        f = self.frame
+        c = float(f.O[1]) + u * float(f.a[1])
+        r = rho * math.hypot(float(f.e_d[1]), float(f.e_f[1])) + LOCUS_REACH_MARGIN
+        return (c + r >= y_min) & (c - r <= y_max)
+
     def locus_theta(self, s) -> np.ndarray:
         """Rotation angle theta(s_w) of the contact locus: the point of each wheel circle where the
         surface normal is perpendicular to the rail direction e_x (the rail normal has no x
@@ -189,9 +215,7 @@ class WheelSurface:
             phase = np.arctan2(B, A)
             ratio = np.where(Rn > 0, C / np.where(Rn > 0, Rn, 1.0), np.nan)
             dev = np.arccos(np.clip(ratio, -1.0, 1.0))
-        th1, th2 = phase + dev, phase - dev
-        th1 = (th1 + np.pi) % (2 * np.pi) - np.pi
-        th2 = (th2 + np.pi) % (2 * np.pi) - np.pi
+        th1, th2 = _wrap(phase + dev), _wrap(phase - dev)
         th = np.where(np.abs(th1) < np.abs(th2), th1, th2)
         bad = ~(np.abs(ratio) <= 1.0) | (np.abs(th) > 0.5)
         return np.where(bad, np.nan, th)
