@@ -93,9 +93,11 @@ def locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locu
 
 
 #: :func:`find_patches` first projects only the locus samples less than this (mm) above the rail
-#: top and their neighbours: an overlap (pen > 0) lies below the rail top, whose envelope follows
-#: the rail profile to well below 1e-4 mm (chords of 0.02 mm), and a patch needs the projections of
-#: its samples and of the two next to it only; all NEAR_GAP samples where no sample overlaps
+#: top and their neighbours: an overlapping sample (pen > 0) lies below the rail profile, and the
+#: rail top envelope (RailTop, linear on a 0.01 mm grid of y) lies within 3e-4 mm of the profile
+#: where it is inclined by less than 80 degrees (0.03 mm at 88); a patch needs the projections of
+#: its samples and of the two next to them only.  All NEAR_GAP samples are projected where none of
+#: these overlaps (test_overlap_samples_give_the_patches_of_all_samples)
 OVERLAP_GAP = 0.05
 
 
