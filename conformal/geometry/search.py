@@ -241,7 +241,7 @@ class ContactPoint:
         """A, B (1/mm; h = A x'^2 + B y'^2 in principal axes) and the angle (rad) of the x' axis
         from the rolling direction."""
         K = 0.5 * (self.curvature + self.curvature.T)
-        w, v = np.linalg.eigh(0.5 * K)
+        w, v = _eigh(0.5 * K)
         # the eigenvector closest to the rolling direction is x'
         k = int(np.argmax(np.abs(v[0, :])))
         A, B = float(w[k]), float(w[1 - k])
@@ -349,7 +349,7 @@ def _curvatures(wheel: WheelSurface, rail: RailSurface, v: dict) -> tuple[np.nda
     II = np.array([[r_ss @ n, r_st @ n], [r_st @ n, r_tt @ n]])
     Jw = np.column_stack([v["t1w"], v["t2w"]])
     e1, e2 = np.array([1.0, 0.0, 0.0]), v["t2r"]
-    C = np.linalg.lstsq(Jw, np.column_stack([e1, e2]), rcond=None)[0]   # tangent vectors in (s_w, theta)
+    C = _lstsq(Jw, np.column_stack([e1, e2]))   # tangent vectors in (s_w, theta)
     Kw = C.T @ II @ C
     Y1, Z1, Y2, Z2 = v["Y1"], v["Z1"], v["Y2"], v["Z2"]
     kr = (Y1 * Z2 - Z1 * Y2) / (Y1 * Y1 + Z1 * Z1) ** 1.5
@@ -371,14 +371,40 @@ def _raise_singular(err, flag):
 #: raises LinAlgError)
 _SOLVE_ERRSTATE = dict(call=_raise_singular, invalid="call", over="ignore", divide="ignore", under="ignore")
 
-try:   # the gufunc numpy.linalg.solve calls for one right-hand side (the same numbers), without its
-    from numpy.linalg import _umath_linalg    # per-call argument handling; under _SOLVE_ERRSTATE
+
+def _raise_eigh(err, flag):
+    raise np.linalg.LinAlgError("Eigenvalues did not converge")
+
+
+def _raise_lstsq(err, flag):
+    raise np.linalg.LinAlgError("SVD did not converge in Linear Least Squares")
+
+try:   # the gufuncs numpy.linalg.solve (one right-hand side), eigh and lstsq call (the same numbers),
+    from numpy.linalg import _umath_linalg    # without their per-call argument handling
 
     def _solve1(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """numpy.linalg.solve(a, b) of float arrays, b a vector; under _SOLVE_ERRSTATE."""
         return _umath_linalg.solve1(a, b, signature="dd->d")
+
+    def _eigh(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """numpy.linalg.eigh(a) of a real symmetric float array (its lower triangle)."""
+        with np.errstate(**{**_SOLVE_ERRSTATE, "call": _raise_eigh}):
+            return _umath_linalg.eigh_lo(a, signature="d->dd")
+
+    def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """numpy.linalg.lstsq(a, b, rcond=None)[0] of float arrays a (m, n), b (m, k), k > 0."""
+        rcond = np.finfo(np.float64).eps * max(a.shape)
+        with np.errstate(**{**_SOLVE_ERRSTATE, "call": _raise_lstsq}):
+            return _umath_linalg.lstsq(a, b, rcond, signature="ddd->ddid")[0]
 except ImportError:                     # pragma: no cover - other numpy layouts
     def _solve1(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return np.linalg.solve(a, b)
+
+    def _eigh(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return np.linalg.eigh(a)
+
+    def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return np.linalg.lstsq(a, b, rcond=None)[0]
 
 
 def newton_contact(wheel: WheelSurface, rail: RailSurface, q0, *, tol: float = 1e-11,
