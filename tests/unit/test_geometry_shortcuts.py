@@ -178,3 +178,16 @@ def test_lift_check_pair_takes_the_neighbours_locus(placed):
                            dataclasses.replace(pose, roll=pose.roll + 1e-4), pair.side)
     rolled.share_locus(pair)
     assert not rolled._loci
+
+
+def test_curvature_gufuncs_equal_numpy_linalg():
+    """The principal curvatures' eigh and lstsq by numpy's gufuncs: numpy.linalg's numbers."""
+    rng = np.random.default_rng(13)
+    for _ in range(100):
+        K = rng.normal(size=(2, 2))
+        K = K + K.T
+        w, v = gs._eigh(K)
+        ref = np.linalg.eigh(K)
+        assert _same(w, ref.eigenvalues) and _same(v, ref.eigenvectors)
+        a, b = rng.normal(size=(3, 2)), rng.normal(size=(3, 2))
+        assert _same(gs._lstsq(a, b), np.linalg.lstsq(a, b, rcond=None)[0])
