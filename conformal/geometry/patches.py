@@ -126,7 +126,7 @@ def _locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, loc
     k = np.nonzero(near)[0]
     pts = loc.points[k]
     s_k = rail.project(pts[:, 1:], top.s_near(pts[:, 1:]))     # closest rail point, from the nearest sample
-    Y, Z, Y1, Z1, _, _ = rail.profile(s_k)
+    Y, Z, Y1, Z1 = rail.profile_slopes(s_k)
     g = np.hypot(Y1, Z1)
     ny, nz = -Z1 / g, Y1 / g
     pen_k = (pts[:, 1] - Y) * ny + (pts[:, 2] - Z) * nz
@@ -335,7 +335,7 @@ def _wheel_line_step(meridian, th, t, cos, sin, frame, q, n, m):
     return F, _cramer3(c0, c1, m, (-F[0], -F[1], -F[2]))
 
 
-_STEP_ARRAYS = 21       # the work arrays of _wheel_lines_step
+_STEP_ARRAYS = 34       # the work rows of _wheel_lines_step
 
 
 def _wheel_lines_step(pieces, offset, radius, th, t, frame, q, n, m, work):
@@ -365,21 +365,38 @@ def _wheel_lines_step(pieces, offset, radius, th, t, frame, q, n, m, work):
         mul(y1, ak, out=c0k)                      # c0 = u' a + rho' er (u' = y', rho' = z')
         c0k += mul(z1, erk, out=w)
         etk *= rho                                # c1 = rho et
-    return F, _cramer3_into(c0, et, m, F, work[17:20], w)
+    return F, _cramer3_into(c0, et, m, F, work[17:20], work[21:34], w)
 
 
-def _cramer3_into(c0, c1, m, F, out, w):
+def _cross_into(a, b, out, w):
+    """:func:`_cross` (a, b) written into the rows of ``out`` (``w`` a work row)."""
+    np.multiply(a[1], b[2], out=out[0])
+    out[0] -= np.multiply(a[2], b[1], out=w)
+    np.multiply(a[2], b[0], out=out[1])
+    out[1] -= np.multiply(a[0], b[2], out=w)
+    np.multiply(a[0], b[1], out=out[2])
+    out[2] -= np.multiply(a[1], b[0], out=w)
+    return out
+
+
+def _dot_into(a, b, out, w):
+    """:func:`_dot` (a, b) written into ``out`` (``w`` a work row)."""
+    np.multiply(a[0], b[0], out=out)
+    out += np.multiply(a[2], b[2], out=w)
+    out += np.multiply(a[1], b[1], out=w)
+    return out
+
+
+def _cramer3_into(c0, c1, m, F, out, rows, w):
     """:func:`_cramer3` (c0, c1, m, -F) for coordinate arrays, the same operations in the same
-    order; the solution written into ``out`` (3 rows), ``w`` a work row; c1 is overwritten."""
-    k12, k20, k01 = _cross(c1, m), _cross(m, c0), _cross(c0, c1)
-    det = _dot(c0, k12)
-    if not np.all(np.abs(det) > 0.0):
+    order; the solution written into ``out`` (3 rows), ``rows`` 13 work rows, ``w`` one more."""
+    k12, k20, k01 = _cross_into(c1, m, rows[0:3], w), _cross_into(m, c0, rows[3:6], w), _cross_into(c0, c1, rows[6:9], w)
+    det = _dot_into(c0, k12, rows[9], w)
+    if not np.all(np.abs(det, out=w) > 0.0):
         raise np.linalg.LinAlgError("singular matrix")
-    b = (-F[0], -F[1], -F[2])
+    b = np.negative(F, out=rows[10:13])
     for row, k in zip(out, (k12, k20, k01)):
-        np.multiply(b[0], k[0], out=row)          # ((b0 k0 + b2 k2) + b1 k1) / det
-        row += np.multiply(b[2], k[2], out=w)
-        row += np.multiply(b[1], k[1], out=w)
+        _dot_into(b, k, row, w)                   # ((b0 k0 + b2 k2) + b1 k1) / det
         row /= det
     return out
 
