@@ -482,8 +482,14 @@ def planar_distance(wheel: WheelSurface, rail: RailSurface, patch: Patch, xi: np
     eta_u, inv = _unique(eta)
     Qr = P[1:][None, :] + eta_u[:, None] * t2[1:][None, :]
     s_r, t_r = rail_on_lines(rail, Qr, n[1:], patch.s_ref + eta_u)
-    # wheel: start from the linear prediction at the reference wheel point
-    Q = P[None, :] + xi.reshape(-1, 1) * e1 + eta.reshape(-1, 1) * t2
+    # wheel: start from the linear prediction at the reference wheel point; the points
+    # P + xi e1 + eta t2 one coordinate at a time (rows of a (3, N) array, Q its transpose)
+    Qc = np.empty((3, xi.size))
+    for k in range(3):
+        np.multiply(xi.reshape(-1), e1[k], out=Qc[k])
+        Qc[k] += P[k]
+        Qc[k] += eta.reshape(-1) * t2[k]
+    Q = Qc.T
     s_w, th_w = _wheel_start(wheel, patch, Q)
     _, _, t_w = wheel_on_lines(wheel, Q, n, s_w, th_w)
     return (t_r[inv] - t_w).reshape(xi.shape)

@@ -123,7 +123,10 @@ class WheelRailPair:
         (y_min, y_max); theta is NaN at the samples that cannot lie over it
         (:meth:`WheelSurface.locus_reach`), whose gap to that rail is NaN in any case."""
         s, th, pts = self._locus_at_zero(step, span)[:3]
-        return s, th, pts + np.array([0.0, 0.0, z])
+        moved = np.empty_like(pts)
+        for k, dz in enumerate((0.0, 0.0, z)):      # pts + (0, 0, z), one coordinate at a time
+            np.add(pts[:, k], dz, out=moved[:, k])
+        return s, th, moved
 
     def locus_radial(self, step: float, span: tuple[float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(e_r (n, 3), rho (n,)) at the locus samples of :meth:`locus_samples`: the radial

@@ -91,7 +91,7 @@ class RailTop:
         """Envelope height at y (NaN outside the rail)."""
         t = (np.asarray(y) - self.y0) / self.hy
         i = np.clip(np.floor(t).astype(int), 0, self.z.size - 2)
-        w = t - i
+        w = t - i.astype(float)          # t - i (the same numbers, without a mixed-type loop)
         z = (1 - w) * self.z[i] + w * self.z[i + 1]
         return np.where((y >= self.y_min) & (y <= self.y_max), z, np.nan)
 

@@ -128,6 +128,17 @@ class WheelFrame:
         return WheelFrame(self.O + np.array([0.0, 0.0, dz]), self.a, self.e_d, self.e_f)
 
 
+def _combine(c: np.ndarray, v: np.ndarray, d: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """c[..., None] * v + d[..., None] * w for 3-vectors v, w, one coordinate at a time (the same
+    numbers as the broadcast expression, without its buffered iteration over rows of three)."""
+    out = np.empty(np.broadcast_shapes(c.shape, d.shape) + (3,))
+    for k in range(3):
+        col = out[..., k]
+        np.multiply(c, v[k], out=col)
+        col += d * w[k]
+    return out
+
+
 #: mm: :meth:`WheelSurface.locus_reach` keeps the samples up to this far outside a rail's lateral range
 LOCUS_REACH_MARGIN = 1.0
 
@@ -170,12 +181,14 @@ class WheelSurface:
         return self.offset + y, self.radius + z, y1, z1, y2, z2
 
     def e_r(self, theta) -> np.ndarray:
-        th = np.asarray(theta)[..., None]
-        return np.cos(th) * self.frame.e_d + np.sin(th) * self.frame.e_f
+        """Radial direction cos(theta) e_d + sin(theta) e_f, shape theta.shape + (3,)."""
+        th = np.asarray(theta)
+        return _combine(np.cos(th), self.frame.e_d, np.sin(th), self.frame.e_f)
 
     def e_t(self, theta) -> np.ndarray:
-        th = np.asarray(theta)[..., None]
-        return -np.sin(th) * self.frame.e_d + np.cos(th) * self.frame.e_f
+        """Circumferential direction -sin(theta) e_d + cos(theta) e_f, shape theta.shape + (3,)."""
+        th = np.asarray(theta)
+        return _combine(-np.sin(th), self.frame.e_d, np.cos(th), self.frame.e_f)
 
     def point(self, s, theta) -> np.ndarray:
         u, rho = self.meridian(s)[:2]
@@ -184,8 +197,15 @@ class WheelSurface:
     def point_of(self, u, rho, theta=None, *, e_r=None) -> np.ndarray:
         """The surface point of axial position u, radius rho (the meridian's values) and rotation
         theta (or its radial direction ``e_r`` = :meth:`e_r` (theta))."""
-        er = self.e_r(theta) if e_r is None else e_r
-        return self.frame.O + np.asarray(u)[..., None] * self.frame.a + np.asarray(rho)[..., None] * er
+        er = self.e_r(theta) if e_r is None else np.asarray(e_r)
+        u, rho, f = np.asarray(u), np.asarray(rho), self.frame
+        out = np.empty(np.broadcast_shapes(u.shape, rho.shape, er.shape[:-1]) + (3,))
+        for k in range(3):              # (O + u a) + rho e_r, one coordinate at a time
+            col = out[..., k]
+            np.multiply(u, f.a[k], out=col)
+            col += f.O[k]
+            col += rho * er[..., k]
+        return out
 
     def locus_reach(self, u: np.ndarray, rho: np.ndarray, y_min: float, y_max: float) -> np.ndarray:
         """Where the profile samples of axial positions u and radii rho (the meridian's values) can
