@@ -201,10 +201,36 @@ class _Pieces:
     def _inner(self) -> np.ndarray:
         return self.x[1:-1]
 
+    @cached_property
+    def _uniform(self) -> tuple[float, float] | None:
+        """(first inner break, 1 / spacing) where the inner breaks are uniform to a quarter of their
+        spacing (the arc-length grid of fit_curve), else None."""
+        inner = self._inner
+        if inner.size < 2:
+            return None
+        h = (inner[-1] - inner[0]) / (inner.size - 1)
+        if not h > 0.0 or np.max(np.abs(inner - (inner[0] + h * np.arange(inner.size)))) > 0.25 * h:
+            return None
+        return float(inner[0]), 1.0 / h
+
     def _index(self, s: np.ndarray) -> np.ndarray:
         """The piece of each s: the last break <= s, the end pieces extended (NaN: the last piece).
-        The count of inner breaks <= s, i.e. searchsorted(x, s, "right") - 1 clipped to the pieces."""
-        return np.searchsorted(self._inner, s, side="right")
+        The count of inner breaks <= s, i.e. searchsorted(x, s, "right") - 1 clipped to the pieces;
+        on uniform breaks from the spacing, corrected by one comparison each way (the same counts)."""
+        uni = self._uniform
+        inner = self._inner
+        if uni is None or s.size < 1500:               # (a binary search is cheaper on fewer)
+            return np.searchsorted(inner, s, side="right")
+        m = inner.size
+        g = clip((s - uni[0]) * uni[1], -1.0, m + 1.0)
+        nan = np.isnan(g)
+        if nan.any():
+            g[nan] = m
+        k = np.floor(g, out=g).astype(np.intp) + 1         # within one of the count
+        k = clip(k, 0, m, out=k)
+        k -= (k > 0) & (inner.take(k - 1, mode="clip") > s)
+        k += (k < m) & (inner.take(k, mode="clip") <= s)
+        return k
 
     def eval(self, s, nu: int = 0) -> np.ndarray:
         """The curve (nu = 0) or its derivative of order nu (1, 2, 3) at s, shape s.shape + (2,)."""

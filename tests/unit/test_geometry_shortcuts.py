@@ -191,3 +191,37 @@ def test_curvature_gufuncs_equal_numpy_linalg():
         assert _same(w, ref.eigenvalues) and _same(v, ref.eigenvectors)
         a, b = rng.normal(size=(3, 2)), rng.normal(size=(3, 2))
         assert _same(gs._lstsq(a, b), np.linalg.lstsq(a, b, rcond=None)[0])
+
+
+def test_piece_index_equals_the_binary_search(placed):
+    """The piece index from the uniform break spacing equals numpy's binary search (the count of
+    inner breaks <= s) at random points, every break, its neighbouring floats, the ends, beyond
+    them, NaN and infinities."""
+    rng = np.random.default_rng(17)
+    for curve in (placed.pair.wheel_curve, placed.pair.rail.curve):
+        pc = curve._pieces
+        assert pc._uniform is not None
+        inner = pc._inner
+        s = np.r_[rng.uniform(-2.0, curve.length + 2.0, 20000), pc.x, np.nextafter(inner, -np.inf),
+                  np.nextafter(inner, np.inf), np.nan, np.inf, -np.inf, 0.0, -0.0, curve.length]
+        assert np.array_equal(pc._index(s), np.searchsorted(inner, s, side="right"))
+        assert np.array_equal(pc._index(s[:3000].reshape(30, 100)), np.searchsorted(inner, s[:3000].reshape(30, 100),
+                                                                                      side="right"))
+
+
+def test_surface_vectors_equal_the_broadcast_expressions(placed):
+    """Radial and circumferential directions and surface points one coordinate at a time: the
+    numbers of the broadcast expressions, for scalars and arrays."""
+    wheel = placed.pair.wheel(placed.z_touch)
+    f = wheel.frame
+    rng = np.random.default_rng(19)
+    for th in (0.3, np.float64(-0.2), rng.normal(size=7), rng.normal(size=(4, 5))):
+        t = np.asarray(th)[..., None]
+        er = np.cos(t) * f.e_d + np.sin(t) * f.e_f
+        assert _same(wheel.e_r(th), er)
+        assert _same(wheel.e_t(th), -np.sin(t) * f.e_d + np.cos(t) * f.e_f)
+        u = rng.normal(size=np.shape(th)) if np.ndim(th) else 2.5
+        rho = 460.0 + rng.normal(size=np.shape(th)) if np.ndim(th) else 455.0
+        assert _same(wheel.point_of(u, rho, th), f.O + np.asarray(u)[..., None] * f.a + np.asarray(rho)[..., None] * er)
+    s, th, pts = placed.pair.locus_samples(0.37, gs.LOCUS_STEP)
+    assert _same(pts, placed.pair.locus_samples(0.0, gs.LOCUS_STEP)[2] + np.array([0.0, 0.0, 0.37]))
