@@ -174,9 +174,8 @@ def placement_warnings(scene: Scene, pl: "Placement", st: PairState) -> list[str
     if concave and scene.geometry.rail_z == "down":
         out.append("placement: " + concave)
     wc = pl.pair.wheel_curve
-    s_w, pts = wc.sample(0.05)
-    k_tip = int(np.argmax(pts[:, 1]))
-    z_tip = float(pts[k_tip, 1])
+    z_w_samples = wc.sampled(0.05)[2]      # the z of wc.sample(0.05), kept with the curve
+    z_tip = float(z_w_samples[int(np.argmax(z_w_samples))])
     flanged = z_tip > 10.0            # a flange more than 10 mm above the tape circle
     rail_len = pl.pair.rail.curve.length
     for pg in st.patches:
@@ -197,7 +196,8 @@ def placement_warnings(scene: Scene, pl: "Placement", st: PairState) -> list[str
                "rail top)")
         geo = scene.geometry
         try:
-            other = place_scene(scene.with_("geometry.lateral_shift", geo.lateral_shift - 0.1), touch_only=True)
+            other = place_scene(scene.with_("geometry.lateral_shift", geo.lateral_shift - 0.1), touch_only=True,
+                                like=pl)
             jump = pl.z_touch - other.z_touch
             if abs(jump) > JUMP_WARN:
                 msg += (f", and {abs(jump):.2f} mm {'higher' if jump < 0 else 'lower'} than at 0.1 mm less "
@@ -275,10 +275,12 @@ class Placement:
         return float(z - self.z_first)
 
 
-def place_scene(scene: Scene, *, touch_only: bool = False) -> Placement:
+def place_scene(scene: Scene, *, touch_only: bool = False, like: Placement | None = None) -> Placement:
     """The wheelset placed (roll, the wheel-rail pair) and the heights where this wheel and the first
     wheel of the wheelset touch; ``touch_only``: z_first is left equal to z_touch (the other wheel
-    is not searched)."""
+    is not searched).  ``like``: a placement of the same scene at another lateral shift, whose
+    wheel's contact locus this pair takes where its orientation is the same
+    (:meth:`~conformal.geometry.placement.WheelRailPair.share_locus`)."""
     geo = scene.geometry
     if not isinstance(geo, WheelRailGeometry):
         raise InputError("[geometry] kind: not a wheel_rail scene")
@@ -290,6 +292,8 @@ def place_scene(scene: Scene, *, touch_only: bool = False) -> Placement:
         z_other = z_both
     roll = 0.0 if roll is None else roll
     pair = build_pair(geo, base, roll=roll)
+    if like is not None:
+        pair.share_locus(like.pair)
     top = RailTop.of(pair.rail)
     z_touch = first_touch(pair, top)
     z_first = z_touch

@@ -92,18 +92,41 @@ def locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locu
     return _locus_penetration(wheel, rail, top, locus)[:4]
 
 
-def _locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locus: Locus | None):
+#: :func:`find_patches` first projects only the locus samples less than this (mm) above the rail
+#: top and their neighbours: an overlapping sample (pen > 0) lies below the rail profile, and the
+#: rail top envelope (RailTop, linear on a 0.01 mm grid of y) lies within 3e-4 mm of the profile
+#: where it is inclined by less than 80 degrees (0.03 mm at 88); a patch needs the projections of
+#: its samples and of the two next to them only.  All NEAR_GAP samples are projected where none of
+#: these overlaps (test_overlap_samples_give_the_patches_of_all_samples)
+OVERLAP_GAP = 0.05
+
+
+def _locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, locus: Locus | None,
+                       overlap_only: bool = False):
     """:func:`locus_penetration` and the rail points (Y, Z) and inner normals (n_y, n_z) at s_r
-    (NaN where s_r is)."""
+    (NaN where s_r is).  ``overlap_only``: of the NEAR_GAP samples, only those less than
+    OVERLAP_GAP above the rail top and their neighbours are projected (the others get pen = -gap,
+    s_r = A = NaN; each projected sample has the values of projecting all), None where there are
+    none."""
     loc = locus if locus is not None else wheel_locus(wheel, top)
     ok = np.isfinite(loc.theta) & np.isfinite(loc.gap)
     near = ok & (loc.gap < NEAR_GAP)
     if not near.any():
+        if overlap_only:
+            return None
         near = ok
+    if overlap_only:
+        close = ok & (loc.gap < OVERLAP_GAP)
+        if not close.any():
+            return None
+        around = close.copy()
+        around[1:] |= close[:-1]
+        around[:-1] |= close[1:]
+        near &= around
     k = np.nonzero(near)[0]
     pts = loc.points[k]
     s_k = rail.project(pts[:, 1:], top.s_near(pts[:, 1:]))     # closest rail point, from the nearest sample
-    Y, Z, Y1, Z1, _, _ = rail.profile(s_k)
+    Y, Z, Y1, Z1 = rail.profile_slopes(s_k)
     g = np.hypot(Y1, Z1)
     ny, nz = -Z1 / g, Y1 / g
     pen_k = (pts[:, 1] - Y) * ny + (pts[:, 2] - Z) * nz
@@ -136,7 +159,11 @@ def find_patches(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = N
 
     Raises NoContactError (with the smallest gap) when the wheel does not touch the rail."""
     top = top or RailTop.of(rail)
-    loc, s_r, pen, A, rail_yzn = _locus_penetration(wheel, rail, top, locus)
+    # the samples near the overlap first (the same patches); all NEAR_GAP samples where none overlaps
+    found = _locus_penetration(wheel, rail, top, locus, overlap_only=True)
+    if found is None or not np.nanmax(found[2], initial=-np.inf) > 0.0:
+        found = _locus_penetration(wheel, rail, top, locus)
+    loc, s_r, pen, A, rail_yzn = found
     if not np.isfinite(pen).any():
         raise NoContactError("wheel-rail contact: the wheel is not over the rail")
     pmax = float(np.nanmax(pen))
@@ -266,13 +293,17 @@ def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: n
     t = np.zeros(N)
     frame = _frame_floats(wheel)
     L = wheel.curve.length
+    work = np.empty((_STEP_ARRAYS, N))
     for _ in range(maxit):
-        F, (ds, dth, dt) = _wheel_line_step(wheel.meridian(s), th, t, np.cos, np.sin, frame, (q0, q1, q2),
-                                            (n0, n1, n2), m)
-        s = clip(s + clip(ds, -2.0, 2.0), 0.0, L)
-        th += clip(dth, -0.05, 0.05)
+        F, (ds, dth, dt) = _wheel_lines_step(wheel.curve.stack(s, 1), wheel.offset, wheel.radius, th, t, frame,
+                                             (q0, q1, q2), (n0, n1, n2), m, work)
+        clip(ds, -2.0, 2.0, out=ds)
+        ds += s
+        s = clip(ds, 0.0, L)
+        clip(dth, -0.05, 0.05, out=dth)
+        th += dth
         t += dt
-        res = np.max([np.max(np.abs(Fk)) for Fk in F])
+        res = np.max([np.max(np.abs(Fk, out=Fk)) for Fk in F])
         if res < tol:
             break
     if not res < 1e-7:
@@ -282,8 +313,7 @@ def wheel_on_lines(wheel: WheelSurface, Q: np.ndarray, n, s0: np.ndarray, th0: n
 
 def _frame_floats(wheel: WheelSurface) -> tuple:
     """The wheel frame's origin and axes (O, a, e_d, e_f) as tuples of Python floats."""
-    f = wheel.frame
-    return tuple(tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
+    return wheel.frame_floats
 
 
 def _wheel_line_step(meridian, th, t, cos, sin, frame, q, n, m):
@@ -303,6 +333,72 @@ def _wheel_line_step(meridian, th, t, cos, sin, frame, q, n, m):
     c0 = (u1 * a0 + rho1 * er[0], u1 * a1 + rho1 * er[1], u1 * a2 + rho1 * er[2])
     c1 = (rho * et[0], rho * et[1], rho * et[2])
     return F, _cramer3(c0, c1, m, (-F[0], -F[1], -F[2]))
+
+
+_STEP_ARRAYS = 34       # the work rows of _wheel_lines_step
+
+
+def _wheel_lines_step(pieces, offset, radius, th, t, frame, q, n, m, work):
+    """:func:`_wheel_line_step` for coordinate arrays, from the wheel profile's values and slopes
+    (``pieces`` = ProfileCurve.stack(s, 1)), the same operations in the same order written into
+    the rows of ``work`` (``_STEP_ARRAYS`` x N; the returned arrays are rows of it)."""
+    (y, z), (y1, z1) = pieces
+    (O0, O1, O2), (a0, a1, a2), (d0, d1, d2), (e0, e1, e2) = frame
+    (q0, q1, q2), (n0, n1, n2) = q, n
+    mul, w = np.multiply, work[20]
+    u, rho = np.add(y, offset, out=work[0]), np.add(z, radius, out=work[1])     # the meridian u, rho
+    c, sn = np.cos(th, out=work[2]), np.sin(th, out=work[3])
+    msn = np.negative(sn, out=work[4])
+    er, et, F, c0 = work[5:8], work[8:11], work[11:14], work[14:17]
+    for k, (dk, ek, Ok, ak, qk, nk) in enumerate(((d0, e0, O0, a0, q0, n0), (d1, e1, O1, a1, q1, n1),
+                                                  (d2, e2, O2, a2, q2, n2))):
+        erk, etk, Fk, c0k = er[k], et[k], F[k], c0[k]
+        mul(c, dk, out=erk)                       # er = c d + sn e
+        erk += mul(sn, ek, out=w)
+        mul(msn, dk, out=etk)                     # et = -sn d + c e
+        etk += mul(c, ek, out=w)
+        mul(u, ak, out=Fk)                        # F = ((O + u a) + rho er - q) - t n
+        Fk += Ok
+        Fk += mul(rho, erk, out=w)
+        Fk -= qk
+        Fk -= mul(t, nk, out=w)
+        mul(y1, ak, out=c0k)                      # c0 = u' a + rho' er (u' = y', rho' = z')
+        c0k += mul(z1, erk, out=w)
+        etk *= rho                                # c1 = rho et
+    return F, _cramer3_into(c0, et, m, F, work[17:20], work[21:34], w)
+
+
+def _cross_into(a, b, out, w):
+    """:func:`_cross` (a, b) written into the rows of ``out`` (``w`` a work row)."""
+    np.multiply(a[1], b[2], out=out[0])
+    out[0] -= np.multiply(a[2], b[1], out=w)
+    np.multiply(a[2], b[0], out=out[1])
+    out[1] -= np.multiply(a[0], b[2], out=w)
+    np.multiply(a[0], b[1], out=out[2])
+    out[2] -= np.multiply(a[1], b[0], out=w)
+    return out
+
+
+def _dot_into(a, b, out, w):
+    """:func:`_dot` (a, b) written into ``out`` (``w`` a work row)."""
+    np.multiply(a[0], b[0], out=out)
+    out += np.multiply(a[2], b[2], out=w)
+    out += np.multiply(a[1], b[1], out=w)
+    return out
+
+
+def _cramer3_into(c0, c1, m, F, out, rows, w):
+    """:func:`_cramer3` (c0, c1, m, -F) for coordinate arrays, the same operations in the same
+    order; the solution written into ``out`` (3 rows), ``rows`` 13 work rows, ``w`` one more."""
+    k12, k20, k01 = _cross_into(c1, m, rows[0:3], w), _cross_into(m, c0, rows[3:6], w), _cross_into(c0, c1, rows[6:9], w)
+    det = _dot_into(c0, k12, rows[9], w)
+    if not np.all(np.abs(det, out=w) > 0.0):
+        raise np.linalg.LinAlgError("singular matrix")
+    b = np.negative(F, out=rows[10:13])
+    for row, k in zip(out, (k12, k20, k01)):
+        _dot_into(b, k, row, w)                   # ((b0 k0 + b2 k2) + b1 k1) / det
+        row /= det
+    return out
 
 
 def _wheel_on_line(wheel: WheelSurface, Q, n, s0, th0, maxit: int, tol: float):
@@ -345,7 +441,7 @@ def rail_on_lines(rail: RailSurface, Q: np.ndarray, n: np.ndarray, s0: np.ndarra
     t = np.zeros(N)
     L = rail.curve.length
     for _ in range(maxit):
-        Y, Z, Y1, Z1, _, _ = rail.profile(s)
+        Y, Z, Y1, Z1 = rail.profile_slopes(s)
         F0, F1 = (Y - q0) - t * n0, (Z - q1) - t * n1
         mF0, mF1 = -F0, -F1
         det = Y1 * mn1 - mn0 * Z1
@@ -386,8 +482,14 @@ def planar_distance(wheel: WheelSurface, rail: RailSurface, patch: Patch, xi: np
     eta_u, inv = _unique(eta)
     Qr = P[1:][None, :] + eta_u[:, None] * t2[1:][None, :]
     s_r, t_r = rail_on_lines(rail, Qr, n[1:], patch.s_ref + eta_u)
-    # wheel: start from the linear prediction at the reference wheel point
-    Q = P[None, :] + xi.reshape(-1, 1) * e1 + eta.reshape(-1, 1) * t2
+    # wheel: start from the linear prediction at the reference wheel point; the points
+    # P + xi e1 + eta t2 one coordinate at a time (rows of a (3, N) array, Q its transpose)
+    Qc = np.empty((3, xi.size))
+    for k in range(3):
+        np.multiply(xi.reshape(-1), e1[k], out=Qc[k])
+        Qc[k] += P[k]
+        Qc[k] += eta.reshape(-1) * t2[k]
+    Q = Qc.T
     s_w, th_w = _wheel_start(wheel, patch, Q)
     _, _, t_w = wheel_on_lines(wheel, Q, n, s_w, th_w)
     return (t_r[inv] - t_w).reshape(xi.shape)

@@ -113,41 +113,80 @@ class WheelRailPair:
     def wheel(self, z: float) -> WheelSurface:
         return WheelSurface(self.wheel_curve, self.radius, self.offset, self.frame(z))
 
-    def locus_samples(self, z: float, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def locus_samples(self, z: float, step: float, span: tuple[float, float] | None = None
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(s_w, theta, points (n, 3)) of the wheel's contact locus (:meth:`WheelSurface.locus_theta`)
         sampled every ``step`` mm of wheel profile, at wheelset height z.  The locus is rigid under
         a vertical translation of the wheelset (theta depends on the orientation only), so it is
         computed once per pair at z = 0 and moved by z: a contact search at many trial heights of
-        one position samples the wheel once."""
-        s, th, pts = self._locus_at_zero(step)[:3]
-        return s, th, pts + np.array([0.0, 0.0, z])
+        one position samples the wheel once.  ``span``: the side-frame lateral range of a rail
+        (y_min, y_max); theta is NaN at the samples that cannot lie over it
+        (:meth:`WheelSurface.locus_reach`), whose gap to that rail is NaN in any case."""
+        s, th, pts = self._locus_at_zero(step, span)[:3]
+        moved = np.empty_like(pts)
+        for k, dz in enumerate((0.0, 0.0, z)):      # pts + (0, 0, z), one coordinate at a time
+            np.add(pts[:, k], dz, out=moved[:, k])
+        return s, th, moved
 
-    def locus_radial(self, step: float) -> tuple[np.ndarray, np.ndarray]:
+    def locus_radial(self, step: float, span: tuple[float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(e_r (n, 3), rho (n,)) at the locus samples of :meth:`locus_samples`: the radial
         direction at the locus angle (0 where there is none) and the wheel radius, both independent
         of the height."""
-        return self._locus_at_zero(step)[3:]
+        return self._locus_at_zero(step, span)[3:5]
 
-    def _locus_at_zero(self, step: float) -> tuple[np.ndarray, ...]:
-        hit = self._loci.get(step)
+    def _locus_at_zero(self, step: float, span: tuple[float, float] | None = None) -> tuple[np.ndarray, ...]:
+        """(s, theta, points, e_r, rho, reach) of the locus at z = 0 (:meth:`locus_samples`), kept."""
+        key = (step, span)
+        hit = self._loci.get(key)
         if hit is None:
             wheel = self.wheel(0.0)
             s, y, z, y1, z1, _, _ = wheel.curve.sampled(step)     # the meridian of WheelSurface
-            th = wheel.locus_theta_of(y1, z1)
-            er = wheel.e_r(np.nan_to_num(th))
-            rho = wheel.radius + z
-            hit = (s, th, wheel.point_of(wheel.offset + y, rho, e_r=er), er, rho)
-            self._loci[step] = hit
+            u, rho = wheel.offset + y, wheel.radius + z
+            reach = np.ones(s.shape, bool) if span is None else wheel.locus_reach(u, rho, *span)
+            th = np.full(s.shape, np.nan)
+            er = np.empty((s.size, 3))
+            er[:] = wheel.e_r(0.0)                   # e_r(nan_to_num(theta)) where theta is NaN
+            todo = reach
+            shared = self._loci.get(("shared",) + key)
+            if shared is not None:                   # the same wheel and orientation (share_locus)
+                sth, ser, sreach = shared
+                both = reach & sreach
+                th[both], er[both] = sth[both], ser[both]
+                todo = reach & ~sreach
+            if todo.any():
+                k = np.nonzero(todo)[0]
+                th[k] = wheel.locus_theta_of(y1[k], z1[k])
+                er[k] = wheel.e_r(np.nan_to_num(th[k]))
+            hit = (s, th, wheel.point_of(u, rho, e_r=er), er, rho, reach)
+            self._loci[key] = hit
         return hit
 
-    def rail_top_under_locus(self, top, step: float) -> np.ndarray:
+    def share_locus(self, other: "WheelRailPair") -> None:
+        """Take the contact locus angles and radial directions of ``other`` (what
+        :meth:`locus_samples` computes once per pair) where they are this pair's: the same wheel
+        profile, radius, axial offset and orientation (roll and yaw), i.e. another lateral shift
+        of the same wheelset; the locus points follow from this pair's centre.  Otherwise
+        nothing is taken."""
+        same = (float(a).hex() == float(b).hex() for a, b in ((other.radius, self.radius),
+                (other.offset, self.offset), (other.pose.roll, self.pose.roll), (other.pose.yaw, self.pose.yaw)))
+        if other.wheel_curve is not self.wheel_curve or not all(same):      # bitwise, signed zeros apart
+            return
+        for key, hit in list(other._loci.items()):
+            if key[0] != "shared" and key not in self._loci:
+                self._loci[("shared",) + key] = hit[1], hit[3], hit[5]
+
+    def rail_top_under_locus(self, top, step: float, span: tuple[float, float] | None = None) -> np.ndarray:
         """``top.z_at`` (a :class:`~conformal.geometry.search.RailTop`) at the lateral positions of
-        the locus samples of :meth:`locus_samples`: they do not change with the height z, so it is
-        computed once per rail top and step."""
-        hit = self._tops.get(step)
+        the locus samples of :meth:`locus_samples` (NaN where they cannot reach ``span``): they do
+        not change with the height z, so it is computed once per rail top and step."""
+        key = (step, span)
+        hit = self._tops.get(key)
         if hit is None or hit[0] is not top:
-            hit = (top, top.z_at(self._locus_at_zero(step)[2][:, 1]))
-            self._tops[step] = hit
+            pts, reach = (self._locus_at_zero(step, span)[i] for i in (2, 5))
+            z_top = np.full(reach.shape, np.nan)
+            z_top[reach] = top.z_at(pts[reach, 1])
+            hit = (top, z_top)
+            self._tops[key] = hit
         return hit[1]
 
     @property

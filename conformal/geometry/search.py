@@ -91,7 +91,7 @@ class RailTop:
         """Envelope height at y (NaN outside the rail)."""
         t = (np.asarray(y) - self.y0) / self.hy
         i = np.clip(np.floor(t).astype(int), 0, self.z.size - 2)
-        w = t - i
+        w = t - i.astype(float)          # t - i (the same numbers, without a mixed-type loop)
         z = (1 - w) * self.z[i] + w * self.z[i + 1]
         return np.where((y >= self.y_min) & (y <= self.y_max), z, np.nan)
 
@@ -112,7 +112,7 @@ class Locus:
     """The wheel's contact locus sampled along the wheel profile."""
 
     s: np.ndarray          # wheel-profile arc length
-    theta: np.ndarray      # rotation angle (NaN: no locus point)
+    theta: np.ndarray      # rotation angle (NaN: no locus point, or none that can lie over the rail)
     points: np.ndarray     # (n, 3) side frame
     gap: np.ndarray        # vertical gap to the rail top (NaN outside the rail / no locus)
     e_r: np.ndarray | None = None   # (n, 3) radial direction at theta (NaN theta: 0), if known
@@ -120,8 +120,13 @@ class Locus:
 
 
 def wheel_locus(wheel: WheelSurface, top: RailTop, step: float = LOCUS_STEP) -> Locus:
+    """The wheel's contact locus sampled every ``step`` mm of wheel profile, theta NaN where there is
+    none or where the sample cannot lie over the rail (:meth:`WheelSurface.locus_reach`)."""
     s, _ = wheel.curve.sample(step)
-    th = wheel.locus_theta(s)
+    u, rho = wheel.meridian(s)[:2]
+    reach = wheel.locus_reach(u, rho, top.y_min, top.y_max)
+    th = np.full(s.shape, np.nan)
+    th[reach] = wheel.locus_theta(s[reach])
     pts = wheel.point(s, np.nan_to_num(th))
     return _locus(s, th, pts, top)
 
@@ -131,9 +136,10 @@ def pair_locus(pair, top: RailTop, z: float, step: float = LOCUS_STEP) -> Locus:
     at wheelset height z: the pair's locus sampled once and moved by z
     (:meth:`~conformal.geometry.placement.WheelRailPair.locus_samples`), equal to
     ``wheel_locus(pair.wheel(z), top)`` to rounding."""
-    s, th, pts = pair.locus_samples(z, step)
-    loc = _locus(s, th, pts, top, pair.rail_top_under_locus(top, step))
-    er, rho = pair.locus_radial(step)
+    span = (top.y_min, top.y_max)
+    s, th, pts = pair.locus_samples(z, step, span)
+    loc = _locus(s, th, pts, top, pair.rail_top_under_locus(top, step, span))
+    er, rho = pair.locus_radial(step, span)
     return Locus(loc.s, loc.theta, loc.points, loc.gap, er, rho)
 
 
@@ -150,7 +156,11 @@ def local_minima(g: np.ndarray, merge: float = MERGE_DEPTH) -> list[int]:
     valid = np.isfinite(g)
     if not valid.any():
         return []
-    gg = np.where(valid, g, np.inf)
+    return _local_minima(np.where(valid, g, np.inf), valid, merge)
+
+
+def _local_minima(gg: np.ndarray, valid: np.ndarray, merge: float) -> list[int]:
+    """:func:`local_minima` of gg = g with inf for NaN (``valid``: where g is finite, at least once)."""
     inf = np.array([np.inf])
     left = np.concatenate((inf, gg[:-1]))
     right = np.concatenate((gg[1:], inf))
@@ -231,7 +241,7 @@ class ContactPoint:
         """A, B (1/mm; h = A x'^2 + B y'^2 in principal axes) and the angle (rad) of the x' axis
         from the rolling direction."""
         K = 0.5 * (self.curvature + self.curvature.T)
-        w, v = np.linalg.eigh(0.5 * K)
+        w, v = _eigh(0.5 * K)
         # the eigenvector closest to the rolling direction is x'
         k = int(np.argmax(np.abs(v[0, :])))
         A, B = float(w[k]), float(w[1 - k])
@@ -307,8 +317,7 @@ def _contact_values(wheel: WheelSurface, rail: RailSurface, q) -> tuple[list, di
     same expressions in Python floats (numpy arrays in ``v``, as there)."""
     s_w, th, x, s_r = (float(c) for c in q)
     u, rho, u1, rho1, u2, rho2 = wheel.meridian(s_w)
-    f = wheel.frame
-    O, a, ed, ef = (tuple(float(c) for c in vec) for vec in (f.O, f.a, f.e_d, f.e_f))
+    O, a, ed, ef = wheel.frame_floats
     c, sn = math.cos(th), math.sin(th)
     msn = -sn
     er = tuple(c * ed[k] + sn * ef[k] for k in range(3))
@@ -340,7 +349,7 @@ def _curvatures(wheel: WheelSurface, rail: RailSurface, v: dict) -> tuple[np.nda
     II = np.array([[r_ss @ n, r_st @ n], [r_st @ n, r_tt @ n]])
     Jw = np.column_stack([v["t1w"], v["t2w"]])
     e1, e2 = np.array([1.0, 0.0, 0.0]), v["t2r"]
-    C = np.linalg.lstsq(Jw, np.column_stack([e1, e2]), rcond=None)[0]   # tangent vectors in (s_w, theta)
+    C = _lstsq(Jw, np.column_stack([e1, e2]))   # tangent vectors in (s_w, theta)
     Kw = C.T @ II @ C
     Y1, Z1, Y2, Z2 = v["Y1"], v["Z1"], v["Y2"], v["Z2"]
     kr = (Y1 * Z2 - Z1 * Y2) / (Y1 * Y1 + Z1 * Z1) ** 1.5
@@ -354,33 +363,79 @@ def _cross_x(n: np.ndarray) -> np.ndarray:
     return np.array([n1 * 0.0 - n2 * 0.0, n2 * 1.0 - n0 * 0.0, n0 * 0.0 - n1 * 1.0])
 
 
+def _raise_singular(err, flag):
+    raise np.linalg.LinAlgError("Singular matrix")
+
+
+#: the floating-point error state numpy.linalg.solve sets around its LAPACK call (a singular matrix
+#: raises LinAlgError)
+_SOLVE_ERRSTATE = dict(call=_raise_singular, invalid="call", over="ignore", divide="ignore", under="ignore")
+
+
+def _raise_eigh(err, flag):
+    raise np.linalg.LinAlgError("Eigenvalues did not converge")
+
+
+def _raise_lstsq(err, flag):
+    raise np.linalg.LinAlgError("SVD did not converge in Linear Least Squares")
+
+try:   # the gufuncs numpy.linalg.solve (one right-hand side), eigh and lstsq call (the same numbers),
+    from numpy.linalg import _umath_linalg    # without their per-call argument handling
+
+    def _solve1(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """numpy.linalg.solve(a, b) of float arrays, b a vector; under _SOLVE_ERRSTATE."""
+        return _umath_linalg.solve1(a, b, signature="dd->d")
+
+    def _eigh(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """numpy.linalg.eigh(a) of a real symmetric float array (its lower triangle)."""
+        with np.errstate(**{**_SOLVE_ERRSTATE, "call": _raise_eigh}):
+            return _umath_linalg.eigh_lo(a, signature="d->dd")
+
+    def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """numpy.linalg.lstsq(a, b, rcond=None)[0] of float arrays a (m, n), b (m, k), k > 0."""
+        rcond = np.finfo(np.float64).eps * max(a.shape)
+        with np.errstate(**{**_SOLVE_ERRSTATE, "call": _raise_lstsq}):
+            return _umath_linalg.lstsq(a, b, rcond, signature="ddd->ddid")[0]
+except ImportError:                     # pragma: no cover - other numpy layouts
+    def _solve1(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return np.linalg.solve(a, b)
+
+    def _eigh(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return np.linalg.eigh(a)
+
+    def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return np.linalg.lstsq(a, b, rcond=None)[0]
+
+
 def newton_contact(wheel: WheelSurface, rail: RailSurface, q0, *, tol: float = 1e-11,
                    maxit: int = 40) -> ContactPoint:
     """Refine a contact point from the start q0 = (s_w, theta, x, s_r) (seed Eqs. 54-55)."""
     q = [float(v) for v in q0]            # Python floats: the arithmetic of numpy's, per entry
     Lw, Lr = wheel.curve.length, rail.curve.length
     res = np.inf
-    f = wheel.frame
-    frame = tuple(tuple(float(c) for c in vec) for vec in (f.O, f.a, f.e_d, f.e_f))
-    for it in range(1, maxit + 1):
-        F, J = _newton_system(wheel, rail, q, frame)
-        try:
-            dq = np.linalg.solve(np.array(J), -np.array(F)).tolist()
-        except np.linalg.LinAlgError:
-            raise ConvergenceError("contact search: singular Jacobian (seed Eq. 55) at "
-                                   f"s_w = {q[0]:.3f}, s_r = {q[3]:.3f} mm") from None
-        # limit the step (a Newton step may jump across the profile where curvatures change fast)
-        scale = max(1.0, abs(dq[0]) / 2.0, abs(dq[3]) / 2.0, abs(dq[1]) / 0.05)
-        dq = [v / scale for v in dq]
-        q = [a + b for a, b in zip(q, dq)]
-        q[0] = min(max(q[0], 0.0), Lw)
-        q[3] = min(max(q[3], 0.0), Lr)
-        if (abs(dq[0]) < 1e-9 and abs(dq[2]) < 1e-9 and abs(dq[3]) < 1e-9 and abs(dq[1]) < 1e-12
-                and scale == 1.0):
-            break
+    frame = wheel.frame_floats
+    array = np.array
+    with np.errstate(**_SOLVE_ERRSTATE):  # numpy.linalg.solve's, once for the loop
+        for it in range(1, maxit + 1):
+            F, J = _newton_system(wheel, rail, q, frame)
+            try:
+                dq = _solve1(array(J), -array(F)).tolist()
+            except np.linalg.LinAlgError:
+                raise ConvergenceError("contact search: singular Jacobian (seed Eq. 55) at "
+                                       f"s_w = {q[0]:.3f}, s_r = {q[3]:.3f} mm") from None
+            # limit the step (a Newton step may jump across the profile where curvatures change fast)
+            scale = max(1.0, abs(dq[0]) / 2.0, abs(dq[3]) / 2.0, abs(dq[1]) / 0.05)
+            dq = [v / scale for v in dq]
+            q = [a + b for a, b in zip(q, dq)]
+            q[0] = min(max(q[0], 0.0), Lw)
+            q[3] = min(max(q[3], 0.0), Lr)
+            if (abs(dq[0]) < 1e-9 and abs(dq[2]) < 1e-9 and abs(dq[3]) < 1e-9 and abs(dq[1]) < 1e-12
+                    and scale == 1.0):
+                break
     q = np.array(q)
     F, v = _contact_values(wheel, rail, q)
-    res = float(np.linalg.norm(F))
+    Fa = np.array(F)
+    res = math.sqrt(Fa.dot(Fa))           # numpy.linalg.norm's arithmetic (a dot product, sqrt)
     if not res < max(tol, 1e-8):
         raise ConvergenceError(f"contact search: Newton-Raphson (seed Eq. 55) did not converge "
                                f"in {maxit} iterations (residual {res:.2e})")
@@ -410,18 +465,19 @@ def find_contacts(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = 
     if known (:func:`pair_locus`)."""
     top = top or RailTop.of(rail)
     loc = locus if locus is not None else wheel_locus(wheel, top)
-    if not np.isfinite(loc.gap).any():
+    valid = np.isfinite(loc.gap)
+    if not valid.any():
         raise NoContactError("contact search: the wheel does not lie over the rail "
                              "(no part of the wheel profile is above the rail profile)")
-    gmin = float(np.nanmin(loc.gap))
-    i_min = int(np.nanargmin(loc.gap))
-    valid = np.isfinite(loc.gap)
+    gg = np.where(valid, loc.gap, np.inf)      # numpy.nanmin / nanargmin's values, NaN as inf
+    i_min = int(np.argmin(gg))
+    gmin = float(gg[i_min])
     if i_min == 0 or i_min == valid.size - 1 or not (valid[i_min - 1] and valid[i_min + 1]):
         y_w = float(wheel.curve.y(loc.s[i_min]))
         raise InputError(f"the wheel would touch the rail at the end of a profile (wheel y = {y_w:.2f} mm, "
                          f"side-frame y = {loc.points[i_min, 1]:.2f} mm): the profiles do not cover "
                          "this position")
-    cands = [i for i in local_minima(loc.gap) if loc.gap[i] <= gmin + window]
+    cands = [i for i in _local_minima(gg, valid, MERGE_DEPTH) if loc.gap[i] <= gmin + window]
     contacts: list[ContactPoint] = []
     for i in cands:
         p = loc.points[i]

@@ -78,6 +78,11 @@ class ProfileCurve:
             return self._pieces.scalar(float(s))
         return self._pieces.derivatives(s)
 
+    def stack(self, s, order: int = 2) -> np.ndarray:
+        """[(y, z), (y', z'), (y'', z'')] at the arc lengths s (an array), (3, 2) + s.shape: the
+        values of :meth:`derivatives` in one array; ``order`` = 1: the first two rows only."""
+        return self._pieces.stack(s, order)
+
     def tangent(self, s) -> np.ndarray:
         t = self._pieces.eval(s, 1)
         return t / np.linalg.norm(t, axis=-1, keepdims=True)
@@ -196,10 +201,36 @@ class _Pieces:
     def _inner(self) -> np.ndarray:
         return self.x[1:-1]
 
+    @cached_property
+    def _uniform(self) -> tuple[float, float] | None:
+        """(first inner break, 1 / spacing) where the inner breaks are uniform to a quarter of their
+        spacing (the arc-length grid of fit_curve), else None."""
+        inner = self._inner
+        if inner.size < 2:
+            return None
+        h = (inner[-1] - inner[0]) / (inner.size - 1)
+        if not h > 0.0 or np.max(np.abs(inner - (inner[0] + h * np.arange(inner.size)))) > 0.25 * h:
+            return None
+        return float(inner[0]), 1.0 / h
+
     def _index(self, s: np.ndarray) -> np.ndarray:
         """The piece of each s: the last break <= s, the end pieces extended (NaN: the last piece).
-        The count of inner breaks <= s, i.e. searchsorted(x, s, "right") - 1 clipped to the pieces."""
-        return np.searchsorted(self._inner, s, side="right")
+        The count of inner breaks <= s, i.e. searchsorted(x, s, "right") - 1 clipped to the pieces;
+        on uniform breaks from the spacing, corrected by one comparison each way (the same counts)."""
+        uni = self._uniform
+        inner = self._inner
+        if uni is None or s.size < 1500:               # (a binary search is cheaper on fewer)
+            return np.searchsorted(inner, s, side="right")
+        m = inner.size
+        g = clip((s - uni[0]) * uni[1], -1.0, m + 1.0)
+        nan = np.isnan(g)
+        if nan.any():
+            g[nan] = m
+        k = np.floor(g, out=g).astype(np.intp) + 1         # within one of the count
+        k = clip(k, 0, m, out=k)
+        k -= (k > 0) & (inner.take(k - 1, mode="clip") > s)
+        k += (k < m) & (inner.take(k, mode="clip") <= s)
+        return k
 
     def eval(self, s, nu: int = 0) -> np.ndarray:
         """The curve (nu = 0) or its derivative of order nu (1, 2, 3) at s, shape s.shape + (2,)."""
@@ -222,16 +253,39 @@ class _Pieces:
         return np.stack(out, axis=-1)
 
     def derivatives(self, s) -> tuple[np.ndarray, ...]:
+        (y, z), (y1, z1), (y2, z2) = self.stack(s)
+        return (y, z, y1, z1, y2, z2)
+
+    def stack(self, s, order: int = 2) -> np.ndarray:
+        """The curve and its first two derivatives at s, (3, 2) + s.shape: [(y, z), (y', z'),
+        (y'', z'')], the expressions of :meth:`scalar` per entry (y and z in one array operation);
+        ``order`` = 1: the curve and its first derivative, (2, 2) + s.shape."""
         s = np.asarray(s, dtype=float)
         i = self._index(s)
         t = s - self.x.take(i)
-        a0y, a0z, a1y, a1z, a2y, a2z, a3y, a3z = self.rows.take(i, axis=1)
-        out = []
-        for a0, a1, a2, a3 in ((a0y, a1y, a2y, a3y), (a0z, a1z, a2z, a3z)):
-            out.append((((a3 * t + a2) * t + a1) * t + a0, (3.0 * a3 * t + 2.0 * a2) * t + a1,
-                        6.0 * a3 * t + 2.0 * a2))
-        (y, y1, y2), (z, z1, z2) = out
-        return (y, z, y1, z1, y2, z2)
+        r = self.rows.take(i, axis=1)
+        a0, a1, a2, a3 = r[0:2], r[2:4], r[4:6], r[6:8]
+        out = np.empty((order + 1, 2) + s.shape)
+        c, d1 = out[0], out[1]
+        np.multiply(a3, t, out=c)               # ((a3 t + a2) t + a1) t + a0
+        c += a2
+        c *= t
+        c += a1
+        c *= t
+        c += a0
+        a2x2 = 2.0 * a2
+        np.multiply(3.0, a3, out=d1)            # (3 a3 t + 2 a2) t + a1
+        d1 *= t
+        d1 += a2x2
+        d1 *= t
+        d1 += a1
+        if order == 1:
+            return out
+        d2 = out[2]
+        np.multiply(6.0, a3, out=d2)            # 6 a3 t + 2 a2
+        d2 *= t
+        d2 += a2x2
+        return out
 
     def scalar(self, s: float) -> tuple[float, ...]:
         """y, z, y', z', y'', z'' at one arc length (Python floats)."""

@@ -59,12 +59,26 @@ class RailSurface:
     def profile(self, s) -> tuple[np.ndarray, ...]:
         """Y, Z, Y', Z', Y'', Z'' of the placed profile at arc length s (side frame; floats for a
         scalar s)."""
-        y, z, y1, z1, y2, z2 = self.curve.derivatives(s)
         r00, r01, r10, r11, y0, z0 = self._placement
-        Y = r00 * y + r01 * z + y0
-        Z = r10 * y + r11 * z + z0
-        return (Y, Z, r00 * y1 + r01 * z1, r10 * y1 + r11 * z1,
-                r00 * y2 + r01 * z2, r10 * y2 + r11 * z2)
+        if isinstance(s, (float, int)) or (isinstance(s, np.ndarray) and s.ndim == 0):
+            y, z, y1, z1, y2, z2 = self.curve.derivatives(s)
+            Y = r00 * y + r01 * z + y0
+            Z = r10 * y + r11 * z + z0
+            return (Y, Z, r00 * y1 + r01 * z1, r10 * y1 + r11 * z1,
+                    r00 * y2 + r01 * z2, r10 * y2 + r11 * z2)
+        c = self.curve.stack(s)          # (3, 2, ...): the value and two derivatives of (y, z)
+        y, z = c[:, 0], c[:, 1]
+        Yd, Zd = r00 * y + r01 * z, r10 * y + r11 * z    # the same expressions, three rows at once
+        return (Yd[0] + y0, Zd[0] + z0, Yd[1], Zd[1], Yd[2], Zd[2])
+
+    def profile_slopes(self, s: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Y, Z, Y', Z' of :meth:`profile` at the arc lengths s (an array): the same values, without
+        the second derivatives."""
+        r00, r01, r10, r11, y0, z0 = self._placement
+        c = self.curve.stack(s, 1)
+        y, z = c[:, 0], c[:, 1]
+        Yd, Zd = r00 * y + r01 * z, r10 * y + r11 * z
+        return (Yd[0] + y0, Zd[0] + z0, Yd[1], Zd[1])
 
     def point(self, s) -> np.ndarray:
         Y, Z = self.profile(s)[:2]
@@ -114,6 +128,33 @@ class WheelFrame:
         return WheelFrame(self.O + np.array([0.0, 0.0, dz]), self.a, self.e_d, self.e_f)
 
 
+def _combine(c: np.ndarray, v: np.ndarray, d: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """c[..., None] * v + d[..., None] * w for 3-vectors v, w, one coordinate at a time (the same
+    numbers as the broadcast expression, without its buffered iteration over rows of three)."""
+    out = np.empty(np.broadcast_shapes(c.shape, d.shape) + (3,))
+    for k in range(3):
+        col = out[..., k]
+        np.multiply(c, v[k], out=col)
+        col += d * w[k]
+    return out
+
+
+#: mm: :meth:`WheelSurface.locus_reach` keeps the samples up to this far outside a rail's lateral range
+LOCUS_REACH_MARGIN = 1.0
+
+
+def _wrap(th: np.ndarray) -> np.ndarray:
+    """(th + pi) % (2 pi) - pi, the remainder taken only where th + pi lies outside (0, 2 pi) (inside,
+    numpy's remainder returns its argument: the same numbers)."""
+    x = th + np.pi
+    if np.ndim(x) == 0:
+        return x % (2 * np.pi) - np.pi
+    out = ~((x > 0.0) & (x < 2 * np.pi))
+    if out.any():
+        x[out] = x[out] % (2 * np.pi)
+    return x - np.pi
+
+
 @dataclass(frozen=True, eq=False)
 class WheelSurface:
     """A wheel profile curve revolved about the axle of ``frame``.
@@ -127,18 +168,27 @@ class WheelSurface:
     offset: float
     frame: WheelFrame
 
+    @cached_property
+    def frame_floats(self) -> tuple[tuple[float, float, float], ...]:
+        """The frame's origin and axes (O, a, e_d, e_f) as tuples of Python floats (for the
+        per-point Newton iterations of the contact search, computed once per wheel)."""
+        f = self.frame
+        return tuple(tuple(float(c) for c in v) for v in (f.O, f.a, f.e_d, f.e_f))
+
     def meridian(self, s) -> tuple[np.ndarray, ...]:
         """u, rho, u', rho', u'', rho'' (axial position and radius along the profile)."""
         y, z, y1, z1, y2, z2 = self.curve.derivatives(s)
         return self.offset + y, self.radius + z, y1, z1, y2, z2
 
     def e_r(self, theta) -> np.ndarray:
-        th = np.asarray(theta)[..., None]
-        return np.cos(th) * self.frame.e_d + np.sin(th) * self.frame.e_f
+        """Radial direction cos(theta) e_d + sin(theta) e_f, shape theta.shape + (3,)."""
+        th = np.asarray(theta)
+        return _combine(np.cos(th), self.frame.e_d, np.sin(th), self.frame.e_f)
 
     def e_t(self, theta) -> np.ndarray:
-        th = np.asarray(theta)[..., None]
-        return -np.sin(th) * self.frame.e_d + np.cos(th) * self.frame.e_f
+        """Circumferential direction -sin(theta) e_d + cos(theta) e_f, shape theta.shape + (3,)."""
+        th = np.asarray(theta)
+        return _combine(-np.sin(th), self.frame.e_d, np.cos(th), self.frame.e_f)
 
     def point(self, s, theta) -> np.ndarray:
         u, rho = self.meridian(s)[:2]
@@ -147,8 +197,25 @@ class WheelSurface:
     def point_of(self, u, rho, theta=None, *, e_r=None) -> np.ndarray:
         """The surface point of axial position u, radius rho (the meridian's values) and rotation
         theta (or its radial direction ``e_r`` = :meth:`e_r` (theta))."""
-        er = self.e_r(theta) if e_r is None else e_r
-        return self.frame.O + np.asarray(u)[..., None] * self.frame.a + np.asarray(rho)[..., None] * er
+        er = self.e_r(theta) if e_r is None else np.asarray(e_r)
+        u, rho, f = np.asarray(u), np.asarray(rho), self.frame
+        out = np.empty(np.broadcast_shapes(u.shape, rho.shape, er.shape[:-1]) + (3,))
+        for k in range(3):              # (O + u a) + rho e_r, one coordinate at a time
+            col = out[..., k]
+            np.multiply(u, f.a[k], out=col)
+            col += f.O[k]
+            col += rho * er[..., k]
+        return out
+
+    def locus_reach(self, u: np.ndarray, rho: np.ndarray, y_min: float, y_max: float) -> np.ndarray:
+        """Where the profile samples of axial positions u and radii rho (the meridian's values) can
+        have their locus point at a side-frame lateral position in [y_min, y_max] (a rail's range),
+        with LOCUS_REACH_MARGIN mm to spare: the point's y = O_y + u a_y + rho e_r,y and
+        |e_r,y| <= hypot(e_d,y, e_f,y) at every rotation."""
+        f = self.frame
+        c = float(f.O[1]) + u * float(f.a[1])
+        r = rho * math.hypot(float(f.e_d[1]), float(f.e_f[1])) + LOCUS_REACH_MARGIN
+        return (c + r >= y_min) & (c - r <= y_max)
 
     def locus_theta(self, s) -> np.ndarray:
         """Rotation angle theta(s_w) of the contact locus: the point of each wheel circle where the
@@ -168,9 +235,7 @@ class WheelSurface:
             phase = np.arctan2(B, A)
             ratio = np.where(Rn > 0, C / np.where(Rn > 0, Rn, 1.0), np.nan)
             dev = np.arccos(np.clip(ratio, -1.0, 1.0))
-        th1, th2 = phase + dev, phase - dev
-        th1 = (th1 + np.pi) % (2 * np.pi) - np.pi
-        th2 = (th2 + np.pi) % (2 * np.pi) - np.pi
+        th1, th2 = _wrap(phase + dev), _wrap(phase - dev)
         th = np.where(np.abs(th1) < np.abs(th2), th1, th2)
         bad = ~(np.abs(ratio) <= 1.0) | (np.abs(th) > 0.5)
         return np.where(bad, np.nan, th)
