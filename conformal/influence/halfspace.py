@@ -327,6 +327,15 @@ class HalfSpaceInfluence:
         fx, fy = int(fx), int(fy)
         return self._on_grid(-(-self.mx // fx), -(-self.my // fy), fx * self.dx, fy * self.dy)
 
+    def window(self, mx: int, my: int) -> "HalfSpaceInfluence":
+        """The operator of a window of mx x my elements of this grid: the half-space is invariant to
+        translations, so it is the operator of an mx x my grid of the same spacing, shared per
+        shape like the operators of whole grids (:func:`_shared_operator`)."""
+        mx, my = int(mx), int(my)
+        if mx * my > CACHE_ELEMENTS:
+            return self._on_grid(mx, my, self.dx, self.dy)
+        return _shared_operator(mx, my, float(self.dx), float(self.dy), float(self.G), float(self.nu), float(self.K))
+
     def _on_grid(self, mx: int, my: int, dx: float, dy: float) -> "HalfSpaceInfluence":
         """The operator of the same constants on another uniform grid."""
         return _padded(HalfSpaceInfluence(mx, my, dx, dy, self.G, self.nu, self.K))

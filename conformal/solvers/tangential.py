@@ -228,6 +228,35 @@ def _operator_shared(op, steady: bool, dx: float) -> dict:
     return per.setdefault((bool(steady), float(dx)), {})
 
 
+#: the products of a contact solve run on a window of the grid around the contact elements (their
+#: bounding rows and columns, in steady rolling one row more downstream for the upstream
+#: neighbours) where the operator has one (``window``: the planar half-space) and the window has
+#: at most WINDOW_FRACTION of the grid's elements; its sides are rounded up to multiples of
+#: WINDOW_STEP elements, so that the contact sets of neighbouring positions share its operator,
+#: single-precision product and preconditioner (0: no windows)
+WINDOW_FRACTION = 0.7
+WINDOW_STEP = 4
+
+
+def _window(contact: np.ndarray, steady: bool):
+    """(first row, first column, rows, columns) of the window of the products around ``contact``
+    (:data:`WINDOW_FRACTION`), or None where the whole grid is used."""
+    if not WINDOW_STEP:
+        return None
+    mx, my = contact.shape
+    rows, cols = np.flatnonzero(contact.any(axis=1)), np.flatnonzero(contact.any(axis=0))
+    if rows.size == 0:
+        return None
+    r0, c0 = int(rows[0]), int(cols[0])
+    nx = min(int(rows[-1]) + (2 if steady else 1), mx) - r0
+    ny = int(cols[-1]) + 1 - c0
+    q = WINDOW_STEP
+    nx, ny = min(mx, -(-nx // q) * q), min(my, -(-ny // q) * q)
+    if nx * ny > WINDOW_FRACTION * mx * my:
+        return None
+    return min(r0, mx - nx), min(c0, my - ny), nx, ny
+
+
 class _SlipOperator:
     """L p on the contact elements (steady: upwind difference of A p over dx; shift: A p) and its
     approximate inverse (the preconditioner), see the module docstring.
@@ -238,16 +267,34 @@ class _SlipOperator:
     whole grid."""
 
     def __init__(self, op, grid, contact: np.ndarray, steady: bool, shared: dict | None = None):
-        self.op, self.steady = op, steady
-        self.mx, self.my = grid.mx, contact.shape[1]
+        self.steady = steady
         self.dx = float(grid.dx)
+        #: the contact elements as flat offsets into the grid (the callers' numbering)
         self.idx = np.flatnonzero(contact.ravel())
         self.products = 0
         self.coarse_products = 0.0  # products on coarser grids (nested start, coarse-grid correction),
         #                             in this grid's units
+        self._full_op, self._full_shared = op, shared
+        self.window = None
+        if shared is None:
+            shared = self._full_shared = _operator_shared(op, steady, grid.dx)
+            win = _window(contact, steady)
+            if win is not None:
+                key = ("window",) + win[2:]
+                if key not in shared:
+                    shared[key] = op.window(*win[2:])
+                if shared[key] is not None:
+                    self.window = (slice(win[0], win[0] + win[2]), slice(win[1], win[1] + win[3]))
+                    op, contact = shared[key], contact[self.window]
+                    shared = _operator_shared(op, steady, grid.dx)
+        # below: the grid of the products (the window where there is one), its contact elements
+        # ``widx`` and its operator ``op``
+        self.op = op
+        self.mx, self.my = contact.shape
+        self.widx = np.flatnonzero(contact.ravel()) if self.window is not None else self.idx
         # what depends on the operator alone (longer operator, single-precision product, the
         # preconditioner's symbols), shared by the operators of other contact sets on this grid
-        self._shared = shared = _operator_shared(op, steady, grid.dx) if shared is None else shared
+        self._shared = shared
         self._ext = None
         if steady and contact[-1].any():  # u' of the leading column lies outside the grid; operators
             if "ext" not in shared:       # without a longer version fall back to u' = u there
@@ -258,19 +305,19 @@ class _SlipOperator:
         self._rows = rows
         # L p = wgt (u[idx] - u[up]) with u = A p on the (possibly extended) grid, flattened
         if steady:
-            has_up = self.idx // self.my + 1 < rows  # without an extended grid the leading column
-            self._up = np.where(has_up, self.idx + self.my, self.idx)  # gets L p = 0 (u' = u)
+            has_up = self.widx // self.my + 1 < rows  # without an extended grid the leading column
+            self._up = np.where(has_up, self.widx + self.my, self.widx)  # gets L p = 0 (u' = u)
             self._wgt = has_up / self.dx
         key = ("fast", self._ext is not None)
         if key not in shared:
             shared[key] = pop.tangential_product32() if SINGLE_PRECISION else None
         self._fast = shared[key]
         # flat offsets of the contact elements (and their upstream neighbours) in a (2, rows*my) buffer
-        self._off = np.concatenate([self.idx, rows * self.my + self.idx])
+        self._off = np.concatenate([self.widx, rows * self.my + self.widx])
         if steady:
             self._off_up = np.concatenate([self._up, rows * self.my + self._up])
             self._wgt2 = np.concatenate([self._wgt, self._wgt])
-        self._poff = np.concatenate([self.idx, self.mx * self.my + self.idx])
+        self._poff = np.concatenate([self.widx, self.mx * self.my + self.widx])
         # the same positions as boolean masks of the grid buffers: scatter and gather by a mask
         # are 3-6x faster than put/take on flat offsets (the offsets are sorted, so the order agrees)
         self._m = np.zeros((2, rows, self.my), bool)
@@ -292,13 +339,30 @@ class _SlipOperator:
         """(u_x, u_y) = A p on the grid for tractions (px, py) given on the grid (zero outside the
         contact elements): the field of the last double-precision :meth:`apply` when that was
         for the same tractions (the final slip of a solve is computed from them), else one
-        product."""
+        product.  With a window (:data:`WINDOW_FRACTION`) that field covers the window only: the
+        rest of the grid, away from the contact, comes from the single-precision product of the
+        whole grid where the operator has one (relative error about 1e-7)."""
         last = self._last
-        if last is not None and np.array_equal(last[0][0], px.reshape(-1).take(self.idx)) \
-                and np.array_equal(last[0][1], py.reshape(-1).take(self.idx)):
-            return last[1][0, :self.mx], last[1][1, :self.mx]
+        same = last is not None and np.array_equal(last[0][0], px.reshape(-1).take(self.idx)) \
+            and np.array_equal(last[0][1], py.reshape(-1).take(self.idx))
+        if self.window is None:
+            if same:
+                return last[1][0, :self.mx], last[1][1, :self.mx]
+            self.products += 1
+            return self._full_op.apply_tangential(px, py)
+        if "fast" not in self._full_shared:
+            self._full_shared["fast"] = self._full_op.tangential_product32() if SINGLE_PRECISION else None
+        fast = self._full_shared["fast"]
         self.products += 1
-        return self.op.apply_tangential(px, py)
+        if fast is None:
+            return self._full_op.apply_tangential(px, py)
+        u = fast(np.stack([px, py]).astype(np.float32)).astype(float)
+        if same:
+            u[(slice(None),) + self.window] = last[1][:, :self.mx]
+        else:
+            self.products += 1
+            u[(slice(None),) + self.window] = self.op.apply_tangential(px[self.window], py[self.window])
+        return u[0], u[1]
 
     def apply(self, pc: np.ndarray, fast: bool = False) -> np.ndarray:
         """L p for p given on the contact elements (2, nc); returns (2, nc).  ``fast``: single
@@ -339,7 +403,8 @@ class _SlipOperator:
         if self._fast is None or mx * my < PROBE32_FROM:
             e = np.zeros((2, mx, my))
             e[k, mx // 2, my // 2] = 1.0
-            return self.grid_u(*e)
+            self.products += 1
+            return self.op.apply_tangential(*e)
         self.products += 1
         e = np.zeros((2, self._rows, my), dtype=np.float32)
         e[k, mx // 2, my // 2] = 1.0
@@ -425,7 +490,7 @@ class _CoarseCorrection:
         self.L, self.ok = L, False
         mx, my = L.mx, L.my
         fy = f if my >= 4 * f else 1
-        g = L.idx[ia]
+        g = L.widx[ia]
         mxc, myc = -(-mx // f), -(-my // fy)
         cell = ((g // my) // f) * myc + (g % my) // fy
         stick = np.bincount(cell, minlength=mxc * myc) >= COARSE_STICK * f * fy
@@ -440,8 +505,8 @@ class _CoarseCorrection:
         Lc.products = 0
         self.scale = (mxc * myc) / (mx * my)   # a coarse product in units of a fine one
         self.sel = np.flatnonzero(stick[cell])  # the adhesion rows (positions in ia) that have a cell
-        self.pos = np.searchsorted(Lc.idx, cell[self.sel])
-        self.ncc = ncc = Lc.idx.size
+        self.pos = np.searchsorted(Lc.widx, cell[self.sel])
+        self.ncc = ncc = Lc.widx.size
         self.wmean = 1.0 / np.bincount(self.pos, minlength=ncc)
         # prolongation by one take: adhesion row j of component k reads entry k (ncc + 1) + pos of
         # the coarse field padded with a zero per component (rows without a cell read the zero)
@@ -629,6 +694,18 @@ class _Newton:
         if L.steady and COARSE_FACTOR and COARSE_FROM and self.nc >= COARSE_FROM and nA:
             cc = _CoarseCorrection(L, ia, COARSE_FACTOR)
             cc = cc if cc.ok else None
+
+        if not nA and cc is None and not w.any():
+            # every row slips with sigma above STIFF_RATIO diag (full slip at large creepage, most of
+            # a wheel-rail sweep): the preconditioner is the diagonal alone, and P's product, which
+            # would act on zeros, is skipped (the same numbers)
+            def diagonal(r):
+                out = np.empty_like(r)
+                out[:nS] = local * r[:nS]
+                out[nS:] = r[nS:]
+                return out
+
+            return diagonal
 
         def prec(r):
             d = np.zeros(2 * nc)
