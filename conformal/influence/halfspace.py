@@ -402,6 +402,10 @@ class TangentialProduct32:
         self.k = [v.real.astype(np.float32) if real else v.astype(np.complex64) for v in k]
         half = self.My // 2 + 1
         self.block = BLOCK_COLUMNS if 2 * self.Mx * half * 8 > BLOCK_FROM_BYTES else half
+        # unblocked, real kernels: each value repeated for the real and imaginary part, so that the
+        # products run on float32 views of the spectrum (the numbers of the complex product, without
+        # numpy's mixed-type casting loop: 2-2.5x faster)
+        self._k2 = [np.repeat(v, 2, axis=-1) for v in self.k] if real and self.block >= half else None
 
     def __call__(self, p: np.ndarray) -> np.ndarray:
         """p: (2, mx, my) float32 (or castable); returns (2, mx, my) float32."""
@@ -428,12 +432,18 @@ class TangentialProduct32:
         columns ``cols`` in its first mx rows, zero below; the product with the kernels there
         and the transform back, in place; returns the first mx rows (2, mx, nc)."""
         h = ffts.fft(h, axis=-2, overwrite=True)
-        kxx, kxy, kyy = (k[:, cols] for k in self.k)
-        a0 = kxx * h[0]
-        a0 += kxy * h[1]
-        h[1] *= kyy
-        h[1] += kxy * h[0]
-        h[0] = a0
+        if self._k2 is not None and h.dtype == np.complex64 and h.flags.c_contiguous \
+                and h.shape[-1] == self._k2[0].shape[-1] // 2:
+            f = h.view(np.float32)
+            kxx, kxy, kyy = self._k2
+        else:
+            f = h
+            kxx, kxy, kyy = (k[:, cols] for k in self.k)
+        a0 = kxx * f[0]
+        a0 += kxy * f[1]
+        f[1] *= kyy
+        f[1] += kxy * f[0]
+        f[0] = a0
         return ffts.ifft(h, axis=-2, overwrite=True)[:, : self.mx]
 
 

@@ -332,7 +332,10 @@ class _SlipOperator:
         if "inv" not in shared:
             self._build_preconditioner()
             shared["inv"], shared["diag"] = self._inv, self.diag
-        self._inv, self.diag = shared["inv"], shared["diag"]
+            real = all(v.dtype == np.float32 for v in self._inv)
+            shared["inv2"] = tuple(np.repeat(v, 2, axis=-1) for v in self._inv) if real else None
+        self._inv, self.diag, self._inv2 = shared["inv"], shared["diag"], shared["inv2"]
+        self._cbuf = np.empty((2, self.mx, self.my), dtype=np.float32) if steady else None
 
     # --- products
     def grid_u(self, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -442,15 +445,22 @@ class _SlipOperator:
         full = self._pbuf.reshape(2, self.mx, self.my)
         full[self._pm] = rc.reshape(-1)
         if self.steady:  # D^-1: sum from the leading edge downstream
-            full = np.cumsum(full[:, ::-1], axis=1)[:, ::-1]
+            np.cumsum(full[:, ::-1], axis=1, out=self._cbuf[:, ::-1])
+            full = self._cbuf
             full *= np.float32(self.dx)
         h = ffts.rfft2(full)
-        i00, i01, i10, i11 = self._inv
-        q = np.empty_like(h)
-        q[0] = i00 * h[0]
-        q[0] += i01 * h[1]
-        q[1] = i10 * h[0]
-        q[1] += i11 * h[1]
+        if self._inv2 is not None and h.flags.c_contiguous:
+            # real symbols: the products on float32 views (the numbers of the complex product)
+            i00, i01, i10, i11 = self._inv2
+            h, q = h.view(np.float32), np.empty_like(h)
+            qf = q.view(np.float32)
+        else:
+            i00, i01, i10, i11 = self._inv
+            q = qf = np.empty_like(h)
+        qf[0] = i00 * h[0]
+        qf[0] += i01 * h[1]
+        qf[1] = i10 * h[0]
+        qf[1] += i11 * h[1]
         q = ffts.irfft2(q, (self.mx, self.my))
         return q[self._pm].astype(float).reshape(2, -1)
 
