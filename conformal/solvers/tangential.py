@@ -631,6 +631,8 @@ class _Newton:
         p, s = st.p, st.s
         z = p - c * s
         nz = np.hypot(z[0], z[1])
+        if not self.force_rows and slip.all():
+            return self._step_full_slip(p, s, z, nz, rtol)
         ia, isl = np.flatnonzero(~slip), np.flatnonzero(slip)
         nA, nS = ia.size, isl.size
         n = z[:, isl] / nz[isl]
@@ -681,6 +683,30 @@ class _Newton:
         for j, (k, _) in enumerate(self.force_rows):
             dcreep[k] = x[2 * nA + nS + j]
         return dp, ds, dcreep, its
+
+    def _step_full_slip(self, p, s, z, nz, rtol: float):
+        """:meth:`step` where every element slips and no force is prescribed (most contact solves
+        of a wheel-rail sweep): the same system and the same numbers, without the scatter and
+        gather of the adhesion rows."""
+        L, c, gk = self.L, self.c, self.gk
+        n = z / nz
+        t = np.stack([-n[1], n[0]])
+        kap = gk / nz
+        sigma = (1.0 - kap) / (kap * c)
+        D0 = (gk - (n[0] * p[0] + n[1] * p[1])) * n
+        LD0 = L.apply(D0, fast=True)
+        tp = t[0] * p[0] + t[1] * p[1]
+        rhs = -tp / (kap * c) - (t[0] * LD0[0] + t[1] * LD0[1])
+
+        def matvec(x):
+            Ld = L.apply(x * t, fast=True)
+            return sigma * x + t[0] * Ld[0] + t[1] * Ld[1], Ld
+
+        empty = np.zeros(0, dtype=np.intp)
+        prec = self.preconditioner(empty, np.arange(self.nc), empty, np.arange(2 * self.nc), t, sigma)
+        x, Ldx, its, _ = gmres(matvec, rhs, precond=prec, tol=rtol, maxit=GMRES_MAXIT, restart=GMRES_RESTART,
+                               extra=True)
+        return D0 + x * t, LD0 + (Ldx if Ldx is not None else 0.0), np.zeros(2), its
 
     def preconditioner(self, ia, isl, ia2, isl2, t, sigma):
         """The right preconditioner of the reduced Newton system (module docstring, "Preconditioner").
