@@ -835,6 +835,24 @@ def column_rigid_slip(grid, xi, eta, phi, steady: bool) -> np.ndarray:
     return np.stack([np.broadcast_to(xi, grid.shape), np.broadcast_to(eta + phi * (X + dq6), grid.shape)])
 
 
+def rescaled_start(p_start: np.ndarray, pn_start: np.ndarray, pn: np.ndarray) -> np.ndarray:
+    """Starting tractions for the pressure ``pn`` from a neighbouring solution (tractions
+    ``p_start`` (2, mx, my) under the pressure ``pn_start``, both on this grid, e.g. resampled):
+    each element keeps its traction relative to the pressure, ``p_start pn / pn_start`` (zero where
+    ``pn_start`` is zero).  Where the neighbour slipped, the start then lies on the new bound
+    mu p_n: the contact solves of a wheel-rail sweep, mostly in full slip, need fewer Newton steps
+    (the Manchester sequence: 106 -> 95; the second solve of a position, after the height
+    correction, often none).
+
+    >>> pn0, pn1 = np.array([[1.0, 2.0, 0.0]]), np.array([[1.5, 2.0, 1.0]])
+    >>> rescaled_start(np.array([[[0.3, 0.6, 0.0]], [[0.0, 0.0, 0.0]]]), pn0, pn1)[0].tolist()
+    [[0.44999999999999996, 0.6, 0.0]]
+    """
+    pn_start = np.asarray(pn_start, dtype=float)
+    ratio = np.where(pn_start > 0, np.asarray(pn, dtype=float) / np.where(pn_start > 0, pn_start, 1.0), 0.0)
+    return np.asarray(p_start, dtype=float) * ratio
+
+
 def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: float,
                      mu_static: float, mu_kinetic: float, rolling: str = "steady",
                      fx_rel: float | None = None, fy_rel: float | None = None,
