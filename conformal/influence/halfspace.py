@@ -406,15 +406,9 @@ class TangentialProduct32:
         # products run on float32 views of the spectrum (the numbers of the complex product, without
         # numpy's mixed-type casting loop: 2-2.5x faster)
         self._k2 = [np.repeat(v, 2, axis=-1) for v in self.k] if real and self.block >= half else None
-        # double precision (float64 input): the real kernels in float64, built on first use
-        self._k64 = (lambda: [np.repeat(v.real, 2, axis=-1) for v in k]) if real and self.block >= half else None
 
     def __call__(self, p: np.ndarray) -> np.ndarray:
-        """p: (2, mx, my) float32 (or castable); returns (2, mx, my) float32.  A float64 ``p``
-        gives a float64 product in double precision where the kernels' transforms are real and
-        the spectrum is not blocked (the numbers of :meth:`HalfSpaceInfluence.apply_tangential`
-        to rounding: their imaginary parts, rounding noise of even and odd kernels, are dropped),
-        else with the float32 kernels."""
+        """p: (2, mx, my) float32 (or castable); returns (2, mx, my) float32."""
         ctype = np.complex64 if p.dtype == np.float32 else np.complex128
         half = self.My // 2 + 1
         if self.block >= half:   # the row transforms straight into the padded half-spectrum
@@ -442,12 +436,6 @@ class TangentialProduct32:
                 and h.shape[-1] == self._k2[0].shape[-1] // 2:
             f = h.view(np.float32)
             kxx, kxy, kyy = self._k2
-        elif self._k64 is not None and h.dtype == np.complex128 and h.flags.c_contiguous \
-                and h.shape[-1] * 2 == self._k2[0].shape[-1]:
-            if callable(self._k64):
-                self._k64 = self._k64()
-            f = h.view(np.float64)
-            kxx, kxy, kyy = self._k64
         else:
             f = h
             kxx, kxy, kyy = (k[:, cols] for k in self.k)

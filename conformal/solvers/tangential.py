@@ -379,11 +379,8 @@ class _SlipOperator:
         else:
             buf = self._buf64.reshape(shape)
             buf[self._m] = pc.reshape(-1)
-            if self._fast is not None:    # double precision for float64 input
-                u = self._fast(buf)
-            else:
-                pop = self._ext if self._ext is not None else self.op
-                u = np.stack(pop.apply_tangential(*buf))
+            pop = self._ext if self._ext is not None else self.op
+            u = np.stack(pop.apply_tangential(*buf))
             self._last = (pc.reshape(2, -1).copy(), u)   # for grid_u
         if not self.steady:
             return u[self._m].astype(float).reshape(2, -1)
