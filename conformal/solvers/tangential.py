@@ -631,8 +631,6 @@ class _Newton:
         p, s = st.p, st.s
         z = p - c * s
         nz = np.hypot(z[0], z[1])
-        if not self.force_rows and slip.all():
-            return self._step_full_slip(p, s, z, nz, rtol)
         ia, isl = np.flatnonzero(~slip), np.flatnonzero(slip)
         nA, nS = ia.size, isl.size
         n = z[:, isl] / nz[isl]
@@ -684,11 +682,14 @@ class _Newton:
             dcreep[k] = x[2 * nA + nS + j]
         return dp, ds, dcreep, its
 
-    def _step_full_slip(self, p, s, z, nz, rtol: float):
+    def step_full_slip(self, st: _State, rtol: float):
         """:meth:`step` where every element slips and no force is prescribed (most contact solves
         of a wheel-rail sweep): the same system and the same numbers, without the scatter and
         gather of the adhesion rows."""
         L, c, gk = self.L, self.c, self.gk
+        p, s = st.p, st.s
+        z = p - c * s
+        nz = np.hypot(z[0], z[1])
         n = z / nz
         t = np.stack([-n[1], n[0]])
         kap = gk / nz
@@ -708,7 +709,7 @@ class _Newton:
                                extra=True)
         return D0 + x * t, LD0 + (Ldx if Ldx is not None else 0.0), np.zeros(2), its
 
-    def preconditioner(self, ia, isl, ia2, isl2, t, sigma):
+    def preconditioner(self, ia, isl, ia2, isl2, t, sigma, lean: bool = True):
         """The right preconditioner of the reduced Newton system (module docstring, "Preconditioner").
 
         Adhesion rows: P = L^-1 (cumulative sum and circulant A^-1, :meth:`_SlipOperator.precondition`).
@@ -720,7 +721,8 @@ class _Newton:
         above :data:`STIFF_RATIO` diag.  Measured (circ case, last Newton system, GMRES iterations
         to 1e-3): 20 / 30 / 38 at 100² / 200² / 400² with P unweighted (and the diagonal above
         diag), 13 / 18 / 26 with w (p = 1, diagonal above 2 diag), 14 / 18 / 21 with p = 1.5 and
-        the diagonal above 3 diag."""
+        the diagonal above 3 diag.  Where every row slips above that (``lean``, the default), the
+        diagonal is applied alone, without P's product of zeros (the same numbers)."""
         L, nc = self.L, self.nc
         nA, nS = ia.size, isl.size
         diag = L.diag
@@ -731,7 +733,7 @@ class _Newton:
             cc = _CoarseCorrection(L, ia, COARSE_FACTOR)
             cc = cc if cc.ok else None
 
-        if not nA and cc is None and not w.any():
+        if lean and not nA and cc is None and not w.any():
             # every row slips with sigma above STIFF_RATIO diag (full slip at large creepage, most of
             # a wheel-rail sweep): the preconditioner is the diagonal alone, and P's product, which
             # would act on zeros, is skipped (the same numbers)
@@ -792,7 +794,10 @@ class _Newton:
                 break
             it += 1
             rtol = forcing(res, tol)
-            dp, ds, dcreep, _ = self.step(st, F, ferr, slip, rtol)
+            if not self.force_rows and slip.all():
+                dp, ds, dcreep, _ = self.step_full_slip(st, rtol)
+            else:
+                dp, ds, dcreep, _ = self.step(st, F, ferr, slip, rtol)
             m0 = self.merit(F, ferr)
             memory = slip  # thresholds for the trial points: g_k where slipping now, g_s in adhesion
             alpha, tried = 1.0, []
