@@ -330,11 +330,11 @@ class HalfSpaceInfluence:
     def window(self, mx: int, my: int) -> "HalfSpaceInfluence":
         """The operator of a window of mx x my elements of this grid: the half-space is invariant to
         translations, so it is the operator of an mx x my grid of the same spacing, shared per
-        shape like the operators of whole grids (:func:`_shared_operator`)."""
+        shape (:func:`_window_operator`, apart from the operators of whole grids)."""
         mx, my = int(mx), int(my)
         if mx * my > CACHE_ELEMENTS:
             return self._on_grid(mx, my, self.dx, self.dy)
-        return _shared_operator(mx, my, float(self.dx), float(self.dy), float(self.G), float(self.nu), float(self.K))
+        return _window_operator(mx, my, float(self.dx), float(self.dy), float(self.G), float(self.nu), float(self.K))
 
     def _on_grid(self, mx: int, my: int, dx: float, dy: float) -> "HalfSpaceInfluence":
         """The operator of the same constants on another uniform grid."""
@@ -369,6 +369,14 @@ def _shared_operator(mx: int, my: int, dx: float, dy: float, G: float, nu: float
     spacing, and the lazily computed kernels, their transforms, the normal preconditioner's
     symbol and the single-precision tangential product are then computed once.  The entries are
     pure functions of the arguments, so sharing gives the numbers of a fresh operator."""
+    return _padded(HalfSpaceInfluence(mx, my, dx, dy, G, nu, K))
+
+
+@functools.lru_cache(maxsize=2 * CACHE_SIZE)
+def _window_operator(mx: int, my: int, dx: float, dy: float, G: float, nu: float, K: float) -> HalfSpaceInfluence:
+    """The operators of windows (:meth:`HalfSpaceInfluence.window`), shared like
+    :func:`_shared_operator` but kept apart from it, so that the windows of the contact solves of a
+    sweep (a few shapes: their sides are rounded) do not push the operators of its grids out."""
     return _padded(HalfSpaceInfluence(mx, my, dx, dy, G, nu, K))
 
 
