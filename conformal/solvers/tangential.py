@@ -120,6 +120,25 @@ best of 3; studies/steady_rolling_speed.py, CONTACT's GDsteady times in brackets
   products at 200^2, 46 -> 49 at 400^2).
 * Element-wise Gauss-Seidel (CONTACT's SteadyGS) costs O(N^2) per sweep and O(mx) sweeps
   (6.8 s / 211 s in CONTACT); not pursued.
+* The contact solves of a wheel-rail sweep (the Manchester A-2.2 sequence of
+  studies/performance.py: 51 solves on grids of 190-1290 contact elements, most in full slip,
+  replayed, interleaved with the previous code on a 2-core machine at load 3-5): median CPU
+  0.43 -> 0.26 s (0.60) in one process, 0.35 -> 0.26 s (0.74, best 0.66) in separate processes;
+  forces within 0.001 N, FN unchanged to 1.5e-8.  What it took: the products
+  and the preconditioner on a window around the contact elements (:data:`WINDOW_FRACTION`; the
+  patch grids have margins of 8-10 elements on each side, so the windows hold a quarter to a half
+  of the grid's elements; the padded FFTs of the whole grid remain for (u_x, u_y) once per
+  solve), the diagonal preconditioner alone where every row slips above STIFF_RATIO diag (66 of
+  105 Newton steps: 331 -> 161 FFT preconditioner applications), a Newton step without the
+  scatter and gather of adhesion rows in full slip (:meth:`_Newton.step_full_slip`), the
+  spectral products on float32 views, and the start from the neighbour's tractions relative to
+  its pressure (:func:`rescaled_start`: 106 -> 95 Newton steps).  The last three give bitwise
+  the numbers they replace; the window changes the rounding (the preconditioner's circulant is
+  the window's), the rescaled start the path: both within the solver's tolerance.  Tried and not
+  kept: the nested start from 300 or 1000 contact elements (fewer Newton steps, more CPU), the
+  initial slip in single precision (99 Newton steps instead of 95), double-precision products
+  through the single-precision product's real kernels (in float64: 5e-16 from the reference
+  product, but the changed rounding moved a preconditioner test's iteration counts).
 
 Static and kinetic friction (mu_static > mu_kinetic): an element leaves adhesion when the traction
 it needs exceeds mu_static p_n and then slips with mu_kinetic p_n; it re-adheres when its slip

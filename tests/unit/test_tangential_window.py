@@ -30,6 +30,23 @@ def solve(op, g, pn, **kw):
     return tang.solve_tangential(op, g, pn, **args)
 
 
+def test_window_operator_is_the_block_of_the_whole_grid():
+    """``window(mx, my)``: the matrix between the elements of any mx x my window of the grid."""
+    from conformal.influence.curved import CurvedInfluence
+
+    mat = Material(82000.0, 0.28, 40000.0, 0.3)              # dissimilar: the coupling terms too
+    op = HalfSpaceInfluence.for_grid(6, 5, 0.3, 0.2, mat)
+    D = op.dense()
+    win = op.window(3, 4)
+    assert (win.mx, win.my) == (3, 4)
+    W = win.dense()
+    for r0, c0 in ((0, 0), (2, 1), (3, 1)):
+        cells = np.array([(r0 + i) * 5 + c0 + j for i in range(3) for j in range(4)])
+        rows = np.concatenate([cells + k * 30 for k in range(3)])
+        assert np.array_equal(W, D[np.ix_(rows, rows)])
+    assert CurvedInfluence.window(None, 3, 4) is None         # strips: no window
+
+
 @pytest.mark.parametrize("rolling, kin", [("steady", dict(xi=5e-5, phi=5e-5)), ("shift", dict(xi=1e-3, eta=5e-4))])
 def test_window_gives_the_whole_grid_solution(monkeypatch, rolling, kin):
     op, g, pn = patch()
