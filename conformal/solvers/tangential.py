@@ -610,18 +610,22 @@ class _Newton:
         self.A_tot = float(area.sum())
         self.nc = gs.size
         self.gmax = float(gk.max())
+        self.one_mu = bool(np.array_equal(gs, gk))   # mu_static = mu_kinetic: one bound
 
     def classify(self, p, s, slipping):
         z = p - self.c * s
         nz = np.hypot(z[0], z[1])
-        slip = nz > np.where(slipping, self.gk, self.gs)
+        slip = nz > (self.gk if self.one_mu else np.where(slipping, self.gk, self.gs))
         return z, nz, slip
 
     def residual(self, p, s, slipping):
         """F (2, nc) and the force errors (N) at (p, s)."""
         z, nz, slip = self.classify(p, s, slipping)
-        scale = np.where(slip, self.gk / np.where(slip, nz, 1.0), 0.0)
-        F = np.where(slip, p - scale * z, self.c * s)
+        if slip.all():    # the same numbers without the selections
+            F = p - (self.gk / nz) * z
+        else:
+            scale = np.where(slip, self.gk / np.where(slip, nz, 1.0), 0.0)
+            F = np.where(slip, p - scale * z, self.c * s)
         ferr = [float((self.area * p[k]).sum()) - target for k, target in self.force_rows]
         return F, ferr, slip
 
