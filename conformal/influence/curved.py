@@ -204,6 +204,10 @@ class CurvedInfluence:
         """None: coarser strips need new numbers (e.g. new FE influence numbers)."""
         return None
 
+    def window(self, mx: int, my: int) -> None:
+        """None: the strip kernel depends on the position across the strip."""
+        return None
+
     def self_influence(self) -> np.ndarray:
         """Self terms A_ii of each element along s, shape (ms, 3, 3)."""
         k0 = self.kernel[self.mx - 1]

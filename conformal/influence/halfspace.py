@@ -340,6 +340,15 @@ class HalfSpaceInfluence:
         fx, fy = int(fx), int(fy)
         return self._on_grid(-(-self.mx // fx), -(-self.my // fy), fx * self.dx, fy * self.dy)
 
+    def window(self, mx: int, my: int) -> "HalfSpaceInfluence":
+        """The operator of a window of mx x my elements of this grid: the half-space is invariant to
+        translations, so it is the operator of an mx x my grid of the same spacing, shared per
+        shape (:func:`_window_operator`, apart from the operators of whole grids)."""
+        mx, my = int(mx), int(my)
+        if mx * my > CACHE_ELEMENTS:
+            return self._on_grid(mx, my, self.dx, self.dy)
+        return _window_operator(mx, my, float(self.dx), float(self.dy), float(self.G), float(self.nu), float(self.K))
+
     def _on_grid(self, mx: int, my: int, dx: float, dy: float) -> "HalfSpaceInfluence":
         """The operator of the same constants on another uniform grid."""
         return _padded(HalfSpaceInfluence(mx, my, dx, dy, self.G, self.nu, self.K))
@@ -376,6 +385,14 @@ def _shared_operator(mx: int, my: int, dx: float, dy: float, G: float, nu: float
     return _padded(HalfSpaceInfluence(mx, my, dx, dy, G, nu, K))
 
 
+@functools.lru_cache(maxsize=2 * CACHE_SIZE)
+def _window_operator(mx: int, my: int, dx: float, dy: float, G: float, nu: float, K: float) -> HalfSpaceInfluence:
+    """The operators of windows (:meth:`HalfSpaceInfluence.window`), shared like
+    :func:`_shared_operator` but kept apart from it, so that the windows of the contact solves of a
+    sweep (a few shapes: their sides are rounded) do not push the operators of its grids out."""
+    return _padded(HalfSpaceInfluence(mx, my, dx, dy, G, nu, K))
+
+
 def _padded(op: HalfSpaceInfluence) -> HalfSpaceInfluence:
     """Record the zero-padded FFT size (Mx, My) >= (2mx-1, 2my-1) of a new operator."""
     op._fhat["shape"] = (sfft.next_fast_len(2 * op.mx - 1, real=True), sfft.next_fast_len(2 * op.my - 1, real=True))
@@ -406,6 +423,10 @@ class TangentialProduct32:
         self.k = [v.real.astype(np.float32) if real else v.astype(np.complex64) for v in k]
         half = self.My // 2 + 1
         self.block = BLOCK_COLUMNS if 2 * self.Mx * half * 8 > BLOCK_FROM_BYTES else half
+        # unblocked, real kernels: each value repeated for the real and imaginary part, so that the
+        # products run on float32 views of the spectrum (the numbers of the complex product, without
+        # numpy's mixed-type casting loop: 2-2.5x faster)
+        self._k2 = [np.repeat(v, 2, axis=-1) for v in self.k] if real and self.block >= half else None
 
     def __call__(self, p: np.ndarray) -> np.ndarray:
         """p: (2, mx, my) float32 (or castable); returns (2, mx, my) float32."""
@@ -432,12 +453,18 @@ class TangentialProduct32:
         columns ``cols`` in its first mx rows, zero below; the product with the kernels there
         and the transform back, in place; returns the first mx rows (2, mx, nc)."""
         h = ffts.fft(h, axis=-2, overwrite=True)
-        kxx, kxy, kyy = (k[:, cols] for k in self.k)
-        a0 = kxx * h[0]
-        a0 += kxy * h[1]
-        h[1] *= kyy
-        h[1] += kxy * h[0]
-        h[0] = a0
+        if self._k2 is not None and h.dtype == np.complex64 and h.flags.c_contiguous \
+                and h.shape[-1] == self._k2[0].shape[-1] // 2:
+            f = h.view(np.float32)
+            kxx, kxy, kyy = self._k2
+        else:
+            f = h
+            kxx, kxy, kyy = (k[:, cols] for k in self.k)
+        a0 = kxx * f[0]
+        a0 += kxy * f[1]
+        f[1] *= kyy
+        f[1] += kxy * f[0]
+        f[0] = a0
         return ffts.ifft(h, axis=-2, overwrite=True)[:, : self.mx]
 
 

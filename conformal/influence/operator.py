@@ -89,11 +89,15 @@ class InfluenceOperator(Protocol):
     def coarsened(self, fx: int, fy: int) -> "InfluenceOperator | None":
         """The operator of the grid of fx x fy merged elements, or None."""
 
+    def window(self, mx: int, my: int) -> "InfluenceOperator | None":
+        """The operator of a window of mx x my elements of this grid (the same numbers between the
+        elements in it: operators invariant to translations in x and y), or None."""
+
 
 #: the members every operator has (tests/unit/test_architecture.py checks the classes against it)
 PROTOCOL_MEMBERS = ("mx", "my", "coupled", "apply", "apply_normal", "apply_tangential", "apply_coupling_nt",
                     "apply_coupling_tn", "self_influence", "dense", "contact_modulus", "normal_preconditioner",
-                    "tangential_product32", "extended", "coarsened")
+                    "tangential_product32", "extended", "coarsened", "window")
 
 
 def build_operator(grid: PlanarGrid | CurvedGrid, material: Material, *, influence: str = "halfspace",

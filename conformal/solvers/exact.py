@@ -214,7 +214,9 @@ def solve(problem: ContactProblem) -> Result:
 
     def tangential_stage(pn, extra_u, p_start):
         if p_start is None and start is not None and start[1] is not None:
-            p_start = np.stack([start[1], start[2]])
+            # the neighbour's tractions relative to its pressure (on the bound where it slipped)
+            from conformal.solvers.tangential import rescaled_start
+            p_start = rescaled_start(np.stack([start[1], start[2]]), start[0], pn)
         return solve_tangential_stage(op, grid, pn, problem, extra_u, tol, maxit, p_start)
 
     stages = alternate(op, normal_stage, tangential_stage, tangential=needs_tangential(problem, op), tol=tol,

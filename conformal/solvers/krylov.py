@@ -66,11 +66,13 @@ def gmres(matvec: Callable, b: np.ndarray, *, precond: Callable | None = None, t
     while total < maxit:
         beta = math.sqrt(dot(r, r))
         m_max = min(restart, maxit - total)
+        # the Hessenberg column, the rotations and the residual vector as Python floats (the same
+        # IEEE operations as on numpy scalars, without their overhead)
         V = [r / beta]
         Z, E = [], []
         H = np.zeros((m_max + 1, m_max))
-        cs, sn = np.zeros(m_max), np.zeros(m_max)
-        g = np.zeros(m_max + 1)
+        cs, sn = [0.0] * m_max, [0.0] * m_max
+        g = [0.0] * (m_max + 1)
         g[0] = beta
         m = 0
         for k in range(m_max):
@@ -78,23 +80,25 @@ def gmres(matvec: Callable, b: np.ndarray, *, precond: Callable | None = None, t
             w, e = op(z)
             Z.append(z)
             E.append(e)
+            h = [0.0] * (k + 2)
             for i in range(k + 1):  # modified Gram-Schmidt
-                H[i, k] = dot(w, V[i])
-                w = w - H[i, k] * V[i]
-            H[k + 1, k] = math.sqrt(dot(w, w))
-            V.append(w / H[k + 1, k] if H[k + 1, k] > 0 else w)
+                h[i] = hi = dot(w, V[i])
+                w = w - hi * V[i]
+            h[k + 1] = hk1 = math.sqrt(dot(w, w))
+            V.append(w / hk1 if hk1 > 0 else w)
             for i in range(k):  # previous Givens rotations
-                t = cs[i] * H[i, k] + sn[i] * H[i + 1, k]
-                H[i + 1, k] = -sn[i] * H[i, k] + cs[i] * H[i + 1, k]
-                H[i, k] = t
-            rho = math.hypot(H[k, k], H[k + 1, k])
-            cs[k], sn[k] = (H[k, k] / rho, H[k + 1, k] / rho) if rho > 0 else (1.0, 0.0)
-            H[k, k], H[k + 1, k] = rho, 0.0
+                t = cs[i] * h[i] + sn[i] * h[i + 1]
+                h[i + 1] = -sn[i] * h[i] + cs[i] * h[i + 1]
+                h[i] = t
+            rho = math.hypot(h[k], h[k + 1])
+            cs[k], sn[k] = (h[k] / rho, h[k + 1] / rho) if rho > 0 else (1.0, 0.0)
+            h[k], h[k + 1] = rho, 0.0
+            H[:k + 2, k] = h
             g[k + 1] = -sn[k] * g[k]
             g[k] = cs[k] * g[k]
             m = k + 1
             relres = abs(g[k + 1]) / beta0
-            if relres <= tol or H[k, k] == 0.0:
+            if relres <= tol or h[k] == 0.0:
                 break
         y = np.zeros(m)  # back substitution (no LAPACK: see dot)
         for i in range(m - 1, -1, -1):
