@@ -194,6 +194,21 @@ def test_core_command_parser_leaves_out_the_other_modules():
     assert "stresses" in full and "table" in full
 
 
+def test_planar_wheel_rail_imports_no_other_model():
+    """A planar wheel-rail solve imports the modules of its own theory only: importing the case
+    leaves the other models' modules (FE contact and its meshing, the tables, the curved-strip
+    case) unloaded, and ``conformal.models.SOLVE`` imports a model's module when its function is
+    first asked for."""
+    code = ("import sys; import conformal.cases.wheelrail; from conformal.models import SOLVE; "
+            "other = ('conformal.fe_contact', 'conformal.meshing', 'conformal.tables', 'conformal.cases.conformal', "
+            "'conformal.theories.fastsim'); print(sorted(m for m in sys.modules if m.startswith(other))); "
+            "SOLVE['fastsim']; print('conformal.theories.fastsim' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                         env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin", "OPENBLAS_NUM_THREADS": "1"},
+                         check=True).stdout.split("\n")
+    assert out[0] == "[]" and out[1] == "True"
+
+
 @pytest.mark.slow
 def test_warm_sweep_equals_independent_balance_and_before():
     """The Manchester A-2.2 right-wheel sequence (0.2 mm elements, 10 kN, CONTACT's yaw, roll and
