@@ -358,12 +358,14 @@ class HalfSpaceInfluence:
 #: operators of grids up to this many elements are shared (:func:`_shared_operator`); the kernels
 #: and transforms of a 200 x 200 grid take about 15 MB
 CACHE_ELEMENTS = 40000
-#: ... and the least recently used are dropped when the grids of those kept exceed this many
-#: elements in all (the memory of 8 operators of 200 x 200; the 35 grids of a 21-position
-#: Manchester sweep at 0.2 mm, 70 000 elements, all stay, so a second sweep computes no kernel) ...
-CACHE_TOTAL_ELEMENTS = 8 * CACHE_ELEMENTS
-#: ... or when more than this many are kept
-CACHE_SIZE = 64
+#: ... and the least recently used are dropped when the grids of those kept exceed the elements
+#: of this many of the largest (CACHE_TOTAL_ELEMENTS, the memory of 8 operators of 200 x 200; the
+#: 35 grids of a 21-position Manchester sweep at 0.2 mm, 70 000 elements, all stay, so a second
+#: sweep computes no kernel) ...
+CACHE_SIZE = 8
+CACHE_TOTAL_ELEMENTS = CACHE_SIZE * CACHE_ELEMENTS
+#: ... or when more than this many operators are kept
+CACHE_OPERATORS = 64
 
 
 class _OperatorCache:
@@ -407,7 +409,7 @@ class _OperatorCache:
 #: spacing, and the lazily computed kernels, their transforms, the normal preconditioner's
 #: symbol and the single-precision tangential product are then computed once.  The entries are
 #: pure functions of the arguments, so sharing gives the numbers of a fresh operator.
-_shared_operator = _OperatorCache(CACHE_SIZE, CACHE_TOTAL_ELEMENTS)
+_shared_operator = _OperatorCache(CACHE_OPERATORS, CACHE_TOTAL_ELEMENTS)
 
 
 def _padded(op: HalfSpaceInfluence, *, lattice: bool = False) -> HalfSpaceInfluence:

@@ -321,7 +321,7 @@ def test_shared_operator_cache_is_bounded_by_entries_and_elements():
     the end; the process-wide cache has the documented bounds."""
     from conformal.influence import halfspace as hs
 
-    assert (hs._shared_operator.max_entries, hs._shared_operator.max_elements) == (hs.CACHE_SIZE,
+    assert (hs._shared_operator.max_entries, hs._shared_operator.max_elements) == (hs.CACHE_OPERATORS,
                                                                                    hs.CACHE_TOTAL_ELEMENTS)
     cache = hs._OperatorCache(max_entries=3, max_elements=1000)
     key = (0.2, 0.2, 82000.0, 0.28, 0.0)
