@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import importlib
 import time
+from collections.abc import Iterator, Mapping
 from dataclasses import replace
 from functools import lru_cache
 from typing import Callable
@@ -23,7 +24,6 @@ from conformal.errors import InputError
 from conformal.problem import ContactProblem
 from conformal.registry import LINE_CONTACT, MODELS, Registry
 from conformal.result import Result
-from conformal.solvers import line
 
 
 @lru_cache(maxsize=None)
@@ -53,8 +53,29 @@ def load_solve(solve: str | Callable | None, theory: str = "") -> Callable[[Cont
     return _load(solve) if isinstance(solve, str) else solve
 
 
+class _DeclaredSolves(Mapping):
+    """The solve function of each model of a registry by name, each module imported when its
+    function is first asked for: a process that solves with one theory does not import the
+    others (the FE contact model alone pulls in the meshing modules)."""
+
+    def __init__(self, registry: Registry):
+        self._registry = registry
+
+    def __getitem__(self, theory: str) -> Callable[[ContactProblem], Result]:
+        if theory not in self._registry:
+            raise KeyError(theory)
+        return load_solve(self._registry[theory].solve, theory)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._registry.names)
+
+    def __len__(self) -> int:
+        return len(self._registry.names)
+
+
 #: the solve function of each registered model, loaded from its declaration (conformal.registry.MODELS)
-SOLVE: dict[str, Callable[[ContactProblem], Result]] = {m.name: load_solve(m.solve, m.name) for m in MODELS}
+#: on first use
+SOLVE: Mapping[str, Callable[[ContactProblem], Result]] = _DeclaredSolves(MODELS)
 
 
 def solve_function(theory: str, registry: Registry = MODELS) -> Callable[[ContactProblem], Result]:
@@ -78,6 +99,8 @@ def solve_problem(problem: ContactProblem, registry: Registry = MODELS) -> Resul
         if not registry.accepts(theory, LINE_CONTACT):
             raise InputError(f"[model] theory: line contact ([geometry] B = 0) is solved by theory "
                              f"{registry.quoted(LINE_CONTACT)} (half-plane influence numbers), not {theory!r}")
+        from conformal.solvers import line
+
         solve = line.solve
     t0 = time.perf_counter()
     result = solve(problem)

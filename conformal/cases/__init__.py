@@ -6,12 +6,21 @@ derives the creepages from the wheelset motion and assembles the patches into on
 the geometry, influence and solver layers below.  :mod:`conformal.cases.precompute` plans the FE
 influence numbers a sweep of wheel-rail positions will need.
 """
-from conformal.cases.conformal import solve_wheel_rail_conformal
 from conformal.registry import CURVED_STRIP, FE_BODIES, MODELS
 from conformal.cases.wheelrail import problems_from_wheel_rail
 from conformal.cases.wheelrail import solve_wheel_rail as solve_wheel_rail_planar
 
 __all__ = ["problems_from_wheel_rail", "solve_wheel_rail", "solve_wheel_rail_conformal", "solve_wheel_rail_planar"]
+
+
+def __getattr__(name: str):
+    # the curved-strip case (and what it imports) loads when first used: planar wheel-rail solves do
+    # not need it
+    if name == "solve_wheel_rail_conformal":
+        from conformal.cases.conformal import solve_wheel_rail_conformal
+
+        return solve_wheel_rail_conformal
+    raise AttributeError(f"module 'conformal.cases' has no attribute {name!r}")
 
 
 def solve_wheel_rail(scene, *, warm=None):
@@ -47,5 +56,7 @@ def solve_wheel_rail(scene, *, warm=None):
         from conformal.cases.fe_contact import solve_wheel_rail_fe_contact
         return solve_wheel_rail_fe_contact(scene)
     if MODELS.accepts(scene.model.theory, CURVED_STRIP):
+        from conformal.cases.conformal import solve_wheel_rail_conformal
+
         return solve_wheel_rail_conformal(scene, warm=warm)
     return solve_wheel_rail_planar(scene, warm=warm)

@@ -257,7 +257,8 @@ def _normal_field(fields, pg: PatchGeometry, side: str, pn: np.ndarray) -> Patch
     old = _nearest_field(fields, pg.patch.s_ref)
     if old is None or old.px is None:
         return PatchField(pg.patch.s_ref, grid, pn)
-    return PatchField(pg.patch.s_ref, grid, pn, resample(old.grid, old.px, grid), resample(old.grid, old.py, grid))
+    px, py = resample(old.grid, np.stack([old.px, old.py]), grid)
+    return PatchField(pg.patch.s_ref, grid, pn, px, py)
 
 
 # ----------------------------------------------------------------------------- placement of a scene
@@ -678,10 +679,11 @@ class PatchField:
 
 
 def resample(src: PlanarGrid, values: np.ndarray, dst: PlanarGrid) -> np.ndarray:
-    """``values`` (src's shape, per element) bilinearly interpolated at the element centres of
-    ``dst`` (both grids in their patch's tangent-plane coordinates about the reference point), 0
-    beyond src; equal to ``values`` where dst is src (and where a dst centre lies within 1e-9
-    elements of a src centre, the src value exactly)."""
+    """``values`` (src's shape, per element; or a stack of such arrays, shape (k, mx, my), each
+    resampled alike) bilinearly interpolated at the element centres of ``dst`` (both grids in
+    their patch's tangent-plane coordinates about the reference point), 0 beyond src; equal to
+    ``values`` where dst is src (and where a dst centre lies within 1e-9 elements of a src centre,
+    the src value exactly)."""
     def axis(n_src, lo_src, d_src, n_dst, lo_dst, d_dst):
         f = (lo_dst + (np.arange(n_dst) + 0.5) * d_dst - lo_src) / d_src - 0.5   # src index coordinate
         # an element centre on a source centre takes its value alone: rounding of f (1e-15) would
@@ -695,11 +697,12 @@ def resample(src: PlanarGrid, values: np.ndarray, dst: PlanarGrid) -> np.ndarray
 
     if (src.mx, src.my, src.dx, src.dy, src.xl, src.yl) == (dst.mx, dst.my, dst.dx, dst.dy, dst.xl, dst.yl):
         return np.array(values, dtype=float)      # the same grid (the passes of a position)
-    v = np.pad(np.asarray(values, float), 1)
+    values = np.asarray(values, float)
+    v = np.pad(values, [(0, 0)] * (values.ndim - 2) + [(1, 1), (1, 1)])
     ia, ib, wi = axis(src.mx, src.xl, src.dx, dst.mx, dst.xl, dst.dx)
     ja, jb, wj = axis(src.my, src.yl, src.dy, dst.my, dst.yl, dst.dy)
-    rows = (1.0 - wi)[:, None] * v[ia] + wi[:, None] * v[ib]
-    return (1.0 - wj)[None, :] * rows[:, ja] + wj[None, :] * rows[:, jb]
+    rows = (1.0 - wi)[:, None] * v[..., ia, :] + wi[:, None] * v[..., ib, :]
+    return (1.0 - wj)[None, :] * rows[..., ja] + wj[None, :] * rows[..., jb]
 
 
 def _nearest_field(fields, s_ref: float) -> PatchField | None:
@@ -725,12 +728,11 @@ def _contact_start(fields, pg: PatchGeometry, problem: ContactProblem):
     f = _nearest_field(fields, pg.patch.s_ref)
     if f is None:
         return None
-    pn = resample(f.grid, f.pn, problem.grid)
-    if not np.any(pn > 0):
-        return None
     if f.px is None:
-        return (pn, None, None)
-    return (pn, resample(f.grid, f.px, problem.grid), resample(f.grid, f.py, problem.grid))
+        pn = resample(f.grid, f.pn, problem.grid)
+        return (pn, None, None) if np.any(pn > 0) else None
+    pn, px, py = resample(f.grid, np.stack([f.pn, f.px, f.py]), problem.grid)   # one interpolation for all three
+    return (pn, px, py) if np.any(pn > 0) else None
 
 
 # ----------------------------------------------------------------------------- problems

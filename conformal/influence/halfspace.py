@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -138,11 +139,13 @@ class HalfSpaceInfluence:
         """The operator of an mx x my grid of dx x dy elements.  With ``shared`` (default), grids
         of at most CACHE_ELEMENTS elements share one operator per (shape, spacing, material) within
         the process (:func:`_shared_operator`), so its kernels and their transforms are computed
-        once; ``shared=False`` builds a fresh one (timings that include the set-up)."""
+        once, and every shared operator takes its corner primitives from the lattice of its
+        element size (:class:`CornerLattice`); ``shared=False`` builds a fresh one that computes
+        all of it itself (timings that include the set-up)."""
         key = (int(mx), int(my), float(dx), float(dy), float(material.G), float(material.nu), float(material.K))
         if shared and cls is HalfSpaceInfluence and key[0] * key[1] <= CACHE_ELEMENTS:
             return _shared_operator(*key)
-        return _padded(cls(*key))
+        return _padded(cls(*key), lattice=shared)
 
     @property
     def coupled(self) -> bool:
@@ -160,9 +163,12 @@ class HalfSpaceInfluence:
         if key not in self._fhat:
             mx, my = self.mx, self.my
             if "primitives" not in self._fhat:   # all five at once (one evaluation per operator)
-                cx = (np.arange(mx) + 0.5) * self.dx
-                cy = (np.arange(my) + 0.5) * self.dy
-                self._fhat["primitives"] = _primitives(cx[:, None], cy[None, :])
+                if self._fhat.get("lattice"):    # a slice of the lattice its element size shares
+                    self._fhat["primitives"] = _corner_lattice(self.dx, self.dy).primitives(mx, my)
+                else:
+                    cx = (np.arange(mx) + 0.5) * self.dx
+                    cy = (np.arange(my) + 0.5) * self.dy
+                    self._fhat["primitives"] = _primitives(cx[:, None], cy[None, :])
             F = self._fhat["primitives"][_PRIM_INDEX[name]]
             sa, sb = _PARITY[name]
             full = np.empty((2 * mx, 2 * my))
@@ -306,7 +312,10 @@ class HalfSpaceInfluence:
             kx = 2.0 * np.sin(np.pi * np.fft.fftfreq(Nx))[:, None] / self.dx
             ky = 2.0 * np.sin(np.pi * np.fft.rfftfreq(Ny))[None, :] / self.dy
             sym = np.hypot(kx, ky)
-            sym[0, 0] = sym[sym > 0].min() if (sym > 0).any() else 1.0
+            # every wave number but (0, 0) is positive (sin(pi f) != 0 for the frequencies f != 0
+            # of fftfreq), so the smallest positive one is the smallest after the first
+            rest = sym.ravel()[1:]
+            sym[0, 0] = rest.min() if rest.size else 1.0
             self._fhat["pc_periodic"] = (Nx, Ny, sym)
         Nx, Ny, sym = self._fhat["pc_periodic"]
         mx, my = self.mx, self.my
@@ -351,7 +360,7 @@ class HalfSpaceInfluence:
 
     def _on_grid(self, mx: int, my: int, dx: float, dy: float) -> "HalfSpaceInfluence":
         """The operator of the same constants on another uniform grid."""
-        return _padded(HalfSpaceInfluence(mx, my, dx, dy, self.G, self.nu, self.K))
+        return _padded(HalfSpaceInfluence(mx, my, dx, dy, self.G, self.nu, self.K), lattice=True)
 
     def dense(self) -> np.ndarray:
         """The full 3N x 3N matrix (N = mx my; rows/cols ordered component-major, then ix, iy).
@@ -371,18 +380,58 @@ class HalfSpaceInfluence:
 #: operators of grids up to this many elements are shared (:func:`_shared_operator`); the kernels
 #: and transforms of a 200 x 200 grid take about 15 MB
 CACHE_ELEMENTS = 40000
-#: ... and at most this many of them are kept (least recently used dropped)
+#: ... and the least recently used are dropped when the grids of those kept exceed the elements
+#: of this many of the largest (CACHE_TOTAL_ELEMENTS, the memory of 8 operators of 200 x 200; the
+#: 35 grids of a 21-position Manchester sweep at 0.2 mm, 70 000 elements, all stay, so a second
+#: sweep computes no kernel) ...
 CACHE_SIZE = 8
+CACHE_TOTAL_ELEMENTS = CACHE_SIZE * CACHE_ELEMENTS
+#: ... or when more than this many operators are kept
+CACHE_OPERATORS = 64
 
 
-@functools.lru_cache(maxsize=CACHE_SIZE)
-def _shared_operator(mx: int, my: int, dx: float, dy: float, G: float, nu: float, K: float) -> HalfSpaceInfluence:
-    """One operator per grid and material within the process: a sweep solves the normal and the
-    contact problems of a position (and often of its neighbours) on grids of equal shape and
-    spacing, and the lazily computed kernels, their transforms, the normal preconditioner's
-    symbol and the single-precision tangential product are then computed once.  The entries are
-    pure functions of the arguments, so sharing gives the numbers of a fresh operator."""
-    return _padded(HalfSpaceInfluence(mx, my, dx, dy, G, nu, K))
+class _OperatorCache:
+    """The shared operators by (mx, my, dx, dy, G, nu, K), least recently used first, bounded by
+    the number of operators and the elements of their grids in all."""
+
+    def __init__(self, max_entries: int, max_elements: int):
+        self.max_entries, self.max_elements = max_entries, max_elements
+        self._ops: OrderedDict[tuple, HalfSpaceInfluence] = OrderedDict()
+        self._elements = 0
+
+    def __call__(self, mx: int, my: int, dx: float, dy: float, G: float, nu: float, K: float) -> HalfSpaceInfluence:
+        key = (mx, my, dx, dy, G, nu, K)
+        op = self._ops.get(key)
+        if op is not None:
+            self._ops.move_to_end(key)
+            return op
+        op = _padded(HalfSpaceInfluence(mx, my, dx, dy, G, nu, K), lattice=True)
+        self._ops[key] = op
+        self._elements += mx * my
+        while len(self._ops) > 1 and (len(self._ops) > self.max_entries or self._elements > self.max_elements):
+            (ox, oy, *_), _ = self._ops.popitem(last=False)
+            self._elements -= ox * oy
+        return op
+
+    def __len__(self) -> int:
+        return len(self._ops)
+
+    @property
+    def elements(self) -> int:
+        """The grid elements of the operators kept."""
+        return self._elements
+
+    def cache_clear(self) -> None:
+        self._ops.clear()
+        self._elements = 0
+
+
+#: One operator per grid and material within the process: a sweep solves the normal and the
+#: contact problems of a position (and often of its neighbours) on grids of equal shape and
+#: spacing, and the lazily computed kernels, their transforms, the normal preconditioner's
+#: symbol and the single-precision tangential product are then computed once.  The entries are
+#: pure functions of the arguments, so sharing gives the numbers of a fresh operator.
+_shared_operator = _OperatorCache(CACHE_OPERATORS, CACHE_TOTAL_ELEMENTS)
 
 
 @functools.lru_cache(maxsize=2 * CACHE_SIZE)
@@ -390,13 +439,68 @@ def _window_operator(mx: int, my: int, dx: float, dy: float, G: float, nu: float
     """The operators of windows (:meth:`HalfSpaceInfluence.window`), shared like
     :func:`_shared_operator` but kept apart from it, so that the windows of the contact solves of a
     sweep (a few shapes: their sides are rounded) do not push the operators of its grids out."""
-    return _padded(HalfSpaceInfluence(mx, my, dx, dy, G, nu, K))
+    return _padded(HalfSpaceInfluence(mx, my, dx, dy, G, nu, K), lattice=True)
 
 
-def _padded(op: HalfSpaceInfluence) -> HalfSpaceInfluence:
-    """Record the zero-padded FFT size (Mx, My) >= (2mx-1, 2my-1) of a new operator."""
+def _padded(op: HalfSpaceInfluence, *, lattice: bool = False) -> HalfSpaceInfluence:
+    """Record the zero-padded FFT size (Mx, My) >= (2mx-1, 2my-1) of a new operator, and whether it
+    takes its corner primitives from the shared lattice of its element size."""
     op._fhat["shape"] = (sfft.next_fast_len(2 * op.mx - 1, real=True), sfft.next_fast_len(2 * op.my - 1, real=True))
+    op._fhat["lattice"] = bool(lattice and op.mx * op.my <= CACHE_ELEMENTS)
     return op
+
+
+class CornerLattice:
+    """The five corner primitives (:func:`_primitives`) at the corners ((i + 1/2) dx, (j + 1/2) dy),
+    i < nx, j < ny, of one element size: the positive quadrant of the corner lattice of every
+    grid of that size up to nx x ny elements (reference §4.1).  A grid of mx x my elements takes
+    the slice [:mx, :my], bitwise the values its own evaluation gives (each value is computed
+    elementwise from its own corner); the lattice grows by the corners a larger grid adds, so a
+    sweep over some 35 grid shapes evaluates the primitives at the corners of the largest only
+    (a fifth of the evaluations of one per grid).
+
+    >>> lat = CornerLattice(0.2, 0.2)
+    >>> F = lat.primitives(3, 2); G = lat.primitives(5, 4)
+    >>> lat.shape, bool(np.array_equal(F[0], G[0][:3, :2]))
+    ((5, 4), True)
+    """
+
+    def __init__(self, dx: float, dy: float, max_elements: int = 2 * 40000):
+        self.dx, self.dy = float(dx), float(dy)
+        self.max_elements = int(max_elements)
+        self._F: tuple[np.ndarray, ...] | None = None
+        self.shape = (0, 0)
+
+    def _corners(self, i0: int, i1: int, j0: int, j1: int) -> tuple[np.ndarray, ...]:
+        cx = (np.arange(i1) + 0.5) * self.dx
+        cy = (np.arange(j1) + 0.5) * self.dy
+        return _primitives(cx[i0:, None], cy[None, j0:])
+
+    def primitives(self, mx: int, my: int) -> tuple[np.ndarray, ...]:
+        """L1, L2, R, T1, T2 at the corners of an mx x my grid, each (mx, my) (read-only views)."""
+        nx, ny = self.shape
+        if mx > nx or my > ny:
+            gx, gy = max(mx, nx), max(my, ny)
+            if gx * gy > self.max_elements:     # shapes far apart (a long and a wide grid): start anew
+                self._F, (nx, ny), (gx, gy) = None, (0, 0), (mx, my)
+            if self._F is None:
+                F = self._corners(0, gx, 0, gy)
+            else:   # the corners the larger lattice adds: the rows below, the columns right of the old
+                below = self._corners(nx, gx, 0, gy)
+                right = self._corners(0, nx, ny, gy)
+                F = tuple(np.concatenate([np.concatenate([old, r], axis=1), b], axis=0)
+                          for old, r, b in zip(self._F, right, below))
+            for a in F:
+                a.flags.writeable = False
+            self._F, self.shape = F, (gx, gy)
+        return tuple(a[:mx, :my] for a in self._F)
+
+
+@functools.lru_cache(maxsize=4)
+def _corner_lattice(dx: float, dy: float) -> CornerLattice:
+    """The corner lattice of one element size, shared within the process by the grids of at most
+    CACHE_ELEMENTS elements (at most 2 CACHE_ELEMENTS corners per primitive, 3.2 MB)."""
+    return CornerLattice(dx, dy, 2 * CACHE_ELEMENTS)
 
 
 class TangentialProduct32:

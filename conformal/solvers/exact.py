@@ -244,8 +244,8 @@ class Tractions:
 
 def tractions(op, stages: Stages) -> Tractions:
     normal, tang = stages.normal, stages.tang
-    zeros = np.zeros(normal.pn.shape)
     if tang is None:  # frictionless / no creepage and no coupling: no tangential traction, no slip
+        zeros = np.zeros(normal.pn.shape)
         px, py, sx, sy, ux, uy = zeros, zeros, zeros.copy(), zeros.copy(), zeros.copy(), zeros.copy()
         status = np.where(normal.contact, ADHESION, EXTERIOR).astype(np.int8)
         t_res, t_conv = 0.0, True

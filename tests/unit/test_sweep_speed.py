@@ -194,6 +194,21 @@ def test_core_command_parser_leaves_out_the_other_modules():
     assert "stresses" in full and "table" in full
 
 
+def test_planar_wheel_rail_imports_no_other_model():
+    """A planar wheel-rail solve imports the modules of its own theory only: importing the case
+    leaves the other models' modules (FE contact and its meshing, the tables, the curved-strip
+    case) unloaded, and ``conformal.models.SOLVE`` imports a model's module when its function is
+    first asked for."""
+    code = ("import sys; import conformal.cases.wheelrail; from conformal.models import SOLVE; "
+            "other = ('conformal.fe_contact', 'conformal.meshing', 'conformal.tables', 'conformal.cases.conformal', "
+            "'conformal.theories.fastsim'); print(sorted(m for m in sys.modules if m.startswith(other))); "
+            "SOLVE['fastsim']; print('conformal.theories.fastsim' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                         env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin", "OPENBLAS_NUM_THREADS": "1"},
+                         check=True).stdout.split("\n")
+    assert out[0] == "[]" and out[1] == "True"
+
+
 @pytest.mark.slow
 def test_warm_sweep_equals_independent_balance_and_before():
     """The Manchester A-2.2 right-wheel sequence (0.2 mm elements, 10 kN, CONTACT's yaw, roll and
@@ -295,7 +310,50 @@ def test_shared_halfspace_operator_equals_a_fresh_one():
     np.testing.assert_array_equal(a.tangential_product32()(p), fresh.tangential_product32()(p))
     assert a.tangential_product32() is a.tangential_product32()
     np.testing.assert_array_equal(a.normal_preconditioner()(p[0]), fresh.normal_preconditioner()(p[0]))
-    assert hs._shared_operator.cache_info().maxsize == hs.CACHE_SIZE
     big = int(hs.CACHE_ELEMENTS ** 0.5) + 1
     assert hs.HalfSpaceInfluence.for_grid(big, big, 0.2, 0.2, mat) is not hs.HalfSpaceInfluence.for_grid(
         big, big, 0.2, 0.2, mat)
+
+
+def test_shared_operator_cache_is_bounded_by_entries_and_elements():
+    """The shared operators are dropped least recently used first once more than ``max_entries``
+    are kept or their grids exceed ``max_elements`` in all; one that is asked for again moves to
+    the end; the process-wide cache has the documented bounds."""
+    from conformal.influence import halfspace as hs
+
+    assert (hs._shared_operator.max_entries, hs._shared_operator.max_elements) == (hs.CACHE_OPERATORS,
+                                                                                   hs.CACHE_TOTAL_ELEMENTS)
+    cache = hs._OperatorCache(max_entries=3, max_elements=1000)
+    key = (0.2, 0.2, 82000.0, 0.28, 0.0)
+    a, b = cache(10, 10, *key), cache(20, 20, *key)             # 100 + 400 elements
+    assert cache(10, 10, *key) is a and len(cache) == 2 and cache.elements == 500
+    c = cache(20, 30, *key)                                      # 1100 in all: b (least recently used) goes
+    assert len(cache) == 2 and cache.elements == 700 and cache(10, 10, *key) is a
+    assert cache(20, 20, *key) is not b                          # built anew: c goes (a was just used)
+    assert cache(10, 10, *key) is a and cache.elements == 500
+    assert cache(20, 30, *key) is not c and cache.elements == 700       # the 20 x 20 went
+    for n in range(1, 6):                                        # at most 3 entries
+        cache(n, 1, *key)
+    assert len(cache) == 3 and cache.elements == 3 + 4 + 5
+
+
+def test_corner_lattice_slices_equal_own_evaluations():
+    """The corner primitives of a grid taken from its element size's lattice (grown by larger grids,
+    restarted beyond its bound) equal those the grid evaluates itself, bitwise, and the kernels of
+    a shared operator those of a fresh one."""
+    from conformal.influence import halfspace as hs
+    from conformal.materials import Material
+
+    lat = hs.CornerLattice(0.2, 0.15, max_elements=3000)
+    for mx, my in ((7, 5), (30, 4), (12, 40), (3, 3), (55, 50), (31, 41)):
+        own = hs._primitives(((np.arange(mx) + 0.5) * 0.2)[:, None], ((np.arange(my) + 0.5) * 0.15)[None, :])
+        for f, g in zip(lat.primitives(mx, my), own):
+            np.testing.assert_array_equal(f, g)
+    assert lat.shape == (55, 50)     # 40 x 40 held all before; 55 x 50 beyond 3000 corners started anew
+    mat = Material(82000.0, 0.28, 26000.0, 0.33)                 # coupled: T1, T2 used too
+    for mx, my in ((23, 9), (41, 17), (17, 30)):
+        a = hs.HalfSpaceInfluence.for_grid(mx, my, 0.2, 0.15, mat)
+        b = hs.HalfSpaceInfluence.for_grid(mx, my, 0.2, 0.15, mat, shared=False)
+        for i in range(3):
+            for j in range(3):
+                np.testing.assert_array_equal(a.kernel_hat(i, j), b.kernel_hat(i, j))
