@@ -791,14 +791,13 @@ class _Newton:
         s = self.w + (st.creep - self.creep0)[:, None] + self.L.apply(st.p)
         return _State(st.p, s, st.creep, st.slipping)
 
-    def solve(self, st: _State, tol: float, maxit: int, fresh: bool = True):
+    def solve(self, st: _State, tol: float, maxit: int):
         """Newton iterations until the residual measure <= tol (checked with a fresh slip).
-        ``fresh``: whether the slip of ``st`` comes from a double-precision product.
         Returns (state with fresh slip, its, res, msg)."""
         F, ferr, slip = self.residual(st.p, st.s, st.slipping)
         res = self.measure(st.p, F, ferr)
         best, stall, it = res, 0, 0
-        msg, is_fresh = "", bool(fresh)
+        msg, is_fresh = "", True
         while True:
             if res <= tol:
                 if is_fresh:
@@ -1161,7 +1160,6 @@ def _solve_grid(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows, creep0, t
     newton = _Newton(L, wc, gs, gk, area.ravel()[idx], force_rows, mu_s * FN)
     newton.creep0 = creep0
     creep = creep0.copy()
-    warm = p_start is not None     # a caller's start (a neighbouring solution), not the nested one
     if p_start is None and idx.size >= NESTED_FROM:
         p_start, creep, L.coarse_products = _coarse_start(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows,
                                                           creep0, maxit)
@@ -1172,12 +1170,8 @@ def _solve_grid(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows, creep0, t
         slipping = mag >= gk * (1.0 - 1e-9)
     else:
         p0, slipping = np.zeros((2, idx.size)), np.zeros(idx.size, bool)
-    # from a caller's start (a sweep's neighbouring solution) the starting slip comes from a
-    # single-precision product: the iteration only needs it to about 1e-7, and the converged slip
-    # is recomputed in double precision before it is accepted (:meth:`_Newton.solve`); the
-    # Manchester A-2.2 sequence: the same Newton and GMRES counts, forces within 4e-5 N
-    s0 = wc + (creep - creep0)[:, None] + L.apply(p0, fast=warm)
-    st, its, res, msg = newton.solve(_State(p0, s0, creep, slipping), tol, maxit, fresh=not warm)
+    s0 = wc + (creep - creep0)[:, None] + L.apply(p0)
+    st, its, res, msg = newton.solve(_State(p0, s0, creep, slipping), tol, maxit)
     F, ferr, slip = newton.residual(st.p, st.s, st.slipping)
     res = newton.measure(st.p, F, ferr)
     return st, slip, its, res, msg, L
