@@ -172,6 +172,7 @@ from conformal.influence import fft as ffts
 from conformal.solvers import checks
 from conformal.solvers.krylov import gmres
 from conformal.errors import InputError
+from conformal.grid import PlanarGrid
 from conformal.result import ADHESION, EXTERIOR, SLIP
 
 #: GMRES restart length and the most GMRES iterations for one Newton step
@@ -954,7 +955,9 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
     zeros = np.zeros(shape)
 
     # rigid slip (seed Eq. 47; CONTACT's W/dq with chi = 0)
-    X, Y = grid.mesh()
+    # the y of the element centres: one row broadcast along x on a planar grid (the numbers of its
+    # mesh(), without forming the (mx, my) copies), the mesh elsewhere
+    Y = grid.y[None, :] if isinstance(grid, PlanarGrid) else grid.mesh()[1]
     w = column_rigid_slip(grid, xi - phi * Y, eta, phi, steady)
     if rigid_slip is not None:
         w = w + checks.field("rigid_slip", np.asarray(rigid_slip, dtype=float), (2,) + shape)
