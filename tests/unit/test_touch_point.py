@@ -96,3 +96,23 @@ def test_place_scene_heights_of_the_other_wheel_and_the_lift_check():
         lift = wr.place_scene(sc.with_("geometry.lateral_shift", c["inputs"]["Y_WS_mm"] - 0.1), touch_only=True, like=pl)
         ref = first_touch(build_pair(sc.geometry, sc.base_dir, roll=pl.roll, lateral_shift=c["inputs"]["Y_WS_mm"] - 0.1))
         assert abs(lift.z_touch - ref) <= 1e-9
+
+
+def test_locus_sample_range_as_a_slice():
+    """The contiguous samples of a locus that can lie over the rail are read through a slice, other
+    index sets as they are: the same elements either way."""
+    from conformal.geometry.placement import _as_range
+
+    a = np.arange(10.0)
+    k = np.array([3, 4, 5, 6])
+    assert _as_range(k) == slice(3, 7) and np.array_equal(a[_as_range(k)], a[k])
+    gap = np.array([2, 3, 7])
+    assert _as_range(gap) is gap and _as_range(gap[:0]).size == 0
+    pair = PAIRS[0][1]
+    top = gs.RailTop.of(pair.rail)
+    span = (top.y_min, top.y_max)
+    reach = pair._locus_at_zero(gs.LOCUS_STEP, span)[5]
+    assert isinstance(_as_range(np.nonzero(reach)[0]), slice)        # the Manchester wheel: one range
+    z_top = pair.rail_top_under_locus(top, gs.LOCUS_STEP, span)
+    assert np.array_equal(z_top[reach], top.z_at(pair._locus_at_zero(gs.LOCUS_STEP, span)[2][reach, 1]))
+    assert np.isnan(z_top[~reach]).all()
