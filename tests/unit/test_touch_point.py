@@ -114,5 +114,5 @@ def test_locus_sample_range_as_a_slice():
     reach = pair._locus_at_zero(gs.LOCUS_STEP, span)[5]
     assert isinstance(_as_range(np.nonzero(reach)[0]), slice)        # the Manchester wheel: one range
     z_top = pair.rail_top_under_locus(top, gs.LOCUS_STEP, span)
-    assert np.array_equal(z_top[reach], top.z_at(pair._locus_at_zero(gs.LOCUS_STEP, span)[2][reach, 1]))
+    assert np.array_equal(z_top[reach], top.z_at(pair._locus_at_zero(gs.LOCUS_STEP, span)[2][reach, 1]), equal_nan=True)
     assert np.isnan(z_top[~reach]).all()
