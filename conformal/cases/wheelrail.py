@@ -40,7 +40,7 @@ from conformal.geometry.patches import (Patch, curved_grid_for_patch, find_patch
                                         rail_on_lines)
 from conformal.geometry.placement import WheelRailPair
 from conformal.geometry.profiles import rail_orientation_warning
-from conformal.geometry.search import RailTop, pair_locus
+from conformal.geometry.search import TOUCH_STEP, RailTop, pair_locus
 from conformal.geometry.wheelrail import build_pair, first_touch, profile_curves, wheelset_roll
 from conformal.grid import PlanarGrid
 from conformal.models import solve_problem
@@ -296,13 +296,14 @@ def place_scene(scene: Scene, *, touch_only: bool = False, like: Placement | Non
     if like is not None:
         pair.share_locus(like.pair)
     top = RailTop.of(pair.rail)
-    z_touch = first_touch(pair, top)
+    # the pair of a touch_only placement is not searched further: its locus is sampled for the height alone
+    z_touch = first_touch(pair, top, step=TOUCH_STEP if touch_only else None)
     z_first = z_touch
     # the other wheel sets the height from which [load] approach (and the reported approach) counts
     if geo.placement == "wheelset" and not touch_only:
         if z_other is None:
             other = build_pair(geo, base, side="left" if pair.side == "right" else "right", roll=roll)
-            z_other = first_touch(other)
+            z_other = first_touch(other, step=TOUCH_STEP)      # only its height is needed
         z_first = min(z_touch, z_other)
     return Placement(pair, top, roll, z_touch, z_first)
 

@@ -81,6 +81,15 @@ class SidePose:
         return cls(m * y, m * roll, m * yaw)
 
 
+def _as_range(k: np.ndarray) -> np.ndarray | slice:
+    """Ascending indices k as a slice where they are one contiguous range (the samples of a locus
+    that can lie over a rail usually are): the same elements, read and written through views
+    instead of gathered and scattered copies."""
+    if k.size and int(k[-1]) - int(k[0]) + 1 == k.size:
+        return slice(int(k[0]), int(k[-1]) + 1)
+    return k
+
+
 @dataclass(frozen=True, eq=False)
 class WheelRailPair:
     """One wheel on one rail in the side frame; the wheelset height z is the only free coordinate."""
@@ -154,7 +163,7 @@ class WheelRailPair:
                 th[both], er[both] = sth[both], ser[both]
                 todo = reach & ~sreach
             if todo.any():
-                k = np.nonzero(todo)[0]
+                k = _as_range(np.nonzero(todo)[0])
                 th[k] = wheel.locus_theta_of(y1[k], z1[k])
                 er[k] = wheel.e_r(np.nan_to_num(th[k]))
             hit = (s, th, wheel.point_of(u, rho, e_r=er), er, rho, reach)
@@ -184,7 +193,8 @@ class WheelRailPair:
         if hit is None or hit[0] is not top:
             pts, reach = (self._locus_at_zero(step, span)[i] for i in (2, 5))
             z_top = np.full(reach.shape, np.nan)
-            z_top[reach] = top.z_at(pts[reach, 1])
+            k = _as_range(np.nonzero(reach)[0])
+            z_top[k] = top.z_at(pts[k, 1])
             hit = (top, z_top)
             self._tops[key] = hit
         return hit[1]

@@ -18,7 +18,7 @@ from scipy.optimize import brentq
 from conformal.errors import ConvergenceError, InputError, NoContactError
 from conformal.geometry.placement import WheelRailPair, make_pair
 from conformal.geometry.profiles import builtin_flange_back, load_profile
-from conformal.geometry.search import RailTop, touch_height
+from conformal.geometry.search import RailTop, touch_height, touch_point
 from conformal.geometry.spline import ProfileCurve, fit_curve
 from conformal.scene import WheelRailGeometry
 
@@ -95,17 +95,28 @@ def _position_key(pair: WheelRailPair) -> str:
     return "yaw" if yaw > 0.02 else "lateral_shift"
 
 
-def first_touch(pair: WheelRailPair, top: RailTop | None = None) -> float:
+def first_touch(pair: WheelRailPair, top: RailTop | None = None, *, step: float | None = None) -> float:
+    """Wheelset height (side frame, z down, mm) at which the wheel of ``pair`` first touches its rail.
+
+    ``step``: None searches the wheel's contact locus sampled as the later contact searches of the
+    pair sample it (:func:`~conformal.geometry.search.touch_height`, the locus kept with the pair);
+    a step (mm of wheel profile, e.g. :data:`~conformal.geometry.search.TOUCH_STEP`) samples it
+    that finely for this height alone (:func:`~conformal.geometry.search.touch_point`: the same
+    height to rounding, for a pair whose contacts are not searched further).
+    """
     key = _position_key(pair)
     try:
-        z, sr = touch_height(pair, top)
+        if step is None:
+            z, sr = touch_height(pair, top)
+            c = sr.contacts[0]
+        else:
+            z, c = touch_point(pair, top, step=step)
     except NoContactError as exc:
         raise InputError(f"[geometry] {key}: the {pair.side} wheel does not lie over its rail "
                          f"at this position ({exc})") from None
     except (InputError, ConvergenceError) as exc:
         raise InputError(f"[geometry] {key}: no contact point for the {pair.side} wheel at this "
                          f"position ({exc})") from None
-    c = sr.contacts[0]
     if c.at_end:
         raise InputError(f"[geometry] {key}: the {pair.side} wheel would touch the rail at the end "
                          f"of a profile (rail y = {float(pair.rail.to_own(c.rail_point[1:])[0]):.2f} mm, "
