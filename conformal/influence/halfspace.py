@@ -352,7 +352,7 @@ class HalfSpaceInfluence:
     def window(self, mx: int, my: int) -> "HalfSpaceInfluence":
         """The operator of a window of mx x my elements of this grid: the half-space is invariant to
         translations, so it is the operator of an mx x my grid of the same spacing, shared per
-        shape (:func:`_window_operator`, apart from the operators of whole grids)."""
+        shape (``_window_operator``, apart from the operators of whole grids)."""
         mx, my = int(mx), int(my)
         if mx * my > CACHE_ELEMENTS:
             return self._on_grid(mx, my, self.dx, self.dy)
@@ -434,12 +434,10 @@ class _OperatorCache:
 _shared_operator = _OperatorCache(CACHE_OPERATORS, CACHE_TOTAL_ELEMENTS)
 
 
-@functools.lru_cache(maxsize=2 * CACHE_SIZE)
-def _window_operator(mx: int, my: int, dx: float, dy: float, G: float, nu: float, K: float) -> HalfSpaceInfluence:
-    """The operators of windows (:meth:`HalfSpaceInfluence.window`), shared like
-    :func:`_shared_operator` but kept apart from it, so that the windows of the contact solves of a
-    sweep (a few shapes: their sides are rounded) do not push the operators of its grids out."""
-    return _padded(HalfSpaceInfluence(mx, my, dx, dy, G, nu, K), lattice=True)
+#: The operators of windows (:meth:`HalfSpaceInfluence.window`), shared like the operators of whole
+#: grids but kept apart from them, so that the windows of the contact solves of a sweep (a few
+#: shapes: their sides are rounded) do not push the operators of its grids out.
+_window_operator = _OperatorCache(2 * CACHE_SIZE, CACHE_TOTAL_ELEMENTS)
 
 
 def _padded(op: HalfSpaceInfluence, *, lattice: bool = False) -> HalfSpaceInfluence:
