@@ -489,10 +489,72 @@ def planar_distance(wheel: WheelSurface, rail: RailSurface, patch: Patch, xi: np
         np.multiply(xi.reshape(-1), e1[k], out=Qc[k])
         Qc[k] += P[k]
         Qc[k] += eta.reshape(-1) * t2[k]
-    Q = Qc.T
-    s_w, th_w = _wheel_start(wheel, patch, Q)
-    _, _, t_w = wheel_on_lines(wheel, Q, n, s_w, th_w)
+    t_w = _wheel_on_grid_lines(wheel, patch, Qc, n)
     return (t_r[inv] - t_w).reshape(xi.shape)
+
+
+def _wheel_on_grid_lines(wheel: WheelSurface, patch: Patch, q: np.ndarray, n: np.ndarray, *,
+                         maxit: int = 30, tol: float = 1e-10) -> np.ndarray:
+    """The distances t at which the lines q + t n (q: (3, N) coordinate rows, n the patch normal)
+    meet the wheel surface, as :func:`wheel_on_lines` (the same root), in two unknowns.
+
+    A point w (from the wheelset centre O) lies on the surface of revolution where its axial
+    position w . a and its distance from the axle |w - (w . a) a| are those of a profile point,
+    (u(s), rho(s)) (seed Eq. 52).  Along a line both are known in closed form: the axial position
+    alpha(t) = alpha_0 + t n.a and the squared radius r(t)^2 = |v_0 + t m|^2 (v_0 the radial
+    part of q - O, m = n - (n.a) a), so Newton-Raphson runs on the two equations
+    y(s) = alpha(t) - L and z(s) = r(t) - R0 (L the axial offset, R0 the radius of the profile
+    origin) in (s, t), without the rotation angle; starts from the linear prediction at the
+    patch's wheel point (:func:`_wheel_start`'s).  Steps limited as there (|ds| <= 2 mm, s on
+    the profile); the residual (mm) below ``tol``."""
+    f = wheel.frame
+    (O0, O1, O2), (a0, a1, a2), _, _ = wheel.frame_floats
+    n0, n1, n2 = (float(c) for c in n)
+    w0, w1, w2 = q[0] - O0, q[1] - O1, q[2] - O2
+    al = (w0 * a0 + w1 * a1) + w2 * a2                      # axial position at t = 0
+    v0, v1, v2 = w0 - al * a0, w1 - al * a1, w2 - al * a2   # radial part at t = 0
+    al1 = (n0 * a0 + n1 * a1) + n2 * a2
+    m0, m1, m2 = n0 - al1 * a0, n1 - al1 * a1, n2 - al1 * a2
+    c0 = (v0 * v0 + v1 * v1) + v2 * v2                       # r(t)^2 = c0 + t (2 c1 + t c2)
+    c1 = (v0 * m0 + v1 * m1) + v2 * m2
+    c2 = (m0 * m0 + m1 * m1) + m2 * m2
+    b = al - wheel.offset                                   # the profile's y at t = 0
+    R0 = wheel.radius
+    # start: the linear prediction of (s, t) at the patch's wheel point (rows 0 and 2 of the
+    # inverse Jacobian of r_w(s, theta) - q - t n, by Cramer's rule)
+    u, rho, u1, rho1, _, _ = (float(v) for v in wheel.meridian(patch.wheel_s))
+    er, et = wheel.e_r(patch.wheel_theta), wheel.e_t(patch.wheel_theta)
+    J0, J1, J2 = (tuple(float(c) for c in v) for v in (u1 * f.a + rho1 * er, rho * et, -patch.normal))
+    k12, k01 = _cross(J1, J2), _cross(J0, J1)
+    det = _dot(J0, k12)
+    wp0, wp1, wp2 = (float(c) for c in patch.wheel_point)
+    d0, d1, d2 = q[0] - wp0, q[1] - wp1, q[2] - wp2
+    s = (d0 * (k12[0] / det) + d1 * (k12[1] / det)) + d2 * (k12[2] / det)
+    s += patch.wheel_s
+    t = (d0 * (k01[0] / det) + d1 * (k01[1] / det)) + d2 * (k01[2] / det)
+    cur = wheel.curve._pieces.cursor()
+    L = wheel.curve.length
+    c1x2 = 2.0 * c1
+    for _ in range(maxit):
+        (y, z), (y1, z1) = cur.stack1(s)
+        tc2 = t * c2
+        r = np.sqrt(c0 + t * (c1x2 + tc2))
+        G1 = (y - b) - al1 * t
+        G2 = (z + R0) - r
+        rp = (c1 + tc2) / r                                  # dr/dt
+        det = al1 * z1 - y1 * rp
+        ds = (G1 * rp - al1 * G2) / det
+        dt = (z1 * G1 - y1 * G2) / det
+        clip(ds, -2.0, 2.0, out=ds)
+        ds += s
+        s = clip(ds, 0.0, L)
+        t += dt
+        res = float(np.maximum(np.abs(G1, out=G1).max(), np.abs(G2, out=G2).max()))   # NaN if any
+        if res < tol:
+            break
+    if not res < 1e-7:
+        raise _no_wheel(res)
+    return t
 
 
 def _wheel_start(wheel: WheelSurface, patch: Patch, Q: np.ndarray):

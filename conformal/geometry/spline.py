@@ -287,6 +287,10 @@ class _Pieces:
         d2 += a2x2
         return out
 
+    def cursor(self) -> "_Cursor":
+        """A :class:`_Cursor` on these pieces (repeated evaluations at slowly moving arc lengths)."""
+        return _Cursor(self)
+
     def scalar(self, s: float) -> tuple[float, ...]:
         """y, z, y', z', y'', z'' at one arc length (Python floats)."""
         xs = self.x_list
@@ -296,6 +300,63 @@ class _Pieces:
         return (((a3y * t + a2y) * t + a1y) * t + a0y, ((a3z * t + a2z) * t + a1z) * t + a0z,
                 (3.0 * a3y * t + 2.0 * a2y) * t + a1y, (3.0 * a3z * t + 2.0 * a2z) * t + a1z,
                 6.0 * a3y * t + 2.0 * a2y, 6.0 * a3z * t + 2.0 * a2z)
+
+
+class _Cursor:
+    """:meth:`_Pieces.stack` (order 1) at arc lengths that move little between calls (the Newton
+    iterates of many points): the piece of each point and its coefficients are kept from the
+    previous call and looked up again only when some point has left its piece, i.e. the same
+    pieces as :meth:`_Pieces._index` and the same expressions, hence the same numbers."""
+
+    __slots__ = ("pc", "n", "lo", "hi", "x", "r", "d")
+
+    def __init__(self, pc: _Pieces):
+        self.pc, self.n = pc, -1
+
+    def _look_up(self, s: np.ndarray, k: np.ndarray | None) -> None:
+        """The pieces of s (k None) or of the points k (indices into s)."""
+        pc = self.pc
+        sk = s if k is None else s[k]
+        i = pc._index(sk)
+        x = pc.x.take(i)
+        # the bounds of each point's piece (the end pieces extend to infinity; NaN: never inside)
+        lo = np.where(i > 0, x, -np.inf)
+        hi = np.where(i < pc.x.size - 2, pc.x.take(i + 1, mode="clip"), np.inf)
+        r = pc.rows.take(i, axis=1)
+        # 2 a2 and 3 a3 (the products stack forms per call: the same numbers)
+        d = np.concatenate((2.0 * r[4:6], np.multiply(3.0, r[6:8])))
+        if k is None:
+            self.x, self.lo, self.hi, self.r, self.d, self.n = x, lo, hi, r, d, s.size
+        else:
+            self.x[k], self.lo[k], self.hi[k] = x, lo, hi
+            self.r[:, k], self.d[:, k] = r, d
+
+    def stack1(self, s: np.ndarray) -> np.ndarray:
+        """``pieces.stack(s, 1)`` of a 1-D float array s."""
+        if s.size != self.n:
+            self._look_up(s, None)
+        else:
+            inside = self.lo <= s
+            inside &= s < self.hi
+            if not inside.all():
+                self._look_up(s, np.flatnonzero(~inside))
+        r, d = self.r, self.d
+        a0, a1, a2, a3 = r[0:2], r[2:4], r[4:6], r[6:8]
+        a2x2, a3x3 = d[0:2], d[2:4]
+        t = s - self.x
+        out = np.empty((2, 2, s.size))
+        c, d1 = out[0], out[1]
+        np.multiply(a3, t, out=c)               # ((a3 t + a2) t + a1) t + a0
+        c += a2
+        c *= t
+        c += a1
+        c *= t
+        c += a0
+        np.multiply(a3x3, t, out=d1)            # (3 a3 t + 2 a2) t + a1
+        d1 += a2x2
+        d1 *= t
+        d1 += a1
+        return out
 
 
 def _chord_parameter(p: np.ndarray) -> np.ndarray:
