@@ -146,9 +146,10 @@ def _locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, loc
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """Inclusive index ranges of the True runs of mask."""
-    m = np.r_[False, mask, False].astype(int)
-    d = np.diff(m)
-    starts, ends = np.nonzero(d == 1)[0], np.nonzero(d == -1)[0] - 1
+    m = np.zeros(mask.size + 2, bool)
+    m[1:-1] = mask
+    starts = np.flatnonzero(m[1:] > m[:-1])            # False -> True
+    ends = np.flatnonzero(m[:-1] > m[1:]) - 1          # True -> False
     return list(zip(starts.tolist(), ends.tolist()))
 
 
@@ -177,7 +178,7 @@ def find_patches(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = N
         where = (f" (at rail y = {float(rail.curve.y(s_r[i])):.2f} mm)" if np.isfinite(s_r[i])
                  else f" (side-frame y = {loc.points[i, 1]:.2f} mm)")
         raise NoContactError(f"wheel lifted off: the smallest gap between wheel and rail is {gap:.4g} mm{where}")
-    runs = _runs(np.nan_to_num(pen, nan=-1.0) > 0)
+    runs = _runs(pen > 0)                           # NaN: not overlapping
     valid = np.isfinite(pen)
     for a, b in runs:
         if a == 0 or b == pen.size - 1 or not (valid[a - 1] and valid[b + 1]):
@@ -440,8 +441,13 @@ def rail_on_lines(rail: RailSurface, Q: np.ndarray, n: np.ndarray, s0: np.ndarra
     s = np.array(s0, float).reshape(N).copy()
     t = np.zeros(N)
     L = rail.curve.length
+    cur = rail.curve._pieces.cursor()
+    r00, r01, r10, r11, y0, z0 = rail._placement
     for _ in range(maxit):
-        Y, Z, Y1, Z1 = rail.profile_slopes(s)
+        c = cur.stack1(s)              # rail.profile_slopes(s): the same expressions
+        y, z = c[:, 0], c[:, 1]
+        Yd, Zd = r00 * y + r01 * z, r10 * y + r11 * z
+        Y, Z, Y1, Z1 = Yd[0] + y0, Zd[0] + z0, Yd[1], Zd[1]
         F0, F1 = (Y - q0) - t * n0, (Z - q1) - t * n1
         mF0, mF1 = -F0, -F1
         det = Y1 * mn1 - mn0 * Z1
@@ -449,7 +455,7 @@ def rail_on_lines(rail: RailSurface, Q: np.ndarray, n: np.ndarray, s0: np.ndarra
         dt = (Y1 * mF1 - Z1 * mF0) / det
         s = clip(s + clip(ds, -2.0, 2.0), 0.0, L)
         t += dt
-        res = np.max([np.max(np.abs(F0)), np.max(np.abs(F1))])
+        res = np.maximum(np.abs(F0).max(), np.abs(F1).max())     # NaN if any
         if res < tol:
             break
     if not res < 1e-7:
@@ -611,10 +617,27 @@ def planar_grid_for_patch(wheel: WheelSurface, rail: RailSurface, patch: Patch, 
             dx, dy = 2 * hx / n, 2 * hy / n
         _check_size(mx, my, theory, element_size is not None)
         grid = PlanarGrid(mx, my, dx, dy, cx - 0.5 * mx * dx, cy - 0.5 * my * dy)
-    X, Y = grid.mesh()
-    d = planar_distance(wheel, rail, patch, X, Y)
+    d = _grid_distance(wheel, rail, patch, grid)
     approach = float(-d.min())
     return grid, d + approach, approach
+
+
+def _grid_distance(wheel: WheelSurface, rail: RailSurface, patch: Patch, grid: PlanarGrid) -> np.ndarray:
+    """:func:`planar_distance` at the element centres of ``grid`` (``grid.mesh()``), the same
+    numbers: the rail lines are the grid's columns (its lateral coordinates), the points
+    P + xi e1 + eta t2 formed from the two coordinate vectors by broadcasting."""
+    x, eta = grid.x, grid.y
+    P, n, t2 = patch.point, patch.normal, patch.t2
+    Qr = P[1:][None, :] + eta[:, None] * t2[1:][None, :]
+    _, t_r = rail_on_lines(rail, Qr, n[1:], patch.s_ref + eta)
+    Qc = np.empty((3, x.size, eta.size))
+    xc = x[:, None]
+    for k, e1k in enumerate((1.0, 0.0, 0.0)):
+        np.multiply(xc, e1k, out=Qc[k])
+        Qc[k] += P[k]
+        Qc[k] += eta * t2[k]
+    t_w = _wheel_on_grid_lines(wheel, patch, Qc.reshape(3, -1), n)
+    return t_r - t_w.reshape(x.size, eta.size)
 
 
 # ----------------------------------------------------------------------------- curved grid

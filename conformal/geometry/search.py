@@ -33,10 +33,14 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from conformal.errors import ConvergenceError, InputError, NoContactError
+from conformal.geometry.spline import clip
 from conformal.geometry.surfaces import RailSurface, WheelSurface
 
 LOCUS_STEP = 0.05      # mm of wheel profile between locus samples
 MERGE_DEPTH = 1e-4     # mm: minima separated by a smaller bump are one minimum
+#: :meth:`RailTop.s_near` looks for the nearest rail sample among this many samples either side of
+#: the envelope's (0.02 mm apart; on the Manchester sequence the nearest lies at most 5 away)
+NEAR_WINDOW = 6
 
 
 # ----------------------------------------------------------------------------- rail top
@@ -96,9 +100,50 @@ class RailTop:
         return np.where((y >= self.y_min) & (y <= self.y_max), z, np.nan)
 
     def s_near(self, yz: np.ndarray) -> np.ndarray:
-        """Arc length of the rail sample nearest to points yz (..., 2)."""
-        _, k = self.tree.query(yz)
-        return self.s_samples[k]
+        """Arc length of the rail sample nearest to points yz (..., 2).
+
+        Points given as an (N, 2) array are first looked for among the NEAR_WINDOW samples either
+        side of the envelope's sample at their y (a point near the top of the rail lies within a
+        few samples of it): where the nearest of those is not at the window's edge, the sample
+        distances fall towards it and rise after it, and it is the k-d tree's answer unless
+        another stretch of the profile, more than NEAR_WINDOW samples away along it, came closer
+        (not for the points within a few hundredths of a millimetre of the top that the patch
+        search projects); the others (and points off the envelope) ask the tree."""
+        yz = np.asarray(yz, float)
+        if yz.ndim != 2 or yz.shape[0] < 8 or self.s_samples.size < 4 * NEAR_WINDOW:
+            _, k = self.tree.query(yz)
+            return self.s_samples[k]
+        return self.s_samples[self._near_index(yz)]
+
+    @cached_property
+    def _sample_yz(self) -> tuple[np.ndarray, np.ndarray]:
+        """The samples' y and z (contiguous copies of the tree's points)."""
+        p = self.tree.data
+        return np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1])
+
+    def _near_index(self, yz: np.ndarray) -> np.ndarray:
+        """The index of the sample nearest to each point of yz (N, 2) (:meth:`s_near`)."""
+        (py, pz), ss, W = self._sample_yz, self.s_samples, NEAR_WINDOW
+        n = ss.size
+        qy, qz = yz[:, 0], yz[:, 1]
+        i = clip(np.rint((qy - self.y0) / self.hy), 0.0, self.z.size - 1.0).astype(np.intp)
+        guess = self.s.take(i) * ((n - 1) / ss[-1])                  # the envelope's sample index
+        ok = np.isfinite(guess)
+        j = clip(np.rint(np.where(ok, guess, 0.0)), W, n - 1.0 - W).astype(np.intp)
+        cand = j[:, None] + np.arange(-W, W + 1)
+        dy = py.take(cand)
+        dy -= qy[:, None]
+        dz = pz.take(cand)
+        dz -= qz[:, None]
+        dy *= dy
+        dz *= dz
+        dy += dz                                                     # the squared distances
+        m = dy.argmin(axis=1)
+        k = cand[np.arange(m.size), m]
+        redo = ~ok | (m == 0) | (m == 2 * W) | ~np.isfinite(dy.min(axis=1))
+        if redo.any():
+            k[redo] = self.tree.query(yz[redo])[1]
+        return k
 
 
 @lru_cache(maxsize=64)

@@ -71,3 +71,68 @@ def test_grid_lines_that_miss_the_wheel_are_refused(placed):
     q = np.ascontiguousarray((patch.point + np.array([[0.0, 0.0, 0.0], [0.0, 400.0, 0.0]])).T)
     with pytest.raises(gp.ConvergenceError):
         gp._wheel_on_grid_lines(wheel, patch, q, patch.normal)
+
+
+def _rail_on_lines_reference(rail, Q, n, s0, maxit=30, tol=1e-10):
+    """rail_on_lines as it was written with ProfileSurface.profile_slopes (the reference)."""
+    n0, n1 = float(n[0]), float(n[1])
+    q0, q1 = Q[:, 0].copy(), Q[:, 1].copy()
+    s, t = np.array(s0, float).copy(), np.zeros(len(Q))
+    for _ in range(maxit):
+        Y, Z, Y1, Z1 = rail.profile_slopes(s)
+        F0, F1 = (Y - q0) - t * n0, (Z - q1) - t * n1
+        mF0, mF1 = -F0, -F1
+        det = Y1 * -n1 - -n0 * Z1
+        ds = (mF0 * -n1 + n0 * mF1) / det
+        dt = (Y1 * mF1 - Z1 * mF0) / det
+        s = np.clip(s + np.clip(ds, -2.0, 2.0), 0.0, rail.curve.length)
+        t += dt
+        if np.max([np.max(np.abs(F0)), np.max(np.abs(F1))]) < tol:
+            break
+    return s, t
+
+
+def test_grid_distance_and_rail_lines_equal_their_references(placed):
+    """The grid's distances (columns and broadcast points) are planar_distance's on the grid's mesh,
+    bitwise, and the rail lines (spline cursor) those of the profile_slopes iteration."""
+    z = placed.z_touch + 0.05
+    wheel, rail = placed.pair.wheel(z), placed.pair.rail
+    patch = gp.find_patches(wheel, rail, placed.top)[0]
+    grid, h, approach = gp.planar_grid_for_patch(wheel, rail, patch, element_size=0.2)
+    X, Y = grid.mesh()
+    d = gp.planar_distance(wheel, rail, patch, X, Y)
+    assert (d + approach).tobytes() == h.tobytes()
+    eta = grid.y
+    Q = patch.point[1:][None, :] + eta[:, None] * patch.t2[1:][None, :]
+    got = gp.rail_on_lines(rail, Q, patch.normal[1:], patch.s_ref + eta)
+    ref = _rail_on_lines_reference(rail, Q, patch.normal[1:], patch.s_ref + eta)
+    assert all(g.tobytes() == r.tobytes() for g, r in zip(got, ref))
+
+
+def test_runs_equal_the_padded_difference():
+    """The runs of True are those of the padded integer difference they replace."""
+    rng = np.random.default_rng(5)
+    for size in (0, 1, 2, 7, 300):
+        for _ in range(50):
+            mask = rng.random(size) < 0.6
+            m = np.r_[False, mask, False].astype(int)
+            d = np.diff(m)
+            ref = list(zip(np.nonzero(d == 1)[0].tolist(), (np.nonzero(d == -1)[0] - 1).tolist()))
+            assert gp._runs(mask) == ref
+
+
+def test_nearest_sample_equals_the_tree_query(placed):
+    """The windowed nearest rail sample is the k-d tree's, for the locus points the patch search
+    projects, points deep below and far above the rail (the tree's fallback) and off its ends."""
+    from conformal.geometry.search import pair_locus
+    top = placed.top
+    loc = pair_locus(placed.pair, top, placed.z_touch + 0.1)
+    ok = np.isfinite(loc.gap) & (loc.gap < 0.1)
+    pts = loc.points[ok][:, 1:]
+    rng = np.random.default_rng(2)
+    y = rng.uniform(top.y_min - 5.0, top.y_max + 5.0, 400)
+    z = top.z_at(np.clip(y, top.y_min, top.y_max)) + rng.uniform(-3.0, 3.0, y.size)
+    far = np.c_[y, z][np.isfinite(z)]
+    for yz in (pts, far, pts + [0.0, 1.5]):
+        assert len(yz) >= 8
+        assert np.array_equal(top.s_near(yz), top.s_samples[top.tree.query(yz)[1]])
