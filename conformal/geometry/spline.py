@@ -287,6 +287,20 @@ class _Pieces:
         d2 += a2x2
         return out
 
+    @cached_property
+    def _bounds(self) -> np.ndarray:
+        """The breaks with the ends at -inf and inf: piece i covers [_bounds[i], _bounds[i + 1])
+        (the end pieces extend the curve, as :meth:`_index` counts)."""
+        b = self.x.copy()
+        b[0], b[-1] = -np.inf, np.inf
+        return b
+
+    @cached_property
+    def _rows12(self) -> np.ndarray:
+        """(12, m): :attr:`rows` and 2 a2, 3 a3 (the products :meth:`stack` forms: the same numbers)."""
+        r = self.rows
+        return np.concatenate((r, 2.0 * r[4:6], np.multiply(3.0, r[6:8])))
+
     def cursor(self) -> "_Cursor":
         """A :class:`_Cursor` on these pieces (repeated evaluations at slowly moving arc lengths)."""
         return _Cursor(self)
@@ -308,7 +322,7 @@ class _Cursor:
     previous call and looked up again only when some point has left its piece, i.e. the same
     pieces as :meth:`_Pieces._index` and the same expressions, hence the same numbers."""
 
-    __slots__ = ("pc", "n", "lo", "hi", "x", "r", "d")
+    __slots__ = ("pc", "n", "lo", "hi", "x", "r")
 
     def __init__(self, pc: _Pieces):
         self.pc, self.n = pc, -1
@@ -319,17 +333,13 @@ class _Cursor:
         sk = s if k is None else s[k]
         i = pc._index(sk)
         x = pc.x.take(i)
-        # the bounds of each point's piece (the end pieces extend to infinity; NaN: never inside)
-        lo = np.where(i > 0, x, -np.inf)
-        hi = np.where(i < pc.x.size - 2, pc.x.take(i + 1, mode="clip"), np.inf)
-        r = pc.rows.take(i, axis=1)
-        # 2 a2 and 3 a3 (the products stack forms per call: the same numbers)
-        d = np.concatenate((2.0 * r[4:6], np.multiply(3.0, r[6:8])))
+        lo, hi = pc._bounds.take(i), pc._bounds.take(i + 1)
+        r = pc._rows12.take(i, axis=1)
         if k is None:
-            self.x, self.lo, self.hi, self.r, self.d, self.n = x, lo, hi, r, d, s.size
+            self.x, self.lo, self.hi, self.r, self.n = x, lo, hi, r, s.size
         else:
             self.x[k], self.lo[k], self.hi[k] = x, lo, hi
-            self.r[:, k], self.d[:, k] = r, d
+            self.r[:, k] = r
 
     def stack1(self, s: np.ndarray) -> np.ndarray:
         """``pieces.stack(s, 1)`` of a 1-D float array s."""
@@ -340,9 +350,8 @@ class _Cursor:
             inside &= s < self.hi
             if not inside.all():
                 self._look_up(s, np.flatnonzero(~inside))
-        r, d = self.r, self.d
-        a0, a1, a2, a3 = r[0:2], r[2:4], r[4:6], r[6:8]
-        a2x2, a3x3 = d[0:2], d[2:4]
+        r = self.r
+        a0, a1, a2, a3, a2x2, a3x3 = r[0:2], r[2:4], r[4:6], r[6:8], r[8:10], r[10:12]
         t = s - self.x
         out = np.empty((2, 2, s.size))
         c, d1 = out[0], out[1]
