@@ -541,21 +541,36 @@ def _wheel_on_grid_lines(wheel: WheelSurface, patch: Patch, q: np.ndarray, n: np
     cur = wheel.curve._pieces.cursor()
     L = wheel.curve.length
     c1x2 = 2.0 * c1
+    G = np.empty((2, s.size))                 # the residuals (axial, radial)
+    G1, G2 = G
+    r, rp, det, w = np.empty((4, s.size))
+    mul = np.multiply
     for _ in range(maxit):
-        (y, z), (y1, z1) = cur.stack1(s)
-        tc2 = t * c2
-        r = np.sqrt(c0 + t * (c1x2 + tc2))
-        G1 = (y - b) - al1 * t
-        G2 = (z + R0) - r
-        rp = (c1 + tc2) / r                                  # dr/dt
-        det = al1 * z1 - y1 * rp
-        ds = (G1 * rp - al1 * G2) / det
-        dt = (z1 * G1 - y1 * G2) / det
+        (y, z), (y1, z1) = cur.stack1(s)       # a new array: its rows serve as work rows below
+        tc2 = mul(t, c2, out=rp)
+        np.add(tc2, c1x2, out=r)               # r = sqrt(c0 + t (2 c1 + t c2))
+        r *= t
+        r += c0
+        np.sqrt(r, out=r)
+        np.subtract(y, b, out=G1)              # G1 = (y - b) - al1 t
+        G1 -= mul(t, al1, out=w)
+        np.add(z, R0, out=G2)                  # G2 = (z + R0) - r
+        G2 -= r
+        rp += c1                               # dr/dt = (c1 + t c2) / r
+        rp /= r
+        mul(z1, al1, out=det)                  # det = al1 z1 - y1 dr/dt
+        det -= mul(y1, rp, out=w)
+        ds = mul(G1, rp, out=y)                # ds = (G1 dr/dt - al1 G2) / det
+        ds -= mul(G2, al1, out=w)
+        ds /= det
+        dt = mul(z1, G1, out=z)                # dt = (z1 G1 - y1 G2) / det
+        dt -= mul(y1, G2, out=w)
+        dt /= det
         clip(ds, -2.0, 2.0, out=ds)
         ds += s
-        s = clip(ds, 0.0, L)
+        clip(ds, 0.0, L, out=s)
         t += dt
-        res = float(np.maximum(np.abs(G1, out=G1).max(), np.abs(G2, out=G2).max()))   # NaN if any
+        res = float(np.abs(G, out=G).max())   # NaN if any
         if res < tol:
             break
     if not res < 1e-7:

@@ -296,10 +296,12 @@ class _Pieces:
         return b
 
     @cached_property
-    def _rows12(self) -> np.ndarray:
-        """(12, m): :attr:`rows` and 2 a2, 3 a3 (the products :meth:`stack` forms: the same numbers)."""
+    def _rows14(self) -> np.ndarray:
+        """(14, m): a3, 3 a3, a2, 2 a2, a1, a1, a0 (rows of (y, z); the products :meth:`stack`
+        forms, the same numbers), so that the value's and the slope's Horner steps run as one."""
         r = self.rows
-        return np.concatenate((r, 2.0 * r[4:6], np.multiply(3.0, r[6:8])))
+        a0, a1, a2, a3 = r[0:2], r[2:4], r[4:6], r[6:8]
+        return np.concatenate((a3, np.multiply(3.0, a3), a2, 2.0 * a2, a1, a1, a0))
 
     def cursor(self) -> "_Cursor":
         """A :class:`_Cursor` on these pieces (repeated evaluations at slowly moving arc lengths)."""
@@ -334,7 +336,7 @@ class _Cursor:
         i = pc._index(sk)
         x = pc.x.take(i)
         lo, hi = pc._bounds.take(i), pc._bounds.take(i + 1)
-        r = pc._rows12.take(i, axis=1)
+        r = pc._rows14.take(i, axis=1)
         if k is None:
             self.x, self.lo, self.hi, self.r, self.n = x, lo, hi, r, s.size
         else:
@@ -351,21 +353,16 @@ class _Cursor:
             if not inside.all():
                 self._look_up(s, np.flatnonzero(~inside))
         r = self.r
-        a0, a1, a2, a3, a2x2, a3x3 = r[0:2], r[2:4], r[4:6], r[6:8], r[8:10], r[10:12]
         t = s - self.x
-        out = np.empty((2, 2, s.size))
-        c, d1 = out[0], out[1]
-        np.multiply(a3, t, out=c)               # ((a3 t + a2) t + a1) t + a0
-        c += a2
-        c *= t
-        c += a1
-        c *= t
-        c += a0
-        np.multiply(a3x3, t, out=d1)            # (3 a3 t + 2 a2) t + a1
-        d1 += a2x2
-        d1 *= t
-        d1 += a1
-        return out
+        out = np.empty((4, s.size))
+        np.multiply(r[0:4], t, out=out)         # rows (a3, 3 a3) t + (a2, 2 a2), times t, + a1:
+        out += r[4:8]
+        out *= t
+        out += r[8:12]                          # the slope (3 a3 t + 2 a2) t + a1 done
+        c = out[0:2]
+        c *= t                                  # the value ((a3 t + a2) t + a1) t + a0
+        c += r[12:14]
+        return out.reshape(2, 2, s.size)
 
 
 def _chord_parameter(p: np.ndarray) -> np.ndarray:
