@@ -144,22 +144,36 @@ class ProfileCurve:
     def project(self, q: np.ndarray, s0: np.ndarray) -> np.ndarray:
         """Closest-point arc lengths of points q (..., 2) by Newton from s0 (...): eight steps, or
         fewer for a point whose step no longer changes its arc length (a fixed point of the steps,
-        which the remaining ones would repeat: such points drop out of the iteration)."""
+        which the remaining ones would repeat: such points drop out of the iteration), or that
+        returns to its arc length of two steps before (a cycle of two, whose remaining steps
+        alternate: the point takes the value the last step would give and drops out)."""
         s = np.array(s0, dtype=float, copy=True)
         shape = s.shape
         s = s.reshape(-1)
         q = np.asarray(q, dtype=float)
-        qy, qz = q[..., 0].reshape(-1), q[..., 1].reshape(-1)
-        act, sa = None, s          # the moving points (None: all) and their arc lengths
-        for _ in range(8):
-            y, z, y1, z1, y2, z2 = self.derivatives(sa)
-            dy, dz = y - qy, z - qz
-            g = dy * y1 + dz * z1
-            H = y1 * y1 + z1 * z1 + dy * y2 + dz * z2
+        qyz = np.stack((q[..., 0].reshape(-1), q[..., 1].reshape(-1)))
+        stack, L = self._pieces.stack, self.length
+        act, sa, prev = None, s, None  # the moving points (None: all), their arc lengths and those before
+        for it in range(8):
+            c = stack(sa)                      # (y, z), (y', z'), (y'', z'')
+            d = c[0] - qyz                     # (dy, dz)
+            p = d * c[1]
+            g = p[0] + p[1]                    # dy y' + dz z'
+            p = c[1] * c[1]
+            H = p[0] + p[1]                    # ((y'^2 + z'^2) + dy y'') + dz z''
+            p = d * c[2]
+            H += p[0]
+            H += p[1]
             curved = H > 0.1
             step = np.where(curved, g / np.where(curved, H, 1.0), g)
-            s_new = clip(sa - clip(step, -2.0, 2.0), 0.0, self.length)
+            s_new = clip(sa - clip(step, -2.0, 2.0), 0.0, L)
             moved = s_new != sa
+            if prev is not None:
+                cycle = s_new == prev
+                if cycle.any():                # the steps it + 1, ..., 7 alternate sa, s_new, ...
+                    if (7 - it) % 2:
+                        s_new[cycle] = sa[cycle]
+                    moved &= ~cycle
             if act is None:
                 s = s_new
             else:
@@ -168,9 +182,9 @@ class ProfileCurve:
                 act = np.nonzero(moved)[0] if act is None else act[moved]
                 if act.size == 0:
                     break
-                sa, qy, qz = s_new[moved], qy[moved], qz[moved]
+                prev, sa, qyz = sa[moved], s_new[moved], qyz[:, moved]
             else:
-                sa = s_new
+                prev, sa = sa, s_new
         return s.reshape(shape)
 
 

@@ -136,3 +136,48 @@ def test_nearest_sample_equals_the_tree_query(placed):
     for yz in (pts, far, pts + [0.0, 1.5]):
         assert len(yz) >= 8
         assert np.array_equal(top.s_near(yz), top.s_samples[top.tree.query(yz)[1]])
+
+
+def _project_reference(curve, q, s0):
+    """ProfileCurve.project as written before the two-cycle exit (eight steps or a fixed point)."""
+    from conformal.geometry.spline import clip
+    s = np.array(s0, dtype=float, copy=True).reshape(-1)
+    qy, qz = q[:, 0].copy(), q[:, 1].copy()
+    act, sa = None, s
+    for _ in range(8):
+        y, z, y1, z1, y2, z2 = curve.derivatives(sa)
+        dy, dz = y - qy, z - qz
+        g = dy * y1 + dz * z1
+        H = y1 * y1 + z1 * z1 + dy * y2 + dz * z2
+        curved = H > 0.1
+        step = np.where(curved, g / np.where(curved, H, 1.0), g)
+        s_new = clip(sa - clip(step, -2.0, 2.0), 0.0, curve.length)
+        moved = s_new != sa
+        if act is None:
+            s = s_new
+        else:
+            s[act] = s_new
+        if not moved.all():
+            act = np.nonzero(moved)[0] if act is None else act[moved]
+            if act.size == 0:
+                break
+            sa, qy, qz = s_new[moved], qy[moved], qz[moved]
+        else:
+            sa = s_new
+    return s
+
+
+def test_projection_equals_the_eight_step_iteration(placed):
+    """The closest-point projection with its early exits (fixed points, cycles of two) gives the
+    arc lengths of the plain iteration, bitwise, for points near and far from the rail profile,
+    started at and away from their nearest samples."""
+    rail = placed.pair.rail
+    curve = rail.curve
+    rng = np.random.default_rng(11)
+    s_true = rng.uniform(0.0, curve.length, 4000)
+    pts = curve.point(s_true) + curve.normal(s_true) * rng.normal(0.0, 0.3, (s_true.size, 1))
+    for s0 in (s_true + rng.normal(0.0, 0.01, s_true.size), s_true + rng.normal(0.0, 0.5, s_true.size),
+               np.clip(s_true + 3.0, 0.0, curve.length)):
+        got = curve.project(pts, s0)
+        ref = _project_reference(curve, pts, s0)
+        assert got.tobytes() == ref.tobytes()
