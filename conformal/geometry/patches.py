@@ -132,7 +132,7 @@ def _locus_penetration(wheel: WheelSurface, rail: RailSurface, top: RailTop, loc
     pen_k = (pts[:, 1] - Y) * ny + (pts[:, 2] - Z) * nz
     er = wheel.e_r(np.nan_to_num(loc.theta[k])) if loc.e_r is None else loc.e_r[k]
     rho = wheel.rolling_radius(loc.s[k]) if loc.rho is None else loc.rho[k]
-    A_k = np.clip((er[:, 1] * ny + er[:, 2] * nz) / (2 * rho), 1e-6, None)
+    A_k = np.maximum((er[:, 1] * ny + er[:, 2] * nz) / (2 * rho), 1e-6)     # np.clip(.., 1e-6, None)
     # points that project onto an end of the rail are not over the rail
     inside = (s_k > 1e-6) & (s_k < rail.curve.length - 1e-6)
     n = loc.s.size
@@ -211,24 +211,25 @@ def _patch(wheel: WheelSurface, rail: RailSurface, loc, s_r, pen, A, idx, n_lobe
     # deepest point: Newton-Raphson from the deepest locus sample (seed Eqs. 54-55)
     deepest = newton_contact(wheel, rail, (loc.s[i], loc.theta[i], x[k], s_r[k]))
     w = pen ** (REF_EXPONENT + 0.5) / np.sqrt(A)
-    s_ref = float(np.sum(w * s_r) / np.sum(w))
-    x_ref = float(np.sum(w * x) / np.sum(w))
+    sw = w.sum()                                  # (np.sum's: the same pairwise sum)
+    s_ref = float((w * s_r).sum() / sw)
+    x_ref = float((w * x).sum() / sw)
     Y, Z = (float(v) for v in rail.profile(s_ref)[:2])
     # the reference normal: weighted mean of the contact angles (equal to the normal at s_ref on
     # narrow patches; on wide ones it follows the mean inclination, as CONTACT's does)
     y_r, z_r, ny_r, nz_r = rail_yzn              # rail.point(s_r), rail.normal(s_r)
     angles = np.arctan2(-ny_r, nz_r)
-    delta = float(np.sum(w * angles) / np.sum(w))
+    delta = float((w * angles).sum() / sw)
     # each sample's overlap grows by dz cos(delta_i) and its rail point moves by dz sin(delta_i)
     dw = (REF_EXPONENT + 0.5) * w / pen * np.cos(angles)           # pen > 0 on a patch
-    s_ref_rate = float(np.sum(dw * (s_r - s_ref) + w * np.sin(angles)) / np.sum(w))
+    s_ref_rate = float((dw * (s_r - s_ref) + w * np.sin(angles)).sum() / sw)
     n = np.array([0.0, -math.sin(delta), math.cos(delta)])
     t2 = _cross_x(n)
     P = np.array([x_ref, Y, Z])
     # the wheel point on the normal line through P (start from the deepest point)
     q = wheel_on_lines(wheel, P[None, :], n, np.array([deepest.s_w]), np.array([deepest.theta]))
     sw, th, t = (float(v[0]) for v in q)
-    half = np.sqrt(np.clip(pen, 0, None) / A)
+    half = np.sqrt(np.maximum(pen, 0.0) / A)       # np.clip(pen, 0, None)
     eta = (y_r - Y) * t2[1] + (z_r - Z) * t2[2]
     return Patch(s_ref=s_ref, x_ref=x_ref, point=P, normal=n, t2=t2,
                  wheel_point=P + t * n, wheel_s=sw, wheel_theta=th, deepest=deepest,
