@@ -60,17 +60,17 @@ def gmres(matvec: Callable, b: np.ndarray, *, precond: Callable | None = None, t
     ext = None
     if beta0 == 0.0:
         return (x, ext, 0, 0.0) if extra else (x, 0, 0.0)
-    r = b.copy()
+    r = b          # (never written to: the restarts form a new residual)
     total = 0
     relres = 1.0
+    beta = beta0   # the first cycle's residual is b
     while total < maxit:
-        beta = math.sqrt(dot(r, r))
         m_max = min(restart, maxit - total)
         # the Hessenberg column, the rotations and the residual vector as Python floats (the same
-        # IEEE operations as on numpy scalars, without their overhead)
+        # IEEE operations as on numpy scalars, without their overhead); the columns are kept as
+        # lists and written into H for the back substitution
         V = [r / beta]
-        Z, E = [], []
-        H = np.zeros((m_max + 1, m_max))
+        Z, E, cols = [], [], []
         cs, sn = [0.0] * m_max, [0.0] * m_max
         g = [0.0] * (m_max + 1)
         g[0] = beta
@@ -93,13 +93,16 @@ def gmres(matvec: Callable, b: np.ndarray, *, precond: Callable | None = None, t
             rho = math.hypot(h[k], h[k + 1])
             cs[k], sn[k] = (h[k] / rho, h[k + 1] / rho) if rho > 0 else (1.0, 0.0)
             h[k], h[k + 1] = rho, 0.0
-            H[:k + 2, k] = h
+            cols.append(h)
             g[k + 1] = -sn[k] * g[k]
             g[k] = cs[k] * g[k]
             m = k + 1
             relres = abs(g[k + 1]) / beta0
             if relres <= tol or h[k] == 0.0:
                 break
+        H = np.zeros((m + 1, m))
+        for k, h in enumerate(cols):
+            H[:k + 2, k] = h
         y = np.zeros(m)  # back substitution (no LAPACK: see dot)
         for i in range(m - 1, -1, -1):
             y[i] = (g[i] - dot(H[i, i + 1:m], y[i + 1:])) / H[i, i] if H[i, i] != 0 else 0.0
@@ -112,7 +115,8 @@ def gmres(matvec: Callable, b: np.ndarray, *, precond: Callable | None = None, t
             break
         Mx, _ = op(x)  # true residual for the restart (one product)
         r = b - Mx
-        relres = math.sqrt(dot(r, r)) / beta0
+        beta = math.sqrt(dot(r, r))
+        relres = beta / beta0
         if relres <= tol or total >= maxit:
             break
     return (x, ext, total, relres) if extra else (x, total, relres)
