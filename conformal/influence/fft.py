@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import fft as sfft
 
-__all__ = ["DIRECT", "rfft", "fft", "ifft", "irfft", "rfft2", "irfft2"]
+__all__ = ["DIRECT", "rfft", "fft", "ifft", "irfft", "rfft2", "irfft2", "padded_product"]
 
 
 def _binding():
@@ -120,3 +120,31 @@ def irfft2(x: np.ndarray, s: tuple[int, int]) -> np.ndarray:
     if x.shape[-2:] != (s[0], s[1] // 2 + 1):
         raise ValueError(f"irfft2: a half-spectrum of shape {x.shape[-2:]} does not belong to s = {s}")
     return _PF.c2r(x, (x.ndim - 2, x.ndim - 1), s[1], False, 2, None, 1)
+
+
+def padded_product(p: np.ndarray, kernel_hat: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """The zero-padded FFT convolution of one real field p (mx, my) with a kernel given by its
+    (Mx, My//2+1) half-spectrum ``kernel_hat`` on the padded (Mx, My) = ``shape`` grid, restricted
+    to the first mx x my entries: the mx non-zero rows transformed along y straight into the
+    padded half-spectrum, the transforms along x, the product, and only mx rows transformed back.
+
+    The same transforms, in the same order and on the same arrays, as :func:`rfft`, :func:`fft`,
+    :func:`ifft` and :func:`irfft` called one after the other (so bitwise their numbers), in one
+    call: on the patch grids of a wheel-rail sweep the Python layers around the four transforms
+    were a tenth of the product's time."""
+    mx, my = p.shape
+    Mx, My = shape
+    if _PF is None or p.dtype != np.float64:
+        spec = np.zeros((Mx, My // 2 + 1), dtype=complex)
+        rfft(p, My, axis=-1, out=spec[:mx])
+        spec = fft(spec, axis=-2, overwrite=True)
+        spec *= kernel_hat
+        return irfft(ifft(spec, axis=-2, overwrite=True)[:mx], My, axis=-1)[:, :my]
+    x = np.zeros((mx, My))
+    x[:, :my] = p
+    spec = np.zeros((Mx, My // 2 + 1), dtype=complex)
+    _PF.r2c(x, (1,), True, 0, spec[:mx], 1)
+    _PF.c2c(spec, (0,), True, 0, spec, 1)
+    spec *= kernel_hat
+    _PF.c2c(spec, (0,), False, 2, spec, 1)
+    return _PF.c2r(spec[:mx], (1,), My, False, 2, None, 1)[:, :my]

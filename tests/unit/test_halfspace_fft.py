@@ -99,3 +99,17 @@ def test_integer_input_is_transformed_as_float64():
 def test_irfft2_refuses_a_spectrum_of_another_shape():
     with pytest.raises(ValueError, match="half-spectrum"):
         ffts.irfft2(np.zeros((4, 3), complex), (4, 6))
+
+
+@pytest.mark.parametrize("shape", [(55, 33), (100, 11), (7, 40)])
+def test_normal_product_in_one_call_is_bitwise_the_four_transforms(shape):
+    """apply_normal's one-call product (fft.padded_product) against the general path it replaces:
+    the forward transforms, the kernel, the back transforms, each its own call (same numbers)."""
+    from conformal.influence.halfspace import Z
+
+    mx, my = shape
+    op = HalfSpaceInfluence.for_grid(mx, my, 0.2, 0.2, Material.steel(), shared=False)
+    p = np.random.default_rng(mx * my).random(shape)
+    uh = op._forward(p)
+    uh *= op._kernel_hat(Z, Z)
+    assert np.array_equal(op.apply_normal(p), op._back(uh))
