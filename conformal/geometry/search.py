@@ -630,10 +630,12 @@ def touch_point(pair, top: RailTop | None = None, z0: float = 0.0, *, step: floa
 
     A vertical move dz of the wheelset translates its contact locus rigidly (every vertical gap
     changes by exactly dz), so one locus evaluation (sampled every ``step`` mm of wheel profile)
-    gives the height to the sampling's resolution and one search there (:func:`find_contacts`,
-    refining only the candidate of the smallest sampled gap where the sampled gap rules out the
-    others: ``deepest_only``) every candidate's penetration p and normal n.  A candidate touches at z - p / n_z to first
-    order in p; only those that can touch first (within TOUCH_FOLLOW of the lowest estimate) are
+    gives the height to the sampling's resolution and one search there (:func:`find_contacts`)
+    every candidate's penetration p and normal n; where the floors of the sampled gap
+    (:func:`touch_candidates`) leave one candidate that can touch first, only it is refined, from
+    its locus sample and the rail top's arc length under it (no global search).  A candidate
+    touches at z - p / n_z to first order in p; only those that can touch first (within
+    TOUCH_FOLLOW of the lowest estimate) are
     followed, each by corrections of the height dz = -p / n_z (seed Eq. 56) with Newton-Raphson
     (seed Eq. 55) started from the previous contact point (it moves by O(dz)), instead of a new
     global search per trial height.  The height is that of :func:`touch_height` to rounding (the
@@ -649,14 +651,27 @@ def touch_point(pair, top: RailTop | None = None, z0: float = 0.0, *, step: floa
     """
     top = top or RailTop.of(pair.rail)
     loc = pair_locus(pair, top, z0, step)
-    if not np.isfinite(loc.gap).any():
-        raise NoContactError("contact search: the wheel does not lie over the rail")
-    z1 = z0 + float(np.nanmin(loc.gap))
-    sr = find_contacts(pair.wheel(z1), pair.rail, top, locus=pair_locus(pair, top, z1, step), deepest_only=True)
-    est = [-c.penetration / c.normal[2] for c in sr.contacts]
+    i, g_min, _, contenders = touch_candidates(loc, top)     # NoContactError: no sample over the rail
+    z1 = z0 + g_min
+    contacts = None
+    if contenders == [i] and _inside(loc.gap, i):
+        # the one candidate that can touch first, refined where it lies (the locus samples' wheel
+        # parameters do not depend on the height; the rail's arc length from the rail top under it)
+        k = min(max(int(round((float(loc.points[i, 1]) - top.y0) / top.hy)), 0), top.s.size - 1)
+        s_r0 = float(top.s[k])
+        if math.isfinite(s_r0):
+            try:
+                c = newton_contact(pair.wheel(z1), pair.rail, (loc.s[i], loc.theta[i], loc.points[i, 0], s_r0))
+                contacts = [c] if abs(c.s_w - loc.s[i]) <= 3.0 else None
+            except ConvergenceError:
+                contacts = None
+    if contacts is None:
+        contacts = find_contacts(pair.wheel(z1), pair.rail, top, locus=pair_locus(pair, top, z1, step),
+                                 deepest_only=True).contacts
+    est = [-c.penetration / c.normal[2] for c in contacts]
     low = min(est)
     best: tuple[float, ContactPoint] | None = None
-    for c, e in zip(sr.contacts, est):
+    for c, e in zip(contacts, est):
         if e > low + TOUCH_FOLLOW + 0.5 * abs(e):
             continue
         z = z1
@@ -672,6 +687,12 @@ def touch_point(pair, top: RailTop | None = None, z0: float = 0.0, *, step: floa
         if best is None or z < best[0]:
             best = (z, c)
     return best
+
+
+def _inside(gap: np.ndarray, i: int) -> bool:
+    """Whether sample i of a locus gap has sampled neighbours on both sides (else the touch would lie
+    at the end of a profile: :func:`find_contacts` refuses it)."""
+    return 0 < i < gap.size - 1 and bool(np.isfinite(gap[i - 1]) and np.isfinite(gap[i + 1]))
 
 
 def touch_bounds(pair, top: RailTop | None = None, z0: float = 0.0, *, step: float = LOCUS_STEP
@@ -694,8 +715,7 @@ def touch_bounds(pair, top: RailTop | None = None, z0: float = 0.0, *, step: flo
     top = top or RailTop.of(pair.rail)
     loc = pair_locus(pair, top, z0, step)
     i, g_min, g_low, _ = touch_candidates(loc, top)
-    n = loc.gap.size
-    clear = 0 < i < n - 1 and bool(np.isfinite(loc.gap[i - 1]) and np.isfinite(loc.gap[i + 1]))
+    clear = _inside(loc.gap, i)
     if clear:
         s_w = float(loc.s[i])
         k = min(max(int(round((float(loc.points[i, 1]) - top.y0) / top.hy)), 0), top.s.size - 1)
