@@ -41,6 +41,7 @@ from conformal.geometry.patches import (Patch, curved_grid_for_patch, find_patch
 from conformal.geometry.placement import WheelRailPair
 from conformal.geometry.profiles import rail_orientation_warning
 from conformal.geometry.search import LOCUS_STEP, TOUCH_STEP, RailTop, pair_locus, touch_bounds
+from conformal.geometry.surfaces import LOCUS_REACH_MARGIN
 from conformal.geometry.wheelrail import build_pair, first_touch, profile_curves, touches_after, wheelset_roll
 from conformal.grid import PlanarGrid
 from conformal.models import solve_problem
@@ -210,21 +211,22 @@ def _height_jump(scene: Scene, pl: "Placement", dy: float) -> float | None:
     """pl.z_touch less the touching height of the scene's wheel at ``dy`` mm more lateral shift (the
     lift check of :func:`placement_warnings`), or None where that height provably lies within
     JUMP_WARN of pl.z_touch.  With a given roll (or a single wheel) the wheelset keeps pl's
-    orientation: its pair takes pl's contact locus (:meth:`WheelRailPair.share_locus`, the same
-    samples) and the bounds of the sampled locus (:func:`~conformal.geometry.search.touch_bounds`)
-    decide without a contact search where they can; otherwise the touching height of
-    :func:`first_touch`.  Without a roll the wheelset's roll is that of the shifted scene
-    (:func:`place_scene`)."""
+    orientation and its contact locus moves by dy: for |dy| < LOCUS_REACH_MARGIN the bounds of that locus
+    (:func:`~conformal.geometry.search.touch_bounds`) decide without a contact search where they can;
+    otherwise the touching height of :func:`first_touch` (the shifted pair taking pl's locus angles,
+    :meth:`WheelRailPair.share_locus`).  Without a roll the wheelset's roll is that of the shifted
+    scene (:func:`place_scene`)."""
     geo = scene.geometry
     shift = geo.lateral_shift + dy
     if geo.roll is None and geo.placement == "wheelset":
         return pl.z_touch - place_scene(scene.with_("geometry.lateral_shift", shift), touch_only=True,
                                         like=pl).z_touch
+    if abs(dy) < LOCUS_REACH_MARGIN:
+        z_low, z_high, _ = touch_bounds(pl.pair, pl.top, step=LOCUS_STEP, dy=pl.pair.mirror * dy)
+        if abs(pl.z_touch - z_low) <= JUMP_WARN and abs(pl.z_touch - z_high) <= JUMP_WARN:
+            return None
     pair = build_pair(geo, scene.base_dir, roll=pl.roll, lateral_shift=shift)
     pair.share_locus(pl.pair)
-    z_low, z_high, _ = touch_bounds(pair, pl.top, step=LOCUS_STEP)
-    if abs(pl.z_touch - z_low) <= JUMP_WARN and abs(pl.z_touch - z_high) <= JUMP_WARN:
-        return None
     return pl.z_touch - first_touch(pair, pl.top, step=LOCUS_STEP)
 
 

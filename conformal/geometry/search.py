@@ -33,7 +33,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from conformal.errors import ConvergenceError, InputError, NoContactError
-from conformal.geometry.surfaces import RailSurface, WheelSurface
+from conformal.geometry.surfaces import LOCUS_REACH_MARGIN, RailSurface, WheelSurface
 
 LOCUS_STEP = 0.05      # mm of wheel profile between locus samples
 MERGE_DEPTH = 1e-4     # mm: minima separated by a smaller bump are one minimum
@@ -695,12 +695,16 @@ def _inside(gap: np.ndarray, i: int) -> bool:
     return 0 < i < gap.size - 1 and bool(np.isfinite(gap[i - 1]) and np.isfinite(gap[i + 1]))
 
 
-def touch_bounds(pair, top: RailTop | None = None, z0: float = 0.0, *, step: float = LOCUS_STEP
-                 ) -> tuple[float, float, bool]:
+def touch_bounds(pair, top: RailTop | None = None, z0: float = 0.0, *, step: float = LOCUS_STEP,
+                 dy: float = 0.0) -> tuple[float, float, bool]:
     """Bounds of the touching height of :func:`touch_height` from the sampled locus alone (no
     Newton-Raphson): the locus is rigid under a vertical move of the wheelset, so the wheel first
     touches at z0 plus the smallest continuous vertical gap of its locus, which lies between the
     smallest sampled gap and the floor of :func:`touch_candidates`.
+
+    ``dy``: the bounds of the wheel moved by dy (mm, side frame, less than LOCUS_REACH_MARGIN)
+    along y, its orientation kept: its locus is the pair's moved by dy (the same samples to
+    rounding: a sample that cannot lie over the rail lies LOCUS_REACH_MARGIN outside it).
 
     Returns
     -------
@@ -714,6 +718,12 @@ def touch_bounds(pair, top: RailTop | None = None, z0: float = 0.0, *, step: flo
     """
     top = top or RailTop.of(pair.rail)
     loc = pair_locus(pair, top, z0, step)
+    if dy:
+        if not abs(dy) < LOCUS_REACH_MARGIN:
+            raise ValueError(f"touch_bounds: dy = {dy:g} mm must be smaller than {LOCUS_REACH_MARGIN:g} mm")
+        pts = loc.points.copy()
+        pts[:, 1] += dy
+        loc = Locus(loc.s, loc.theta, pts, np.where(np.isnan(loc.theta), np.nan, top.z_at(pts[:, 1]) - pts[:, 2]))
     i, g_min, g_low, _ = touch_candidates(loc, top)
     clear = _inside(loc.gap, i)
     if clear:

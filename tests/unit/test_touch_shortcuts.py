@@ -119,9 +119,9 @@ def test_the_other_wheel_is_searched_only_where_it_can_touch_first(searched):
 
 
 def test_lift_check_bounds_the_neighbour_and_finds_the_jump():
-    """The lift check's neighbour 0.1 mm back: where the bounds leave its height within JUMP_WARN of
-    the wheel's, the searched height is there too (the flange positions 6.5 .. 10 mm: 0.2 .. 0.7 mm
-    apart); 1 mm back (5.5 mm on the roll of 6.5 mm, the flange contact 2.9 mm higher) the bounds
+    """The lift check's neighbour 0.1 mm back: the bounds of the wheel's locus moved by 0.1 mm hold
+    its searched height; where they leave it within JUMP_WARN of the wheel's, the searched height is
+    there too (the flange positions 6.5 .. 10 mm: 0.2 .. 0.7 mm apart); 1 mm back (5.5 mm on the roll of 6.5 mm, the flange contact 2.9 mm higher) the bounds
     cannot tell and the height is searched: the difference of the search.  A wheelset whose roll is
     found per shift jumps onto its flange tip (the worn pair at 15.55 mm: 12 mm): the warning says so."""
     for c in CASES:
@@ -131,12 +131,17 @@ def test_lift_check_bounds_the_neighbour_and_finds_the_jump():
         sc = mbench_case_scene(c["inputs"])
         pl = wr.place_scene(sc)
         assert -pl.z_touch > wr.LIFT_WARN
-        ref = pl.z_touch - first_touch(build_pair(sc.geometry, sc.base_dir, roll=pl.roll, lateral_shift=y - 0.1))
+        z_back = first_touch(build_pair(sc.geometry, sc.base_dir, roll=pl.roll, lateral_shift=y - 0.1))
+        lo, hi, _ = gs.touch_bounds(pl.pair, pl.top, dy=-0.1)      # pl's locus moved back by 0.1 mm
+        assert lo <= z_back <= hi and hi - lo < 5e-3, y
+        ref = pl.z_touch - z_back
         assert wr._height_jump(sc, pl, -0.1) is None and 0.1 < abs(ref) <= wr.JUMP_WARN, y
         if y == 6.5:
             ref = pl.z_touch - first_touch(build_pair(sc.geometry, sc.base_dir, roll=pl.roll, lateral_shift=y - 1.0))
             jump = wr._height_jump(sc, pl, -1.0)
             assert ref < -2.0 and abs(jump - ref) <= 1e-9
+            with pytest.raises(ValueError):
+                gs.touch_bounds(pl.pair, pl.top, dy=-1.0)
     from test_worn_placement import worn
 
     sc = worn(15.55)
