@@ -320,8 +320,10 @@ def place_scene(scene: Scene, *, touch_only: bool = False, like: Placement | Non
         pair.share_locus(like.pair)
     top = RailTop.of(pair.rail)
     # the pair of a touch_only placement is not searched further: its locus is sampled for the height
-    # alone (as finely as like's, whose locus angles it takes, where like is given)
-    step = LOCUS_STEP if not touch_only or like is not None else TOUCH_STEP
+    # alone (as finely as like's, whose locus angles it takes, where like is given); this wheel's height
+    # from the search per trial height on the locus its contact searches use (bitwise the height that
+    # keys a cache of FE influence numbers), refining only the candidate that can touch first
+    step = None if not touch_only else LOCUS_STEP if like is not None else TOUCH_STEP
     z_touch = first_touch(pair, top, step=step)
     z_first = z_touch
     # the other wheel sets the height from which [load] approach (and the reported approach) counts

@@ -538,7 +538,8 @@ def find_contacts(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = 
     candidate of the smallest sampled gap can be the deepest (:func:`touch_candidates`: every other
     local minimum's floor lies TOUCH_CLEAR above it, so its contact overlaps less, or not at all,
     at every height where the wheel touches), only that one is refined and returned (the same
-    contact, the same numbers); all of them where it does not converge."""
+    contact, the same numbers; ``candidates`` holds it alone); all of them where it does not
+    converge."""
     top = top or RailTop.of(rail)
     loc = locus if locus is not None else wheel_locus(wheel, top)
     valid = np.isfinite(loc.gap)
@@ -553,11 +554,13 @@ def find_contacts(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = 
         raise InputError(f"the wheel would touch the rail at the end of a profile (wheel y = {y_w:.2f} mm, "
                          f"side-frame y = {loc.points[i_min, 1]:.2f} mm): the profiles do not cover "
                          "this position")
-    cands = [i for i in _local_minima(gg, valid, MERGE_DEPTH) if loc.gap[i] <= gmin + window]
     contacts: list[ContactPoint] = []
-    if deepest_only and cands[:1] == [i_min] and touch_candidates(loc, top)[3] == [i_min]:
+    if deepest_only and touch_candidates(loc, top)[3] == [i_min]:
+        # i_min is then the first of the merged candidates (a strict local minimum below all others)
         contacts = _refine(wheel, rail, top, loc, [i_min])
+        cands = [i_min]
     if not contacts:
+        cands = [i for i in _local_minima(gg, valid, MERGE_DEPTH) if loc.gap[i] <= gmin + window]
         contacts = _refine(wheel, rail, top, loc, cands)
     if not contacts:
         raise ConvergenceError("contact search: no candidate converged (seed Eq. 55)")
@@ -632,8 +635,8 @@ def touch_point(pair, top: RailTop | None = None, z0: float = 0.0, *, step: floa
     changes by exactly dz), so one locus evaluation (sampled every ``step`` mm of wheel profile)
     gives the height to the sampling's resolution and one search there (:func:`find_contacts`)
     every candidate's penetration p and normal n; where the floors of the sampled gap
-    (:func:`touch_candidates`) leave one candidate that can touch first, only it is refined, from
-    its locus sample and the rail top's arc length under it (no global search).  A candidate
+    (:func:`touch_candidates`) leave one candidate that can touch first, only it is refined (from
+    its locus sample, as the search would: the same contact and numbers).  A candidate
     touches at z - p / n_z to first order in p; only those that can touch first (within
     TOUCH_FOLLOW of the lowest estimate) are
     followed, each by corrections of the height dz = -p / n_z (seed Eq. 56) with Newton-Raphson
@@ -655,16 +658,10 @@ def touch_point(pair, top: RailTop | None = None, z0: float = 0.0, *, step: floa
     z1 = z0 + g_min
     contacts = None
     if contenders == [i] and _inside(loc.gap, i):
-        # the one candidate that can touch first, refined where it lies (the locus samples' wheel
-        # parameters do not depend on the height; the rail's arc length from the rail top under it)
-        k = min(max(int(round((float(loc.points[i, 1]) - top.y0) / top.hy)), 0), top.s.size - 1)
-        s_r0 = float(top.s[k])
-        if math.isfinite(s_r0):
-            try:
-                c = newton_contact(pair.wheel(z1), pair.rail, (loc.s[i], loc.theta[i], loc.points[i, 0], s_r0))
-                contacts = [c] if abs(c.s_w - loc.s[i]) <= 3.0 else None
-            except ConvergenceError:
-                contacts = None
+        # the one candidate that can touch first, refined from where it lies as find_contacts would at
+        # z1 (the same start: the locus samples' wheel parameters and the rail top under them do not
+        # depend on the height)
+        contacts = _refine(pair.wheel(z1), pair.rail, top, pair_locus(pair, top, z1, step), [i]) or None
     if contacts is None:
         contacts = find_contacts(pair.wheel(z1), pair.rail, top, locus=pair_locus(pair, top, z1, step),
                                  deepest_only=True).contacts

@@ -70,10 +70,10 @@ def test_deepest_only_gives_the_height_and_contact_of_the_full_search(searched):
 
 @pytest.mark.parametrize("step", [gs.LOCUS_STEP, gs.TOUCH_STEP])
 def test_touch_point_takes_the_same_contact(searched, monkeypatch, step):
-    """search.touch_point refines the same candidate, its height within 1e-9 mm of the full search's
-    (measured <= 3.4e-13 mm): Newton-Raphson from the one locus sample that can touch first without
-    a global search (find_contacts) wherever the sampled gap shows it, with one at the two-point
-    contact."""
+    """search.touch_point refines the same candidate, its height within 1e-9 mm of the search per
+    trial height (measured <= 3.4e-13 mm): Newton-Raphson from the one locus sample that can touch
+    first without a global search (find_contacts) wherever the sampled gap shows it, with one at
+    the two-point contact."""
     calls = []
     find = gs.find_contacts
     monkeypatch.setattr(gs, "find_contacts", lambda *a, **k: calls.append(1) or find(*a, **k))
@@ -99,7 +99,8 @@ def test_touch_bounds_bracket_the_height(searched):
 def test_the_other_wheel_is_searched_only_where_it_can_touch_first(searched):
     """touches_after is True only where the searched height of the other wheel lies below the
     right wheel's (0.0017 mm and more on the Manchester positions 0.5 .. 10 mm), False at 0 mm (both
-    touch at the same height: CONTACT's roll); place_scene's z_first is then the min of both heights."""
+    touch at the same height: CONTACT's roll); place_scene's heights are bitwise those of the search
+    per trial height (z_touch) and of touch_point (the other wheel)."""
     z = {name: z for name, _, z, _ in searched}
     pairs = dict(PAIRS)
     skipped = []
@@ -115,7 +116,7 @@ def test_the_other_wheel_is_searched_only_where_it_can_touch_first(searched):
         pl = wr.place_scene(sc)
         y = c["inputs"]["Y_WS_mm"]
         z_other = first_touch(build_pair(sc.geometry, sc.base_dir, side="left", roll=pl.roll), step=gs.TOUCH_STEP)
-        assert abs(pl.z_touch - z[f"right {y:g}"]) <= 1e-9 and pl.z_first == min(pl.z_touch, z_other)
+        assert pl.z_touch == z[f"right {y:g}"] and pl.z_first == min(pl.z_touch, z_other)      # bitwise
 
 
 def test_lift_check_bounds_the_neighbour_and_finds_the_jump():
