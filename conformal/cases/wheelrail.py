@@ -40,8 +40,9 @@ from conformal.geometry.patches import (Patch, curved_grid_for_patch, find_patch
                                         rail_on_lines)
 from conformal.geometry.placement import WheelRailPair
 from conformal.geometry.profiles import rail_orientation_warning
-from conformal.geometry.search import TOUCH_STEP, RailTop, pair_locus
-from conformal.geometry.wheelrail import build_pair, first_touch, profile_curves, wheelset_roll
+from conformal.geometry.search import LOCUS_STEP, TOUCH_STEP, RailTop, pair_locus, touch_bounds
+from conformal.geometry.surfaces import LOCUS_REACH_MARGIN
+from conformal.geometry.wheelrail import build_pair, first_touch, profile_curves, touches_after, wheelset_roll
 from conformal.grid import PlanarGrid
 from conformal.models import solve_problem
 from conformal.problem import ContactProblem
@@ -194,12 +195,9 @@ def placement_warnings(scene: Scene, pl: "Placement", st: PairState) -> list[str
     if lift > LIFT_WARN:
         msg = (f"placement: the wheelset stands {lift:.2f} mm above its nominal height (tape circle on the "
                "rail top)")
-        geo = scene.geometry
         try:
-            other = place_scene(scene.with_("geometry.lateral_shift", geo.lateral_shift - 0.1), touch_only=True,
-                                like=pl)
-            jump = pl.z_touch - other.z_touch
-            if abs(jump) > JUMP_WARN:
+            jump = _height_jump(scene, pl, -0.1)
+            if jump is not None and abs(jump) > JUMP_WARN:
                 msg += (f", and {abs(jump):.2f} mm {'higher' if jump < 0 else 'lower'} than at 0.1 mm less "
                         "lateral shift: the height jumps (flange climbing onto the rail), a state the rolling "
                         "wheelset does not reach; check [geometry] lateral_shift")
@@ -207,6 +205,29 @@ def placement_warnings(scene: Scene, pl: "Placement", st: PairState) -> list[str
             pass
         out.append(msg)
     return out
+
+
+def _height_jump(scene: Scene, pl: "Placement", dy: float) -> float | None:
+    """pl.z_touch less the touching height of the scene's wheel at ``dy`` mm more lateral shift (the
+    lift check of :func:`placement_warnings`), or None where that height provably lies within
+    JUMP_WARN of pl.z_touch.  With a given roll (or a single wheel) the wheelset keeps pl's
+    orientation and its contact locus moves by dy: for |dy| < LOCUS_REACH_MARGIN the bounds of that locus
+    (:func:`~conformal.geometry.search.touch_bounds`) decide without a contact search where they can;
+    otherwise the touching height of :func:`first_touch` (the shifted pair taking pl's locus angles,
+    :meth:`WheelRailPair.share_locus`).  Without a roll the wheelset's roll is that of the shifted
+    scene (:func:`place_scene`)."""
+    geo = scene.geometry
+    shift = geo.lateral_shift + dy
+    if geo.roll is None and geo.placement == "wheelset":
+        return pl.z_touch - place_scene(scene.with_("geometry.lateral_shift", shift), touch_only=True,
+                                        like=pl).z_touch
+    if abs(dy) < LOCUS_REACH_MARGIN:
+        z_low, z_high, _ = touch_bounds(pl.pair, pl.top, step=LOCUS_STEP, dy=pl.pair.mirror * dy)
+        if abs(pl.z_touch - z_low) <= JUMP_WARN and abs(pl.z_touch - z_high) <= JUMP_WARN:
+            return None
+    pair = build_pair(geo, scene.base_dir, roll=pl.roll, lateral_shift=shift)
+    pair.share_locus(pl.pair)
+    return pl.z_touch - first_touch(pair, pl.top, step=LOCUS_STEP)
 
 
 def _grid_options(scene: Scene) -> dict:
@@ -281,7 +302,9 @@ def place_scene(scene: Scene, *, touch_only: bool = False, like: Placement | Non
     wheel of the wheelset touch; ``touch_only``: z_first is left equal to z_touch (the other wheel
     is not searched).  ``like``: a placement of the same scene at another lateral shift, whose
     wheel's contact locus this pair takes where its orientation is the same
-    (:meth:`~conformal.geometry.placement.WheelRailPair.share_locus`)."""
+    (:meth:`~conformal.geometry.placement.WheelRailPair.share_locus`).  The other wheel of a
+    wheelset is searched only where its sampled locus does not show that it touches after this one
+    (:func:`~conformal.geometry.wheelrail.touches_after`): z_first is then z_touch."""
     geo = scene.geometry
     if not isinstance(geo, WheelRailGeometry):
         raise InputError("[geometry] kind: not a wheel_rail scene")
@@ -296,15 +319,22 @@ def place_scene(scene: Scene, *, touch_only: bool = False, like: Placement | Non
     if like is not None:
         pair.share_locus(like.pair)
     top = RailTop.of(pair.rail)
-    # the pair of a touch_only placement is not searched further: its locus is sampled for the height alone
-    z_touch = first_touch(pair, top, step=TOUCH_STEP if touch_only else None)
+    # the pair of a touch_only placement is not searched further: its locus is sampled for the height
+    # alone (as finely as like's, whose locus angles it takes, where like is given); this wheel's height
+    # from the search per trial height on the locus its contact searches use (bitwise the height that
+    # keys a cache of FE influence numbers), refining only the candidate that can touch first
+    step = None if not touch_only else LOCUS_STEP if like is not None else TOUCH_STEP
+    z_touch = first_touch(pair, top, step=step)
     z_first = z_touch
     # the other wheel sets the height from which [load] approach (and the reported approach) counts
     if geo.placement == "wheelset" and not touch_only:
         if z_other is None:
             other = build_pair(geo, base, side="left" if pair.side == "right" else "right", roll=roll)
-            z_other = first_touch(other, step=TOUCH_STEP)      # only its height is needed
-        z_first = min(z_touch, z_other)
+            # only its height is needed, and only where it touches first
+            if not touches_after(other, z_touch, step=TOUCH_STEP):
+                z_other = first_touch(other, step=TOUCH_STEP)
+        if z_other is not None:
+            z_first = min(z_touch, z_other)
     return Placement(pair, top, roll, z_touch, z_first)
 
 

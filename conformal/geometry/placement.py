@@ -154,7 +154,8 @@ class WheelRailPair:
             reach = np.ones(s.shape, bool) if span is None else wheel.locus_reach(u, rho, *span)
             th = np.full(s.shape, np.nan)
             er = np.empty((s.size, 3))
-            er[:] = wheel.e_r(0.0)                   # e_r(nan_to_num(theta)) where theta is NaN
+            f = wheel.frame                          # e_r(nan_to_num(theta)) where theta is NaN: e_r(0.0),
+            er[:] = [1.0 * d + 0.0 * e for d, e in zip(f.e_d.tolist(), f.e_f.tolist())]   # its arithmetic
             todo = reach
             shared = self._loci.get(("shared",) + key)
             if shared is not None:                   # the same wheel and orientation (share_locus)
@@ -165,7 +166,8 @@ class WheelRailPair:
             if todo.any():
                 k = _as_range(np.nonzero(todo)[0])
                 th[k] = wheel.locus_theta_of(y1[k], z1[k])
-                er[k] = wheel.e_r(np.nan_to_num(th[k]))
+                tk = th[k]
+                er[k] = wheel.e_r(np.where(np.isnan(tk), 0.0, tk))   # nan_to_num (theta is finite or NaN)
             hit = (s, th, wheel.point_of(u, rho, e_r=er), er, rho, reach)
             self._loci[key] = hit
         return hit

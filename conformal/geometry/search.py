@@ -34,7 +34,7 @@ from scipy.spatial import cKDTree
 
 from conformal.errors import ConvergenceError, InputError, NoContactError
 from conformal.geometry.spline import clip
-from conformal.geometry.surfaces import RailSurface, WheelSurface
+from conformal.geometry.surfaces import LOCUS_REACH_MARGIN, RailSurface, WheelSurface
 
 LOCUS_STEP = 0.05      # mm of wheel profile between locus samples
 MERGE_DEPTH = 1e-4     # mm: minima separated by a smaller bump are one minimum
@@ -228,6 +228,78 @@ def _local_minima(gg: np.ndarray, valid: np.ndarray, merge: float) -> list[int]:
         else:
             merged.append(i)
     return sorted(merged, key=lambda k: gg[k])
+
+
+#: mm: the sampled vertical gap of a locus lies above the continuous gap by at most the sampling's
+#: terms (:func:`_gap_floor`) plus this (rounding, the envelope's crossing segments)
+SAMPLE_GAP_TOL = 1e-5
+#: mm: a sampled local minimum of the gap is left out of the search for the touching contact only
+#: where the continuous gap in its basin lies provably this much above the smallest sampled gap
+TOUCH_CLEAR = 1e-6
+#: mm of profile arc length: a touching contact sampled this far from the ends of both profiles is
+#: not at an end (its Newton-Raphson solution lies within 3 mm of its start, :func:`find_contacts`)
+END_CLEAR = 3.0
+
+
+def _gap_floor(gg: np.ndarray, valid: np.ndarray, y: np.ndarray, top: RailTop, j: int, h: float) -> float:
+    """A lower bound (mm) of the continuous vertical gap between the neighbours of the sampled local
+    minimum j of gg (the locus gap with inf for NaN; ``y``: the samples' lateral positions, ``h``:
+    the sampling step along the wheel profile), -inf at the end of a stretch of samples.
+
+    The continuous minimum lies within one sample of j; a quadratic through the three samples dips
+    below gg[j] by at most d2/8 (d2 = gg[j-1] - 2 gg[j] + gg[j+1]), taken 4 times; the rail top
+    (:class:`RailTop`: chords of the rail samples regridded linearly every hy) lies above the
+    profile by at most 5/8 of its largest second difference near y[j] (the chords' 0.02 mm of arc
+    length project onto at most two grid steps), taken as the whole second difference."""
+    n = gg.size
+    if j <= 0 or j >= n - 1 or not (valid[j - 1] and valid[j + 1]):
+        return -math.inf
+    d2 = float(gg[j - 1] - 2.0 * gg[j] + gg[j + 1])
+    k = int((float(y[j]) - top.y0) / top.hy)
+    reach = int(math.ceil(h / top.hy)) + 2
+    z = top.z[max(k - reach, 0): k + reach + 2]
+    if z.size < 3:
+        return -math.inf
+    d2r = float(np.max(np.abs(z[:-2] - 2.0 * z[1:-1] + z[2:])))
+    if not math.isfinite(d2r):
+        return -math.inf
+    return float(gg[j]) - 0.5 * abs(d2) - d2r - SAMPLE_GAP_TOL
+
+
+def touch_candidates(loc: Locus, top: RailTop) -> tuple[int, float, float, list[int]]:
+    """The sampled local minima of a locus's vertical gap that can hold its smallest continuous gap.
+
+    Returns
+    -------
+    i_min : int
+        The sample of the smallest gap (the first, numpy's argmin of the gap with NaN as inf).
+    g_min : float
+        That gap (mm): an upper bound of the continuous minimum.
+    g_low : float
+        A lower bound (mm) of the continuous minimum: the smallest :func:`_gap_floor` of the local
+        minima (-inf where one ends a stretch of samples).
+    contenders : list of int
+        The local minima (not merged, :func:`local_minima`'s candidates) whose floor lies less
+        than TOUCH_CLEAR above g_min, ascending: the others touch later than the sample i_min
+        when the wheel is lowered vertically.
+    """
+    valid = np.isfinite(loc.gap)
+    if not valid.any():
+        raise NoContactError("contact search: the wheel does not lie over the rail")
+    gg = np.where(valid, loc.gap, np.inf)
+    i_min = int(np.argmin(gg))
+    g_min = float(gg[i_min])
+    inf = np.array([np.inf])
+    raw = np.nonzero(valid & (gg <= np.concatenate((inf, gg[:-1]))) & (gg < np.concatenate((gg[1:], inf))))[0]
+    h = float(loc.s[1] - loc.s[0]) if loc.s.size > 1 else 0.0
+    y = loc.points[:, 1]
+    g_low, contenders = math.inf, []
+    for j in raw.tolist():
+        f = _gap_floor(gg, valid, y, top, j, h)
+        g_low = min(g_low, f)
+        if f <= g_min + TOUCH_CLEAR:
+            contenders.append(j)
+    return i_min, g_min, min(g_low, g_min), contenders
 
 
 # ----------------------------------------------------------------------------- Newton (Eqs. 54-55)
@@ -504,10 +576,15 @@ class SearchResult:
 
 
 def find_contacts(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = None, *,
-                  window: float = 1.0, locus: Locus | None = None) -> SearchResult:
+                  window: float = 1.0, locus: Locus | None = None, deepest_only: bool = False) -> SearchResult:
     """All distinct contact candidates whose vertical gap is within ``window`` mm of the smallest,
     refined by Newton-Raphson; deepest (largest penetration) first.  ``locus``: the wheel's locus
-    if known (:func:`pair_locus`)."""
+    if known (:func:`pair_locus`).  ``deepest_only``: where the sampled gap shows that only the
+    candidate of the smallest sampled gap can be the deepest (:func:`touch_candidates`: every other
+    local minimum's floor lies TOUCH_CLEAR above it, so its contact overlaps less, or not at all,
+    at every height where the wheel touches), only that one is refined and returned (the same
+    contact, the same numbers; ``candidates`` holds it alone); all of them where it does not
+    converge."""
     top = top or RailTop.of(rail)
     loc = locus if locus is not None else wheel_locus(wheel, top)
     valid = np.isfinite(loc.gap)
@@ -522,7 +599,23 @@ def find_contacts(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = 
         raise InputError(f"the wheel would touch the rail at the end of a profile (wheel y = {y_w:.2f} mm, "
                          f"side-frame y = {loc.points[i_min, 1]:.2f} mm): the profiles do not cover "
                          "this position")
-    cands = [i for i in _local_minima(gg, valid, MERGE_DEPTH) if loc.gap[i] <= gmin + window]
+    contacts: list[ContactPoint] = []
+    if deepest_only and touch_candidates(loc, top)[3] == [i_min]:
+        # i_min is then the first of the merged candidates (a strict local minimum below all others)
+        contacts = _refine(wheel, rail, top, loc, [i_min])
+        cands = [i_min]
+    if not contacts:
+        cands = [i for i in _local_minima(gg, valid, MERGE_DEPTH) if loc.gap[i] <= gmin + window]
+        contacts = _refine(wheel, rail, top, loc, cands)
+    if not contacts:
+        raise ConvergenceError("contact search: no candidate converged (seed Eq. 55)")
+    contacts.sort(key=lambda c: -c.penetration)
+    return SearchResult(contacts, loc, cands)
+
+
+def _refine(wheel: WheelSurface, rail: RailSurface, top: RailTop, loc: Locus, cands: list[int]) -> list[ContactPoint]:
+    """The contact points refined from the locus samples ``cands`` (:func:`find_contacts`), distinct,
+    in the order of ``cands``."""
     contacts: list[ContactPoint] = []
     for i in cands:
         p = loc.points[i]
@@ -538,27 +631,26 @@ def find_contacts(wheel: WheelSurface, rail: RailSurface, top: RailTop | None = 
             continue
         # keep minima of the distance only: the relative lateral curvature must not be strongly negative
         contacts.append(c)
-    if not contacts:
-        raise ConvergenceError("contact search: no candidate converged (seed Eq. 55)")
-    contacts.sort(key=lambda c: -c.penetration)
-    return SearchResult(contacts, loc, cands)
+    return contacts
 
 
 def touch_height(pair, top: RailTop | None = None, z0: float = 0.0, *, tol: float = 1e-9,
-                 maxit: int = 20) -> tuple[float, SearchResult]:
+                 maxit: int = 20, deepest_only: bool = False) -> tuple[float, SearchResult]:
     """Wheelset height z (side frame, z down) at which the wheel of ``pair`` first touches its
     rail, and the contact search there (the deepest contact has zero penetration).
 
     The locus is rigid under vertical translation, so the vertical gap gives the height to the
     envelope's resolution in one step; Newton-Raphson contact points then correct it
-    (a vertical move dz changes the penetration by dz n_z)."""
+    (a vertical move dz changes the penetration by dz n_z).  ``deepest_only``: the searches refine
+    only the candidate that can be the deepest where the sampled gap shows it
+    (:func:`find_contacts`): the same height and contact, the search's other contacts left out."""
     top = top or RailTop.of(pair.rail)
     loc = pair_locus(pair, top, z0)
     if not np.isfinite(loc.gap).any():
         raise NoContactError("contact search: the wheel does not lie over the rail")
     z = z0 + float(np.nanmin(loc.gap))
     for _ in range(maxit):
-        sr = find_contacts(pair.wheel(z), pair.rail, top, locus=pair_locus(pair, top, z))
+        sr = find_contacts(pair.wheel(z), pair.rail, top, locus=pair_locus(pair, top, z), deepest_only=deepest_only)
         c = sr.contacts[0]
         dz = -c.penetration / c.normal[2]
         z += dz
@@ -587,8 +679,11 @@ def touch_point(pair, top: RailTop | None = None, z0: float = 0.0, *, step: floa
     A vertical move dz of the wheelset translates its contact locus rigidly (every vertical gap
     changes by exactly dz), so one locus evaluation (sampled every ``step`` mm of wheel profile)
     gives the height to the sampling's resolution and one search there (:func:`find_contacts`)
-    every candidate's penetration p and normal n.  A candidate touches at z - p / n_z to first
-    order in p; only those that can touch first (within TOUCH_FOLLOW of the lowest estimate) are
+    every candidate's penetration p and normal n; where the floors of the sampled gap
+    (:func:`touch_candidates`) leave one candidate that can touch first, only it is refined (from
+    its locus sample, as the search would: the same contact and numbers).  A candidate
+    touches at z - p / n_z to first order in p; only those that can touch first (within
+    TOUCH_FOLLOW of the lowest estimate) are
     followed, each by corrections of the height dz = -p / n_z (seed Eq. 56) with Newton-Raphson
     (seed Eq. 55) started from the previous contact point (it moves by O(dz)), instead of a new
     global search per trial height.  The height is that of :func:`touch_height` to rounding (the
@@ -604,14 +699,21 @@ def touch_point(pair, top: RailTop | None = None, z0: float = 0.0, *, step: floa
     """
     top = top or RailTop.of(pair.rail)
     loc = pair_locus(pair, top, z0, step)
-    if not np.isfinite(loc.gap).any():
-        raise NoContactError("contact search: the wheel does not lie over the rail")
-    z1 = z0 + float(np.nanmin(loc.gap))
-    sr = find_contacts(pair.wheel(z1), pair.rail, top, locus=pair_locus(pair, top, z1, step))
-    est = [-c.penetration / c.normal[2] for c in sr.contacts]
+    i, g_min, _, contenders = touch_candidates(loc, top)     # NoContactError: no sample over the rail
+    z1 = z0 + g_min
+    contacts = None
+    if contenders == [i] and _inside(loc.gap, i):
+        # the one candidate that can touch first, refined from where it lies as find_contacts would at
+        # z1 (the same start: the locus samples' wheel parameters and the rail top under them do not
+        # depend on the height)
+        contacts = _refine(pair.wheel(z1), pair.rail, top, pair_locus(pair, top, z1, step), [i]) or None
+    if contacts is None:
+        contacts = find_contacts(pair.wheel(z1), pair.rail, top, locus=pair_locus(pair, top, z1, step),
+                                 deepest_only=True).contacts
+    est = [-c.penetration / c.normal[2] for c in contacts]
     low = min(est)
     best: tuple[float, ContactPoint] | None = None
-    for c, e in zip(sr.contacts, est):
+    for c, e in zip(contacts, est):
         if e > low + TOUCH_FOLLOW + 0.5 * abs(e):
             continue
         z = z1
@@ -627,3 +729,49 @@ def touch_point(pair, top: RailTop | None = None, z0: float = 0.0, *, step: floa
         if best is None or z < best[0]:
             best = (z, c)
     return best
+
+
+def _inside(gap: np.ndarray, i: int) -> bool:
+    """Whether sample i of a locus gap has sampled neighbours on both sides (else the touch would lie
+    at the end of a profile: :func:`find_contacts` refuses it)."""
+    return 0 < i < gap.size - 1 and bool(np.isfinite(gap[i - 1]) and np.isfinite(gap[i + 1]))
+
+
+def touch_bounds(pair, top: RailTop | None = None, z0: float = 0.0, *, step: float = LOCUS_STEP,
+                 dy: float = 0.0) -> tuple[float, float, bool]:
+    """Bounds of the touching height of :func:`touch_height` from the sampled locus alone (no
+    Newton-Raphson): the locus is rigid under a vertical move of the wheelset, so the wheel first
+    touches at z0 plus the smallest continuous vertical gap of its locus, which lies between the
+    smallest sampled gap and the floor of :func:`touch_candidates`.
+
+    ``dy``: the bounds of the wheel moved by dy (mm, side frame, less than LOCUS_REACH_MARGIN)
+    along y, its orientation kept: its locus is the pair's moved by dy (the same samples to
+    rounding: a sample that cannot lie over the rail lies LOCUS_REACH_MARGIN outside it).
+
+    Returns
+    -------
+    z_low, z_high : float
+        The touching height (side frame, z down, mm) lies in [z_low, z_high] (z_low = -inf where
+        a local minimum of the sampled gap ends a stretch of samples).
+    clear : bool
+        The smallest sampled gap lies inside its stretch of samples and END_CLEAR mm from the ends
+        of both profiles: the search of the height itself would not stop at a profile's end (an
+        InputError of :func:`find_contacts` or an ``at_end`` contact).
+    """
+    top = top or RailTop.of(pair.rail)
+    loc = pair_locus(pair, top, z0, step)
+    if dy:
+        if not abs(dy) < LOCUS_REACH_MARGIN:
+            raise ValueError(f"touch_bounds: dy = {dy:g} mm must be smaller than {LOCUS_REACH_MARGIN:g} mm")
+        pts = loc.points.copy()
+        pts[:, 1] += dy
+        loc = Locus(loc.s, loc.theta, pts, np.where(np.isnan(loc.theta), np.nan, top.z_at(pts[:, 1]) - pts[:, 2]))
+    i, g_min, g_low, _ = touch_candidates(loc, top)
+    clear = _inside(loc.gap, i)
+    if clear:
+        s_w = float(loc.s[i])
+        k = min(max(int(round((float(loc.points[i, 1]) - top.y0) / top.hy)), 0), top.s.size - 1)
+        s_r = float(top.s[k])
+        clear = (END_CLEAR <= s_w <= pair.wheel_curve.length - END_CLEAR
+                 and END_CLEAR <= s_r <= pair.rail.curve.length - END_CLEAR)
+    return z0 + g_low, z0 + g_min, clear

@@ -18,7 +18,7 @@ from scipy.optimize import brentq
 from conformal.errors import ConvergenceError, InputError, NoContactError
 from conformal.geometry.placement import WheelRailPair, make_pair
 from conformal.geometry.profiles import builtin_flange_back, load_profile
-from conformal.geometry.search import RailTop, touch_height, touch_point
+from conformal.geometry.search import TOUCH_STEP, RailTop, touch_bounds, touch_height, touch_point
 from conformal.geometry.spline import ProfileCurve, fit_curve
 from conformal.scene import WheelRailGeometry
 
@@ -99,15 +99,20 @@ def first_touch(pair: WheelRailPair, top: RailTop | None = None, *, step: float 
     """Wheelset height (side frame, z down, mm) at which the wheel of ``pair`` first touches its rail.
 
     ``step``: None searches the wheel's contact locus sampled as the later contact searches of the
-    pair sample it (:func:`~conformal.geometry.search.touch_height`, the locus kept with the pair);
-    a step (mm of wheel profile, e.g. :data:`~conformal.geometry.search.TOUCH_STEP`) samples it
-    that finely for this height alone (:func:`~conformal.geometry.search.touch_point`: the same
-    height to rounding, for a pair whose contacts are not searched further).
+    pair sample it, with a global search per trial height
+    (:func:`~conformal.geometry.search.touch_height`, the locus kept with the pair; Newton-Raphson
+    only from the locus minimum that can touch first, ``deepest_only``); a step (mm of wheel
+    profile) samples it that finely and searches it once
+    (:func:`~conformal.geometry.search.touch_point`: the same height to rounding, measured within
+    3.4e-13 mm).  :data:`~conformal.geometry.search.LOCUS_STEP` is the locus the later contact
+    searches use (kept with the pair: :func:`~conformal.cases.wheelrail.place_scene`),
+    :data:`~conformal.geometry.search.TOUCH_STEP` a coarser one for a pair whose contacts are not
+    searched further.
     """
     key = _position_key(pair)
     try:
         if step is None:
-            z, sr = touch_height(pair, top)
+            z, sr = touch_height(pair, top, deepest_only=True)
             c = sr.contacts[0]
         else:
             z, c = touch_point(pair, top, step=step)
@@ -122,6 +127,20 @@ def first_touch(pair: WheelRailPair, top: RailTop | None = None, *, step: float 
                          f"of a profile (rail y = {float(pair.rail.to_own(c.rail_point[1:])[0]):.2f} mm, "
                          f"wheel y = {c.y_wheel:.2f} mm): the profiles do not cover this position")
     return z
+
+
+def touches_after(pair: WheelRailPair, z: float, top: RailTop | None = None, *, step: float = TOUCH_STEP) -> bool:
+    """Whether the wheel of ``pair`` provably first touches its rail below the height z (side frame,
+    z down, mm), i.e. after a wheel that touches at z, from its contact locus sampled every ``step``
+    mm alone (:func:`~conformal.geometry.search.touch_bounds`: the lower bound of its touching height
+    more than 1e-9 mm beyond z, and the touch away from the profiles' ends, where
+    :func:`first_touch` would refuse the position).  False where it cannot tell: then
+    :func:`first_touch` gives the height (a wheelset's first touch is min(z, that height))."""
+    try:
+        z_low, _, clear = touch_bounds(pair, top, step=step)
+    except (InputError, NoContactError, ConvergenceError):
+        return False
+    return clear and z_low > z + 1e-9
 
 
 def wheelset_roll(geo: WheelRailGeometry, base_dir: str | Path = ".", lateral_shift: float | None = None,
