@@ -353,7 +353,7 @@ class _SlipOperator:
             self._build_preconditioner()
             shared["inv"], shared["diag"] = self._inv, self.diag
             real = all(v.dtype == np.float32 for v in self._inv)
-            shared["inv2"] = tuple(np.repeat(v, 2, axis=-1) for v in self._inv) if real else None
+            shared["inv2"] = tuple(ffts.doubled(v) for v in self._inv) if real else None
         self._inv, self.diag, self._inv2 = shared["inv"], shared["diag"], shared["inv2"]
         self._cbuf = np.empty((2, self.mx, self.my), dtype=np.float32) if steady else None
 
@@ -457,7 +457,7 @@ class _SlipOperator:
         det = np.where(np.abs(det) < floor, floor, det)
         # single precision: the preconditioner need not be accurate
         inv = [v / det for v in (d, -b, -c, a)]
-        real = all(np.abs(v.imag).max() <= 1e-6 * np.abs(v).max() for v in inv)
+        real = all(ffts.imag_negligible(v, 1e-6) for v in inv)
         self._inv = tuple(v.real.astype(np.float32) if real else v.astype(np.complex64) for v in inv)
 
     def precondition(self, rc: np.ndarray) -> np.ndarray:
