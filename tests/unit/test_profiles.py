@@ -146,6 +146,34 @@ def test_self_intersection(tmp_path):
         check_points(np.array(rows, float), "rail", "bowtie")
 
 
+def test_crossing_search_by_sorted_ranges_finds_the_pairwise_first_crossing():
+    """_segments_cross (pairs from the segments sorted by y) returns the first crossing pair (least
+    i, then j) of the all-pairs test on random polylines (many crossings), monotone ones with one
+    point moved back (one or two), on a quarter-mm lattice (ties, shared ends, collinear
+    segments) and on the built-in profiles (none)."""
+    from conformal.geometry.profiles import _segments_cross, _segments_cross_pairwise
+
+    rng = np.random.default_rng(0)
+    found = 0
+    for trial in range(600):
+        n = int(rng.integers(2, 60))
+        if trial % 3 == 0:
+            p = rng.random((n, 2))
+        elif trial % 3 == 1:
+            p = np.c_[np.cumsum(rng.random(n)), rng.normal(scale=0.3, size=n)]
+            if n > 5:
+                p[n // 2] = p[1] + rng.normal(scale=0.5, size=2)
+        else:
+            p = np.round(rng.random((n, 2)) * 4) / 4
+        first = _segments_cross(p)
+        assert first == _segments_cross_pairwise(p)
+        found += first is not None
+    assert found > 300
+    for name in ("S1002", "UIC60"):
+        entry = BUILTIN[name]
+        assert _segments_cross(load_profile(name, entry.kind).points) is None
+
+
 def test_points_out_of_order():
     rows = np.array([(0, 5), (1, 3), (2, 1), (3, 0), (1.5, 0.1), (4, 1), (5, 3), (6, 5)], float)
     with pytest.raises(InputError, match="out of order"):
