@@ -510,10 +510,10 @@ class CornerLattice:
         nx, ny = self.shape
         if mx > nx or my > ny:
             gx, gy = max(mx, nx), max(my, ny)
-            # a side that grows grows by a quarter at least (the growing shapes of a sweep: fewer
-            # growths, each of which computes the lattice's differences anew), within the bound
-            wx = max(gx, nx + (nx + 3) // 4) if mx > nx and nx else gx
-            wy = max(gy, ny + (ny + 3) // 4) if my > ny and ny else gy
+            # a side that grows grows by half at least (the growing shapes of a sweep: fewer growths,
+            # each of which computes the lattice's differences anew), within the bound
+            wx = max(gx, nx + nx // 2) if mx > nx and nx else gx
+            wy = max(gy, ny + ny // 2) if my > ny and ny else gy
             if wx * wy <= self.max_elements:
                 gx, gy = wx, wy
             elif gx * gy > self.max_elements:     # shapes far apart (a long and a wide grid): start anew

@@ -277,6 +277,18 @@ def _window(contact: np.ndarray, steady: bool):
     return min(r0, mx - nx), min(c0, my - ny), nx, ny
 
 
+def _centred_at(k: np.ndarray, cx: int, cy: int) -> np.ndarray:
+    """k (mx, my) rolled so that its entry (cx, cy) comes first: ``numpy.roll(k, (-cx, -cy),
+    axis=(0, 1))``, the same array by four block copies."""
+    mx, my = k.shape
+    out = np.empty_like(k)
+    out[:mx - cx, :my - cy] = k[cx:, cy:]
+    out[:mx - cx, my - cy:] = k[cx:, :cy]
+    out[mx - cx:, :my - cy] = k[:cx, cy:]
+    out[mx - cx:, my - cy:] = k[:cx, :cy]
+    return out
+
+
 class _SlipOperator:
     """L p on the contact elements (steady: upwind difference of A p over dx; shift: A p) and its
     approximate inverse (the preconditioner), see the module docstring.
@@ -450,7 +462,7 @@ class _SlipOperator:
             else:
                 dxx, dyy = dxx / self.dx, dyy / self.dx
         self.diag = 0.5 * (dxx + dyy)
-        sym = [ffts.rfft2(np.roll(k, (-cx, -cy), axis=(0, 1))) for k in (kxx, kxy, kyx, kyy)]
+        sym = [ffts.rfft2(_centred_at(k, cx, cy)) for k in (kxx, kxy, kyx, kyy)]
         a, b, c, d = sym
         det = a * d - b * c
         floor = 1e-8 * np.abs(det).max()

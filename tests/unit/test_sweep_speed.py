@@ -357,12 +357,14 @@ def test_corner_lattice_slices_equal_own_evaluations():
             D = lat.differences(name, mx, my)
             assert D.shape == (2 * mx - 1, 2 * my - 1)
             np.testing.assert_array_equal(D, hs._differences(own[k], name))
-    grow = hs.CornerLattice(0.2, 0.2, max_elements=10000)      # a growing side grows by a quarter
+    grow = hs.CornerLattice(0.2, 0.2, max_elements=10000)      # a growing side grows by half
     grow.primitives(40, 30)
     grow.primitives(42, 30)
-    assert grow.shape == (50, 30) and grow.primitives(49, 29)[0].shape == (49, 29)
-    grow.primitives(51, 180)             # a quarter more rows would pass the bound: the rows asked for
-    assert grow.shape == (51, 180)
+    assert grow.shape == (60, 30) and grow.primitives(59, 29)[0].shape == (59, 29)
+    grow.primitives(61, 100)
+    assert grow.shape == (90, 100)
+    grow.primitives(91, 105)              # half as many rows more would pass the bound: those asked for
+    assert grow.shape == (91, 105)
     mat = Material(82000.0, 0.28, 26000.0, 0.33)                 # coupled: T1, T2 used too
     for mx, my in ((23, 9), (41, 17), (17, 30)):
         a = hs.HalfSpaceInfluence.for_grid(mx, my, 0.2, 0.15, mat)
