@@ -307,10 +307,12 @@ class HalfSpaceInfluence:
 
     def self_influence(self) -> np.ndarray:
         """A_ij(0, 0), the 3 x 3 self term (diagonal)."""
-        S = np.zeros((3, 3))
-        for i in range(3):
-            S[i, i] = self._component(i, i)[self.mx - 1, self.my - 1]
-        return S
+        if "self" not in self._fhat:        # (kept: a lattice operator's components are views, not kept)
+            S = np.zeros((3, 3))
+            for i in range(3):
+                S[i, i] = self._component(i, i)[self.mx - 1, self.my - 1]
+            self._fhat["self"] = S
+        return self._fhat["self"].copy()
 
     # -------------------------------------------------------------- the operator protocol
     def contact_modulus(self) -> float:
