@@ -111,7 +111,7 @@ def _read_csv(path: Path) -> np.ndarray:
         text = line.split("#")[0].strip()
         if not text:
             continue
-        parts = [p for p in re.split(r"[,;\s]+", text) if p]
+        parts = text.replace(",", " ").replace(";", " ").split()   # runs of , ; and white space
         try:
             y, z = float(parts[0]), float(parts[1])
         except (ValueError, IndexError):
@@ -200,14 +200,59 @@ def read_points(path: str | Path) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- checks
+def _orient(P, Q, R):
+    return (Q[..., 0] - P[..., 0]) * (R[..., 1] - P[..., 1]) - (Q[..., 1] - P[..., 1]) * (R[..., 0] - P[..., 0])
+
+
+def _proper_crossing(a, b, ii, jj) -> np.ndarray:
+    """Whether segments ii and jj (a -> b) properly cross (each one's ends on opposite sides of the other)."""
+    d1 = _orient(a[ii], b[ii], a[jj])
+    d2 = _orient(a[ii], b[ii], b[jj])
+    d3 = _orient(a[jj], b[jj], a[ii])
+    d4 = _orient(a[jj], b[jj], b[ii])
+    return (d1 * d2 < 0) & (d3 * d4 < 0)
+
+
 def _segments_cross(p: np.ndarray) -> tuple[int, int] | None:
-    """First pair (i, j) of non-adjacent polyline segments that properly cross, or None."""
+    """First pair (i, j), i < j - 1, of polyline segments that properly cross (the least i, then the
+    least j), or None.  The pairs whose bounding boxes overlap are found from the segments sorted
+    by their least y (of two overlapping y ranges one starts within the other): a profile's
+    segments overlap a few neighbours each, so this tests O(n) pairs, not n^2 (the pairwise test,
+    :func:`_segments_cross_pairwise`, where the y ranges overlap much: the same answer)."""
+    a, b = p[:-1], p[1:]
+    n = len(a)
+    if n < 3:
+        return None
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    order = np.argsort(lo[:, 0], kind="stable")
+    lo_sorted = lo[order, 0]
+    start = np.searchsorted(lo_sorted, lo[:, 0], side="left")
+    count = np.searchsorted(lo_sorted, hi[:, 0], side="right") - start
+    total = int(count.sum())
+    if total > 20 * n + 10_000:
+        return _segments_cross_pairwise(p)
+    i = np.repeat(np.arange(n), count)
+    first = np.repeat(start - (np.cumsum(count) - count), count)   # sorted position = first + running index
+    q = order[first + np.arange(total)]
+    ii, jj = np.minimum(i, q), np.maximum(i, q)
+    keep = jj > ii + 1
+    ii, jj = ii[keep], jj[keep]
+    cand = ((lo[ii, 0] <= hi[jj, 0]) & (lo[jj, 0] <= hi[ii, 0]) & (lo[ii, 1] <= hi[jj, 1])
+            & (lo[jj, 1] <= hi[ii, 1]))
+    ii, jj = ii[cand], jj[cand]
+    hit = _proper_crossing(a, b, ii, jj)
+    if not hit.any():
+        return None
+    ii, jj = ii[hit], jj[hit]
+    k = int(np.lexsort((jj, ii))[0])
+    return int(ii[k]), int(jj[k])
+
+
+def _segments_cross_pairwise(p: np.ndarray) -> tuple[int, int] | None:
+    """:func:`_segments_cross` by testing all pairs (in chunks of rows)."""
     a, b = p[:-1], p[1:]
     n = len(a)
     lo, hi = np.minimum(a, b), np.maximum(a, b)
-
-    def orient(P, Q, R):
-        return (Q[..., 0] - P[..., 0]) * (R[..., 1] - P[..., 1]) - (Q[..., 1] - P[..., 1]) * (R[..., 0] - P[..., 0])
 
     chunk = max(1, 400_000 // max(n, 1))
     for i0 in range(0, n, chunk):
@@ -220,11 +265,7 @@ def _segments_cross(p: np.ndarray) -> tuple[int, int] | None:
         if ii.size == 0:
             continue
         ii = ii + i0
-        d1 = orient(a[ii], b[ii], a[jj])
-        d2 = orient(a[ii], b[ii], b[jj])
-        d3 = orient(a[jj], b[jj], a[ii])
-        d4 = orient(a[jj], b[jj], b[ii])
-        hit = (d1 * d2 < 0) & (d3 * d4 < 0)
+        hit = _proper_crossing(a, b, ii, jj)
         if hit.any():
             k = int(np.argmax(hit))
             return int(ii[k]), int(jj[k])

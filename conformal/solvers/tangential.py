@@ -277,6 +277,18 @@ def _window(contact: np.ndarray, steady: bool):
     return min(r0, mx - nx), min(c0, my - ny), nx, ny
 
 
+def _centred_at(k: np.ndarray, cx: int, cy: int) -> np.ndarray:
+    """k (mx, my) rolled so that its entry (cx, cy) comes first: ``numpy.roll(k, (-cx, -cy),
+    axis=(0, 1))``, the same array by four block copies."""
+    mx, my = k.shape
+    out = np.empty_like(k)
+    out[:mx - cx, :my - cy] = k[cx:, cy:]
+    out[:mx - cx, my - cy:] = k[cx:, :cy]
+    out[mx - cx:, :my - cy] = k[:cx, cy:]
+    out[mx - cx:, my - cy:] = k[:cx, :cy]
+    return out
+
+
 class _SlipOperator:
     """L p on the contact elements (steady: upwind difference of A p over dx; shift: A p) and its
     approximate inverse (the preconditioner), see the module docstring.
@@ -353,7 +365,7 @@ class _SlipOperator:
             self._build_preconditioner()
             shared["inv"], shared["diag"] = self._inv, self.diag
             real = all(v.dtype == np.float32 for v in self._inv)
-            shared["inv2"] = tuple(np.repeat(v, 2, axis=-1) for v in self._inv) if real else None
+            shared["inv2"] = tuple(ffts.doubled(v) for v in self._inv) if real else None
         self._inv, self.diag, self._inv2 = shared["inv"], shared["diag"], shared["inv2"]
         self._cbuf = np.empty((2, self.mx, self.my), dtype=np.float32) if steady else None
 
@@ -450,14 +462,14 @@ class _SlipOperator:
             else:
                 dxx, dyy = dxx / self.dx, dyy / self.dx
         self.diag = 0.5 * (dxx + dyy)
-        sym = [ffts.rfft2(np.roll(k, (-cx, -cy), axis=(0, 1))) for k in (kxx, kxy, kyx, kyy)]
+        sym = [ffts.rfft2(_centred_at(k, cx, cy)) for k in (kxx, kxy, kyx, kyy)]
         a, b, c, d = sym
         det = a * d - b * c
         floor = 1e-8 * np.abs(det).max()
         det = np.where(np.abs(det) < floor, floor, det)
         # single precision: the preconditioner need not be accurate
         inv = [v / det for v in (d, -b, -c, a)]
-        real = all(np.abs(v.imag).max() <= 1e-6 * np.abs(v).max() for v in inv)
+        real = all(ffts.imag_negligible(v, 1e-6) for v in inv)
         self._inv = tuple(v.real.astype(np.float32) if real else v.astype(np.complex64) for v in inv)
 
     def precondition(self, rc: np.ndarray) -> np.ndarray:

@@ -113,3 +113,21 @@ def test_normal_product_in_one_call_is_bitwise_the_four_transforms(shape):
     uh = op._forward(p)
     uh *= op._kernel_hat(Z, Z)
     assert np.array_equal(op.apply_normal(p), op._back(uh))
+
+
+def test_doubled_and_imag_negligible_are_the_numpy_forms():
+    """ffts.doubled is numpy.repeat(v, 2, axis=-1) (the same array, any dtype and rank); the
+    real-spectrum test ffts.imag_negligible decides as max|Im v| <= rtol max|v| does, on spectra
+    real to rounding, with a large imaginary part, with the imaginary parts deciding alone, and
+    with NaN."""
+    rng = np.random.default_rng(5)
+    for v in (rng.random((7, 5)).astype(np.float32), rng.random((2, 3, 4)), np.zeros((3, 0))):
+        d = ffts.doubled(v)
+        assert d.dtype == v.dtype and np.array_equal(d, np.repeat(v, 2, axis=-1))
+    re = rng.normal(size=(6, 9))
+    cases = [re + 1e-12j * rng.normal(size=re.shape), re + 1j * rng.normal(size=re.shape),
+             1e-3 * re + 1j * np.full(re.shape, 1e-12),          # |Re| small: the moduli decide
+             np.zeros((2, 2), complex), np.array([1.0 + np.nan * 1j, 2.0])]
+    for v in cases:
+        for rtol in (1e-9, 1e-6, 1e-2):
+            assert ffts.imag_negligible(v, rtol) == bool(np.abs(v.imag).max() <= rtol * np.abs(v).max())

@@ -78,6 +78,34 @@ def test_smoothing_reduces_noise_and_reports_its_error():
     assert rough.smoothing_error < 1e-5
 
 
+def test_own_smoothing_spline_is_scipys_and_interpolates_at_zero_smoothing():
+    """spline.smoothing_spline (the penalty matrix in array operations) gives the coefficients of
+    scipy's make_smoothing_spline (a Python loop per point) on profiles and uneven noisy data,
+    to 1e-13 of the data's size (bitwise with the scipy it was written against), for y of one
+    and two columns; lam = 0 interpolates the points (an independent property)."""
+    from scipy.interpolate import make_smoothing_spline
+
+    from conformal.geometry.spline import _chord_parameter, smoothing_spline
+
+    rng = np.random.default_rng(3)
+    x = np.cumsum(rng.uniform(0.05, 0.4, 300))
+    data = [(x, np.c_[np.sin(x), np.cos(0.3 * x)] + rng.normal(scale=0.01, size=(300, 2)))]
+    for spec, kind in (("S1002_MBENCH", "wheel"), ("UIC60", "rail")):
+        p = load_profile(spec, kind).points
+        data.append((_chord_parameter(p), p))
+    for t, y in data:
+        scale = np.abs(y).max()
+        for lam in (1e-6, 1e-3, 0.5, 20.0):
+            for yy in (y, y[:, 1]):
+                ours, theirs = smoothing_spline(t, yy, lam), make_smoothing_spline(t, yy, lam=lam)
+                assert ours.c.shape == theirs.c.shape and np.array_equal(ours.t, theirs.t)
+                assert np.abs(ours.c - theirs.c).max() <= 1e-13 * scale
+    t, y = data[0]
+    assert np.abs(smoothing_spline(t, y, 0.0)(t) - y).max() < 1e-9
+    with pytest.raises(ValueError):
+        smoothing_spline(t[::-1], y, 1.0)
+
+
 def test_simpack_prw_file(tmp_path):
     # a tiny CONTACT/SIMPACK wheel file: header block with mirror.y = 1 and mm units, '!' comments
     ys = np.linspace(-20.0, 20.0, 41)
@@ -116,6 +144,34 @@ def test_self_intersection(tmp_path):
     rows = [(0, 0), (2, 0), (4, 1), (5, 3), (4, 4), (3, 3), (3.5, 0.5), (6, 0), (8, 0)]
     with pytest.raises(InputError, match="intersects itself"):
         check_points(np.array(rows, float), "rail", "bowtie")
+
+
+def test_crossing_search_by_sorted_ranges_finds_the_pairwise_first_crossing():
+    """_segments_cross (pairs from the segments sorted by y) returns the first crossing pair (least
+    i, then j) of the all-pairs test on random polylines (many crossings), monotone ones with one
+    point moved back (one or two), on a quarter-mm lattice (ties, shared ends, collinear
+    segments) and on the built-in profiles (none)."""
+    from conformal.geometry.profiles import _segments_cross, _segments_cross_pairwise
+
+    rng = np.random.default_rng(0)
+    found = 0
+    for trial in range(600):
+        n = int(rng.integers(2, 60))
+        if trial % 3 == 0:
+            p = rng.random((n, 2))
+        elif trial % 3 == 1:
+            p = np.c_[np.cumsum(rng.random(n)), rng.normal(scale=0.3, size=n)]
+            if n > 5:
+                p[n // 2] = p[1] + rng.normal(scale=0.5, size=2)
+        else:
+            p = np.round(rng.random((n, 2)) * 4) / 4
+        first = _segments_cross(p)
+        assert first == _segments_cross_pairwise(p)
+        found += first is not None
+    assert found > 300
+    for name in ("S1002", "UIC60"):
+        entry = BUILTIN[name]
+        assert _segments_cross(load_profile(name, entry.kind).points) is None
 
 
 def test_points_out_of_order():

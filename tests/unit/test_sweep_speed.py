@@ -350,10 +350,28 @@ def test_corner_lattice_slices_equal_own_evaluations():
         for f, g in zip(lat.primitives(mx, my), own):
             np.testing.assert_array_equal(f, g)
     assert lat.shape == (55, 50)     # 40 x 40 held all before; 55 x 50 beyond 3000 corners started anew
+    # the corner differences at the offsets of a grid: a slice of the lattice's, bitwise the grid's own
+    for mx, my in ((7, 5), (55, 50), (1, 1), (20, 33)):
+        own = hs._primitives(((np.arange(mx) + 0.5) * 0.2)[:, None], ((np.arange(my) + 0.5) * 0.15)[None, :])
+        for name, k in hs._PRIM_INDEX.items():
+            D = lat.differences(name, mx, my)
+            assert D.shape == (2 * mx - 1, 2 * my - 1)
+            np.testing.assert_array_equal(D, hs._differences(own[k], name))
+    grow = hs.CornerLattice(0.2, 0.2, max_elements=10000)      # a growing side grows by half
+    grow.primitives(40, 30)
+    grow.primitives(42, 30)
+    assert grow.shape == (60, 30) and grow.primitives(59, 29)[0].shape == (59, 29)
+    grow.primitives(61, 100)
+    assert grow.shape == (90, 100)
+    grow.primitives(91, 105)              # half as many rows more would pass the bound: those asked for
+    assert grow.shape == (91, 105)
     mat = Material(82000.0, 0.28, 26000.0, 0.33)                 # coupled: T1, T2 used too
     for mx, my in ((23, 9), (41, 17), (17, 30)):
         a = hs.HalfSpaceInfluence.for_grid(mx, my, 0.2, 0.15, mat)
         b = hs.HalfSpaceInfluence.for_grid(mx, my, 0.2, 0.15, mat, shared=False)
         for i in range(3):
+            np.testing.assert_array_equal(a.self_influence(), b.self_influence())
             for j in range(3):
+                np.testing.assert_array_equal(a._component(i, j), b._component(i, j))
                 np.testing.assert_array_equal(a.kernel_hat(i, j), b.kernel_hat(i, j))
+    assert len(hs._corner_lattice(0.2, 0.15)._derived) <= hs.LATTICE_DERIVED

@@ -138,3 +138,17 @@ def test_rescaled_start_of_a_heavier_load(kin, fewer):
     assert (slipping > 0.9) == fewer
     if fewer:
         assert scaled.iterations < plain.iterations, (scaled.iterations, plain.iterations)
+
+
+def test_centred_kernel_is_numpy_roll():
+    """The preconditioner's probe, centred by block copies (tangential._centred_at), is
+    numpy.roll(k, (-cx, -cy), axis=(0, 1)) for every centre of grids of 1 to 7 rows and columns."""
+    from conformal.solvers.tangential import _centred_at
+
+    rng = np.random.default_rng(0)
+    for mx in range(1, 8):
+        for my in range(1, 8):
+            k = rng.random((mx, my))
+            for cx in range(mx):
+                for cy in range(my):
+                    np.testing.assert_array_equal(_centred_at(k, cx, cy), np.roll(k, (-cx, -cy), axis=(0, 1)))
