@@ -82,23 +82,34 @@ def test_separate_strips_agree_with_the_coupled_strip_within_the_interaction(cou
     assert separate.extra["coupled_strip"]["FN"] == pytest.approx(coupled.FN)
 
 
+#: FY_track with 81 elements per axis on each strip (28 s, so stored): the finest of the refinement
+#: 16, 24, 36, 54, 81 (8161.5, 8163.1, 8167.6, 8168.6, 8169.6 N)
+FY_TRACK_81 = 8169.59
+
+
 @pytest.mark.slow
 def test_refining_the_separate_strips_converges():
-    """16, 24, 36 elements per axis on each strip (ratio 1.5): the track lateral force changes by
-    less than 0.1 % per refinement and by no more from 24 to 36 than from 16 to 24; the flange
-    strip's pmax changes less from 24 to 36 than from 16 to 24, its FN by < 0.1 %.  Measured with
-    the corrected coupling sense of the turned frames: FY_track 8157.9, 8163.1, 8167.6 N (steps
-    0.063 %, 0.056 %: a slow order, about 0.3, where the earlier sense gave 8128.3, 8133.4,
-    8133.9 N, order above 1); flange pmax 1471, 1490, 1489 N/mm²; flange FN 7487.1, 7487.4,
-    7489.7 N."""
+    """16, 24, 36 elements per axis on each strip (ratio 1.5): the track lateral force comes closer
+    to the 81-element solution (FY_TRACK_81) with each refinement, within 0.2 % of it at 16 and
+    0.1 % from 24 on; the flange strip's pmax changes less from 24 to 36 than from 16 to 24, its
+    FN by < 0.1 %.
+
+    Measured: FY_track 8161.5, 8163.1, 8167.6, 8168.6, 8169.6 N for 16, 24, 36, 54, 81 elements
+    (distances to the 81-element value 8.1, 6.5, 2.0, 1.0 N); flange pmax 1472, 1490, 1489 N/mm²;
+    flange FN 7491.7, 7487.4, 7489.7 N.  The steps between successive grids are not monotone
+    (1.6, 4.6, 0.9, 1.0 N): each strip's size follows from where the contact first reaches its
+    border, a discrete choice; a change of 1.4e-13 mm in the searched height (the wheel distances
+    in two unknowns) turns the 16-element tread strip's extension from 17 x 24 to 16 x 25 elements
+    and FY_track from 8157.9 to 8161.5 N (0.14 % and 0.10 % from the 81-element value; the test
+    holds for both).  So it compares each grid with the finest one, not successive steps with
+    each other."""
     vals = []
     for n in (16, 24, 36):
         r = solve_wheel_rail_conformal(two_patches(n=n, strips="separate"))
         flange = min(r.extra["separate_strips"], key=lambda s: s["contact_angle_min"])
         vals.append((r.extra["FY_track"], flange["pmax"], flange["FN"]))
-    f1, f2, f3 = (v[0] for v in vals)
-    d1, d2 = f2 - f1, f3 - f2
-    assert abs(d2) <= abs(d1) and max(abs(d1), abs(d2)) < 1e-3 * abs(f3)
+    err = [abs(v[0] - FY_TRACK_81) for v in vals]
+    assert err[0] > err[1] > err[2] and err[0] < 2e-3 * FY_TRACK_81 and err[1] < 1e-3 * FY_TRACK_81
     f1, f2, f3 = (v[1] for v in vals)
     assert abs(f3 - f2) < abs(f2 - f1) and abs(f3 / f2 - 1) < 0.01
     fn = [v[2] for v in vals]
