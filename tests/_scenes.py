@@ -32,6 +32,22 @@ def mbench_case_scene(inputs: dict, side: str = "right", *, theory: str = "exact
         kinematics__pitch_velocity=inputs["VPITCH_rad_per_s"], model__theory=theory)
 
 
+def mbench_case_pairs(cases, neighbour_dy: float | None = None):
+    """(name, pair) of both wheels at each of CONTACT's Manchester A-2.2 ``cases`` (their
+    ``"inputs"``, :func:`mbench_case_scene`), named "right 5" / "left 5"; with ``neighbour_dy``
+    also the right wheel at the shift less it ("right 4.9": the lift check's neighbour)."""
+    from conformal.geometry.wheelrail import build_pair
+
+    for c in cases:
+        sc = mbench_case_scene(c["inputs"])
+        geo, y = sc.geometry, c["inputs"]["Y_WS_mm"]
+        for side in ("right", "left"):
+            yield f"{side} {y:g}", build_pair(geo, sc.base_dir, side=side, roll=geo.roll)
+        if neighbour_dy is not None:
+            yield (f"right {y - neighbour_dy:g}",
+                   build_pair(geo, sc.base_dir, side="right", roll=geo.roll, lateral_shift=y - neighbour_dy))
+
+
 def hertz_scene(a: float, b: float, normal_force: float, *, theory: str, material: dict | None = None,
                 mu: float = 0.3, kinematics: dict | None = None, grid: dict | None = None, **model):
     """A Hertzian contact given by its ellipse (``[geometry] kind = "hertz"``, semi-axes ``a``, ``b``

@@ -13,18 +13,13 @@ from conformal.cases import wheelrail as wr
 from conformal.geometry import search as gs
 from conformal.geometry.wheelrail import build_pair, first_touch
 from _paths import CONTACT_CASES
-from _scenes import mbench_case_scene
+from _scenes import mbench_case_pairs, mbench_case_scene
 
 CASES = json.loads(CONTACT_CASES.read_text())["cases"]["mbench_a22"]["right"]
 
 
 def _pairs():
-    for c in CASES:
-        sc = mbench_case_scene(c["inputs"])
-        geo, y = sc.geometry, c["inputs"]["Y_WS_mm"]
-        for side in ("right", "left"):
-            yield f"{side} {y:g}", build_pair(geo, sc.base_dir, side=side, roll=geo.roll)
-        yield f"right {y - 0.1:g}", build_pair(geo, sc.base_dir, side="right", roll=geo.roll, lateral_shift=y - 0.1)
+    yield from mbench_case_pairs(CASES, neighbour_dy=0.1)
     # the flange-contact jump (tread and flange touch at nearly the same height), CONTACT's roll at 6 mm
     sc = mbench_case_scene(next(c["inputs"] for c in CASES if c["inputs"]["Y_WS_mm"] == 6.0))
     for y in np.arange(6.0, 6.55, 0.05):

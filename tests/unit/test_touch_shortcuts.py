@@ -13,7 +13,7 @@ from conformal.cases import wheelrail as wr
 from conformal.geometry import search as gs
 from conformal.geometry.wheelrail import build_pair, first_touch, touches_after
 from _paths import CONTACT_CASES
-from _scenes import mbench_case_scene
+from _scenes import mbench_case_pairs, mbench_case_scene
 
 CASES = json.loads(CONTACT_CASES.read_text())["cases"]["mbench_a22"]["right"]
 TWO_POINT = 6.2250108253756      # tread and flange touch at the same height (tests/unit/test_touch_point.py)
@@ -24,11 +24,7 @@ def _case(y):
 
 
 def _pairs():
-    for c in CASES:
-        sc = mbench_case_scene(c["inputs"])
-        geo, y = sc.geometry, c["inputs"]["Y_WS_mm"]
-        for side in ("right", "left"):
-            yield f"{side} {y:g}", build_pair(geo, sc.base_dir, side=side, roll=geo.roll)
+    yield from mbench_case_pairs(CASES)
     # tread -> flange root (4.5 .. 5 mm) and the flange climbing onto the rail (6 .. 6.5 mm), every 0.05 mm
     for y0, ys in ((5.0, np.arange(4.5, 5.025, 0.05)), (6.0, np.arange(6.0, 6.525, 0.05))):
         geo, base = _case(y0).geometry, _case(y0).base_dir
