@@ -350,10 +350,13 @@ class HalfSpaceInfluence:
             self._fhat["pc_periodic"] = (Nx, Ny, sym)
         Nx, Ny, sym = self._fhat["pc_periodic"]
         mx, my = self.mx, self.my
+        # the periodic grid's field, zero beyond the mx x my elements: one per preconditioner (a
+        # solve), written anew by each call (its zeros stay)
+        pad = np.zeros((Nx, Ny)) if (Nx, Ny) != (mx, my) else None
 
         def apply(g: np.ndarray) -> np.ndarray:
-            if (Nx, Ny) != (mx, my):
-                x = np.zeros((Nx, Ny))
+            if pad is not None:
+                x = pad
                 x[:mx, :my] = g
             else:
                 x = g

@@ -174,6 +174,8 @@ class _Weighted:
         self.unit = np.isscalar(a) and np.isscalar(w) and a == 1.0 and w == 1.0
 
     def load(self, p: np.ndarray) -> float:
+        if self.unit:   # (the sum of p * 1.0 without the product)
+            return float(np.add.reduce(p, axis=None))
         return float(np.multiply(p, self.aw).sum())
 
     def norm(self, p: np.ndarray) -> float:
@@ -186,8 +188,9 @@ class _Weighted:
         return wa, float(np.multiply(wa, self.w).sum())
 
     def approach(self, g: np.ndarray, act: np.ndarray) -> float:
-        if self.unit:
-            return float(np.mean(g[act]))
+        if self.unit:   # np.mean(g[act]): its sum and division, without the wrapper
+            ga = g[act]
+            return float(np.add.reduce(ga)) / ga.size if ga.size else math.nan
         wa, ww = self.on(act.astype(float))
         return _dot(g, wa) / ww
 
@@ -288,9 +291,10 @@ def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, 
     scale = max(abs(delta), spread, 1e-300)
     gap_res = max(float(np.max(np.abs(e), where=act, initial=0.0)),
                   float(np.max(-e, where=~act, initial=0.0))) / scale
-    return NormalSolution(pn=p, un=un, approach=delta, FN=float(np.multiply(p, a).sum() * dA), contact=act,
+    FN = float(np.multiply(p, a).sum() * dA) if not weighted.unit else weighted.load(p) * dA
+    return NormalSolution(pn=p, un=un, approach=delta, FN=FN, contact=act,
                           iterations=k, residual=eps, converged=bool(eps < tol), gap_residual=gap_res,
-                          preconditioned=pc is not None, load=weighted.load(p) * dA)
+                          preconditioned=pc is not None, load=FN if weighted.unit else weighted.load(p) * dA)
 
 
 def initial_pressure(h: np.ndarray, FN: float, E_star: float, dA: float) -> np.ndarray:

@@ -391,7 +391,9 @@ class _SlipOperator:
         self.products += 1
         if fast is None:
             return self._full_op.apply_tangential(px, py)
-        u = fast(np.stack([px, py]).astype(np.float32)).astype(float)
+        p32 = np.empty((2,) + px.shape, dtype=np.float32)   # (the float32 values of np.stack([px, py]))
+        p32[0], p32[1] = px, py
+        u = fast(p32).astype(float)
         if same:
             u[(slice(None),) + self.window] = last[1][:, :self.mx]
         else:
@@ -416,8 +418,8 @@ class _SlipOperator:
             self._last = (pc.reshape(2, -1).copy(), u)   # for grid_u
         if not self.steady:
             return u[self._m].astype(float).reshape(2, -1)
-        if self._m_up is not None:
-            return ((u[self._m] - u[:, 1:][self._m_up]) * self._wgt2).reshape(2, -1)
+        if self._m_up is not None:   # (u - u') at the elements: one gather of the difference of the rows
+            return (np.subtract(u[:, :-1], u[:, 1:])[self._m_up] * self._wgt2).reshape(2, -1)
         u = u.reshape(-1)
         return ((u.take(self._off) - u.take(self._off_up)) * self._wgt2).reshape(2, -1)
 
@@ -604,6 +606,14 @@ def forcing(res: float, tol: float) -> float:
     return min(f["cap"], eta)
 
 
+def _rotated(n: np.ndarray) -> np.ndarray:
+    """(-n_y, n_x) of unit vectors n (2, k): ``np.stack([-n[1], n[0]])`` without its copies."""
+    t = np.empty_like(n)
+    np.negative(n[1], out=t[0])
+    t[1] = n[0]
+    return t
+
+
 @dataclass
 class _State:
     p: np.ndarray       # (2, nc) traction on the contact elements
@@ -670,7 +680,7 @@ class _Newton:
         ia, isl = np.flatnonzero(~slip), np.flatnonzero(slip)
         nA, nS = ia.size, isl.size
         n = z[:, isl] / nz[isl]
-        t = np.stack([-n[1], n[0]])
+        t = _rotated(n)
         kap = self.gk[isl] / nz[isl]
         sigma = (1.0 - kap) / (kap * c)   # = |s|/g at a solution
         # known part: |p| = g along n in slip
@@ -727,7 +737,7 @@ class _Newton:
         z = p - c * s
         nz = np.hypot(z[0], z[1])
         n = z / nz
-        t = np.stack([-n[1], n[0]])
+        t = _rotated(n)
         kap = gk / nz
         sigma = (1.0 - kap) / (kap * c)
         D0 = (gk - (n[0] * p[0] + n[1] * p[1])) * n
@@ -762,7 +772,13 @@ class _Newton:
         L, nc = self.L, self.nc
         nA, nS = ia.size, isl.size
         diag = L.diag
-        w = np.where(sigma > STIFF_RATIO * diag, 0.0, (diag / (diag + sigma)) ** SLIP_WEIGHT_POWER)
+        soft = ~(sigma > STIFF_RATIO * diag)    # (the rows with a weight: the power only where it is used)
+        if soft.all():
+            w = (diag / (diag + sigma)) ** SLIP_WEIGHT_POWER
+        else:
+            w = np.zeros(sigma.shape)
+            if soft.any():
+                w[soft] = (diag / (diag + sigma[soft])) ** SLIP_WEIGHT_POWER
         local = (1.0 - w) / (sigma + diag)
         cc = None
         if L.steady and COARSE_FACTOR and COARSE_FROM and self.nc >= COARSE_FROM and nA:
@@ -805,7 +821,9 @@ class _Newton:
 
     def solve(self, st: _State, tol: float, maxit: int):
         """Newton iterations until the residual measure <= tol (checked with a fresh slip).
-        Returns (state with fresh slip, its, res, msg)."""
+        Returns (state with fresh slip, its, res, msg, last): ``last`` the residual
+        (F, force errors, slip classification) of the returned state where the iteration ended on
+        it, else None (:meth:`residual` of the state gives it)."""
         F, ferr, slip = self.residual(st.p, st.s, st.slipping)
         res = self.measure(st.p, F, ferr)
         best, stall, it = res, 0, 0
@@ -859,8 +877,8 @@ class _Newton:
                     msg = f"Newton stalled at residual {res:.3g} (tol {tol:g}) after {it} iterations"
                     break
         if not is_fresh:
-            st = self.fresh(st)
-        return st, it, res, msg
+            return self.fresh(st), it, res, msg, None
+        return st, it, res, msg, (F, ferr, slip)
 
 
 # ----------------------------------------------------------------------------- entry point
@@ -873,7 +891,10 @@ def column_rigid_slip(grid, xi, eta, phi, steady: bool) -> np.ndarray:
     the wheelset motion with the local contact angle (conformal.solvers.conformal)."""
     X = grid.x[:, None]
     dq6 = grid.dx / 6.0 if steady else 0.0
-    return np.stack([np.broadcast_to(xi, grid.shape), np.broadcast_to(eta + phi * (X + dq6), grid.shape)])
+    w = np.empty((2,) + tuple(grid.shape))   # (the numbers of np.stack of the two broadcasts)
+    w[0] = xi
+    w[1] = eta + phi * (X + dq6)
+    return w
 
 
 def rescaled_start(p_start: np.ndarray, pn_start: np.ndarray, pn: np.ndarray) -> np.ndarray:
@@ -1041,9 +1062,13 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
         msg = f"residual {res:.3g} > tol {tol:g} after {its} Newton iterations"
     px, py, sx, sy = (np.zeros(mx * my) for _ in range(4))
     px[idx], py[idx] = st.p
-    sx[idx], sy[idx] = np.where(slip, st.s, 0.0)
     status = np.full(mx * my, EXTERIOR)
-    status[idx] = np.where(slip, SLIP, ADHESION)
+    if slip.all():   # (full slip: np.where's numbers without its selections)
+        sx[idx], sy[idx] = st.s
+        status[idx] = SLIP
+    else:
+        sx[idx], sy[idx] = np.where(slip, st.s, 0.0)
+        status[idx] = np.where(slip, SLIP, ADHESION)
     r = lambda a: a.reshape(shape)
     return finish(r(px), r(py), r(sx), r(sy), r(status), st.creep[0], st.creep[1], its, res, conv, msg,
                   nprod, L)
@@ -1183,9 +1208,12 @@ def _solve_grid(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows, creep0, t
     else:
         p0, slipping = np.zeros((2, idx.size)), np.zeros(idx.size, bool)
     s0 = wc + (creep - creep0)[:, None] + L.apply(p0)
-    st, its, res, msg = newton.solve(_State(p0, s0, creep, slipping), tol, maxit)
-    F, ferr, slip = newton.residual(st.p, st.s, st.slipping)
-    res = newton.measure(st.p, F, ferr)
+    st, its, res, msg, last = newton.solve(_State(p0, s0, creep, slipping), tol, maxit)
+    if last is None:   # (a fresh state's residual, where the iteration ended on it: the same arguments)
+        F, ferr, slip = newton.residual(st.p, st.s, st.slipping)
+        res = newton.measure(st.p, F, ferr)
+    else:
+        F, ferr, slip = last
     return st, slip, its, res, msg, L
 
 
