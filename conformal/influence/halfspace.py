@@ -286,11 +286,20 @@ class HalfSpaceInfluence:
 
     def apply_tangential(self, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(u_x, u_y) due to (p_x, p_y) alone."""
-        h = self._forward(np.stack([np.asarray(px, dtype=float), np.asarray(py, dtype=float)]))
+        # both fields zero-padded along y in one array (the rows :func:`_forward` transforms), and
+        # the kernel products into their result (the numbers of the stacked fields and of
+        # fxx h0 + fxy h1, fxy h0 + fyy h1)
+        Mx, My = self.padded_shape
+        rows = np.zeros((2, self.mx, My))
+        rows[0, :, :self.my] = px
+        rows[1, :, :self.my] = py
+        h = self._forward(rows)
         fxx, fxy, fyy = self._kernel_hat(X, X), self._kernel_hat(X, Y), self._kernel_hat(Y, Y)
         acc = np.empty_like(h)
-        acc[0] = fxx * h[0] + fxy * h[1]
-        acc[1] = fxy * h[0] + fyy * h[1]
+        np.multiply(fxx, h[0], out=acc[0])
+        acc[0] += fxy * h[1]
+        np.multiply(fxy, h[0], out=acc[1])
+        acc[1] += fyy * h[1]
         u = self._back(acc)
         return u[0], u[1]
 

@@ -349,7 +349,6 @@ class _SlipOperator:
         if steady:
             self._off_up = np.concatenate([self._up, rows * self.my + self._up])
             self._wgt2 = np.concatenate([self._wgt, self._wgt])
-        self._poff = np.concatenate([self.widx, self.mx * self.my + self.widx])
         # the same positions as boolean masks of the grid buffers: scatter and gather by a mask
         # are 3-6x faster than put/take on flat offsets (the offsets are sorted, so the order agrees)
         self._m = np.zeros((2, rows, self.my), bool)
@@ -985,7 +984,6 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
     mx, my = shape
     area = np.broadcast_to(np.asarray(grid.area, dtype=float), shape)
     contact = pn > 0
-    zeros = np.zeros(shape)
 
     # rigid slip (seed Eq. 47; CONTACT's W/dq with chi = 0)
     # the y of the element centres: one row broadcast along x on a planar grid (the numbers of its
@@ -1023,10 +1021,12 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
                                   coarse_products=float(getattr(L, "coarse_products", 0.0)))
 
     if not contact.any():
+        zeros = np.zeros(shape)
         return finish(zeros, zeros.copy(), zeros.copy(), zeros.copy(), np.full(shape, EXTERIOR), xi, eta,
                       0, 0.0, True, "", 0)
     FN = float((pn * area).sum())
     if mu_k == 0.0:  # frictionless: no traction, every element with rigid slip slips
+        zeros = np.zeros(shape)
         ws = np.where(contact, w, 0.0)
         status = np.where(contact, np.where(np.hypot(ws[0], ws[1]) > 0, SLIP, ADHESION), EXTERIOR)
         return finish(zeros, zeros.copy(), ws[0], ws[1], status, xi, eta, 0, 0.0, True, "", 0)
@@ -1194,7 +1194,7 @@ def _solve_grid(op, grid, pn, w, area, steady, mu_s, mu_k, force_rows, creep0, t
     gs = (mu_s * pn).ravel()[idx]
     wc = w.reshape(2, -1)[:, idx].copy()
     FN = float((pn * area).sum())
-    newton = _Newton(L, wc, gs, gk, area.ravel()[idx], force_rows, mu_s * FN)
+    newton = _Newton(L, wc, gs, gk, area[contact], force_rows, mu_s * FN)   # (area.ravel()[idx] without the copy)
     newton.creep0 = creep0
     creep = creep0.copy()
     if p_start is None and idx.size >= NESTED_FROM:
