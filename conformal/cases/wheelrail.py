@@ -729,7 +729,8 @@ def resample(src: PlanarGrid, values: np.ndarray, dst: PlanarGrid) -> np.ndarray
     if (src.mx, src.my, src.dx, src.dy, src.xl, src.yl) == (dst.mx, dst.my, dst.dx, dst.dy, dst.xl, dst.yl):
         return np.array(values, dtype=float)      # the same grid (the passes of a position)
     values = np.asarray(values, float)
-    v = np.pad(values, [(0, 0)] * (values.ndim - 2) + [(1, 1), (1, 1)])
+    v = np.zeros(values.shape[:-2] + (values.shape[-2] + 2, values.shape[-1] + 2))   # (np.pad's zero border)
+    v[..., 1:-1, 1:-1] = values
     ia, ib, wi = axis(src.mx, src.xl, src.dx, dst.mx, dst.xl, dst.dx)
     ja, jb, wj = axis(src.my, src.yl, src.dy, dst.my, dst.yl, dst.dy)
     rows = (1.0 - wi)[:, None] * v[..., ia, :] + wi[:, None] * v[..., ib, :]

@@ -67,16 +67,33 @@ class Creepages:
     velocity: np.ndarray | float   # rolling velocity V (mm/s)
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``numpy.cross(a, b)`` of float 3-vectors (..., 3): its products and differences,
+    (a1 b2 - a2 b1, a2 b0 - a0 b2, a0 b1 - a1 b0), without its axis handling (on single vectors,
+    as Python floats: the same IEEE operations at a twentieth of its cost)."""
+    if a.ndim == 1 and b.ndim == 1:
+        a0, a1, a2 = (float(v) for v in a)
+        b0, b1, b2 = (float(v) for v in b)
+        return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a1 * b2 - a2 * b1
+    out[..., 1] = a2 * b0 - a0 * b2
+    out[..., 2] = a0 * b1 - a1 * b0
+    return out
+
+
 def creepages(frame: WheelFrame, motion: WheelsetMotion, point, normal) -> Creepages:
     """Creepages (seed Eq. 61, body 1 = rail) at contact point(s) ``point`` (..., 3) with inner rail
     normal(s) ``normal`` (..., 3) (normal must have zero x component: the rail is an extrusion)."""
     p = np.asarray(point, float)
     n = np.broadcast_to(np.asarray(normal, float), p.shape)
     t1 = np.array([1.0, 0.0, 0.0])
-    t2 = np.cross(n, t1)
+    t2 = _cross(n, t1)
     Vws = np.array([motion.speed, motion.lateral_velocity, motion.vertical_velocity])
     omega = (motion.roll_rate * t1 + motion.yaw_rate * frame.e_d + motion.pitch_velocity * frame.a)
-    rel_w = np.cross(omega, p - frame.O)          # wheel material relative to the contact point
+    rel_w = _cross(omega, p - frame.O)           # wheel material relative to the contact point
     v_w = Vws + rel_w                            # seed Eq. 60 (the rail is at rest)
     rel_r = -Vws                                 # rail material relative to the contact point
     V = -0.5 * ((rel_r + rel_w) @ t1)
