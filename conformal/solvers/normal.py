@@ -175,7 +175,7 @@ class _Weighted:
 
     def load(self, p: np.ndarray) -> float:
         if self.unit:   # (the sum of p * 1.0 without the product)
-            return float(np.add.reduce(p, axis=None))
+            return float(_sum(p))
         return float(np.multiply(p, self.aw).sum())
 
     def norm(self, p: np.ndarray) -> float:
@@ -369,10 +369,15 @@ def _solve_for_approach(op, pc, a_self, E_star, h, delta, dA, tol, maxit, p_star
     return p, u, total, mismatch
 
 
+def _sum(a: np.ndarray):
+    """``a.sum()`` (numpy's pairwise sum over all elements) without the method's Python wrapper."""
+    return np.add.reduce(a, axis=None)
+
+
 def _dot(a: np.ndarray, b: np.ndarray) -> float:
     """Sum of a*b without BLAS: a threaded BLAS dot on a busy 2-core machine was measured 1000x
     slower (ms instead of µs) than this elementwise product."""
-    return float(np.multiply(a, b).sum())
+    return float(_sum(np.multiply(a, b)))
 
 
 def _direction(ga, act, actf, wa, ww, weighted, pc):
@@ -383,7 +388,7 @@ def _direction(ga, act, actf, wa, ww, weighted, pc):
     # keep the load: <z, w>_act = 0 (planar: zero sum over the contact set, where the sum of z,
     # already zero outside it, is its masked sum)
     if weighted.unit:
-        np.subtract(z, float(z.sum()) / ww, out=z, where=act)
+        np.subtract(z, float(_sum(z)) / ww, out=z, where=act)
     else:
         z -= (actf * weighted.w) * (_dot(z, wa) / ww)
     return z
@@ -428,7 +433,7 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
         if plain:
             wa, ww = actf, float(na)
             ga = np.multiply(g, actf)
-            lam = float(ga.sum()) / ww
+            lam = float(_sum(ga)) / ww
             np.subtract(ga, lam, out=ga, where=act)
         else:
             wa, ww = weighted.on(actf)
@@ -447,7 +452,7 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
         G_old = G
         r = A(t)
         if plain:
-            rt = _dot(r, t) - _dot(r, actf) / ww * float(t.sum())
+            rt = _dot(r, t) - _dot(r, actf) / ww * float(_sum(t))
         else:
             rt = float(_dot(r * a, t)) - float(_dot(r, wa)) / ww * weighted.load(t)
         overlap = g < lam     # the gap g - lam < 0 ...
@@ -481,7 +486,7 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
         else:
             restart = False
         kept = not changed
-        s = load / (float(p_new.sum()) if plain else weighted.load(p_new))
+        s = load / (float(_sum(p_new)) if plain else weighted.load(p_new))
         p_new *= s
         if changed:
             u = A(p_new)
@@ -492,7 +497,7 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
             u = ur
         dp = p_new - p
         np.abs(dp, out=dp)
-        eps = (float(dp.sum()) / load) if plain else weighted.norm(dp) / weighted.norm(p_new)
+        eps = (float(_sum(dp)) / load) if plain else weighted.norm(dp) / weighted.norm(p_new)
         p = p_new
         if eps < tol:
             break
