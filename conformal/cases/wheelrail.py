@@ -733,8 +733,9 @@ def resample(src: PlanarGrid, values: np.ndarray, dst: PlanarGrid) -> np.ndarray
     v[..., 1:-1, 1:-1] = values
     ia, ib, wi = axis(src.mx, src.xl, src.dx, dst.mx, dst.xl, dst.dx)
     ja, jb, wj = axis(src.my, src.yl, src.dy, dst.my, dst.yl, dst.dy)
-    rows = (1.0 - wi)[:, None] * v[..., ia, :] + wi[:, None] * v[..., ib, :]
-    return (1.0 - wj)[None, :] * rows[..., ja] + wj[None, :] * rows[..., jb]
+    # (the gathers by np.take: the values of v[..., ia, :] and rows[..., ja] at less cost)
+    rows = (1.0 - wi)[:, None] * v.take(ia, axis=-2) + wi[:, None] * v.take(ib, axis=-2)
+    return (1.0 - wj)[None, :] * rows.take(ja, axis=-1) + wj[None, :] * rows.take(jb, axis=-1)
 
 
 def _nearest_field(fields, s_ref: float) -> PatchField | None:
