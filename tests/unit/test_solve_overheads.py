@@ -116,3 +116,34 @@ def test_newton_loop_returns_the_residual_of_its_state():
         assert np.array_equal(last[0], F) and last[1] == ferr and np.array_equal(last[2], slip)
     assert newton.measure(st.p, F, ferr) == res
     assert 0 < np.count_nonzero(slip) < newton.nc       # partial slip
+
+
+def _resample_reference(src, values, dst):
+    """The bilinear resampling with numpy.pad and fancy indexing (the expression resample replaces)."""
+    def axis(n_src, lo_src, d_src, n_dst, lo_dst, d_dst):
+        f = (lo_dst + (np.arange(n_dst) + 0.5) * d_dst - lo_src) / d_src - 0.5
+        near = np.rint(f)
+        f = np.where(np.abs(f - near) <= 1e-9, near, f)
+        i0 = np.floor(f).astype(int)
+        w = f - i0
+        return np.clip(i0, -1, n_src) + 1, np.clip(i0 + 1, -1, n_src) + 1, w
+
+    values = np.asarray(values, float)
+    v = np.pad(values, [(0, 0)] * (values.ndim - 2) + [(1, 1), (1, 1)])
+    ia, ib, wi = axis(src.mx, src.xl, src.dx, dst.mx, dst.xl, dst.dx)
+    ja, jb, wj = axis(src.my, src.yl, src.dy, dst.my, dst.yl, dst.dy)
+    rows = (1.0 - wi)[:, None] * v[..., ia, :] + wi[:, None] * v[..., ib, :]
+    return (1.0 - wj)[None, :] * rows[..., ja] + wj[None, :] * rows[..., jb]
+
+
+@pytest.mark.parametrize("stack", [False, True])
+def test_resample_is_the_padded_bilinear_interpolation(stack):
+    from conformal.cases.wheelrail import resample
+
+    rng = np.random.default_rng(11)
+    src = PlanarGrid(12, 9, 0.2, 0.25, -1.3, -1.1)
+    values = rng.random((3, 12, 9) if stack else (12, 9))
+    for dst in (PlanarGrid(15, 7, 0.2, 0.25, -1.5, -0.9), PlanarGrid(10, 12, 0.17, 0.3, -0.7, -2.0),
+                PlanarGrid(12, 9, 0.2, 0.25, -1.1, -1.1)):
+        ref, got = _resample_reference(src, values, dst), resample(src, values, dst)
+        assert got.shape == ref.shape and got.tobytes() == ref.tobytes()
