@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 import re
+import warnings
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -106,8 +107,12 @@ def _read_csv(path: Path) -> np.ndarray:
     raw = path.read_bytes()
     if b"\0" in raw[:4096]:
         raise InputError(f"not a profile: {path} is a binary file (expected rows 'y, z' in mm)")
+    lines = raw.decode("utf-8", errors="replace").splitlines()
+    fast = _rows_fast(lines)
+    if fast is not None:
+        return fast
     rows, header = [], False
-    for lineno, line in enumerate(raw.decode("utf-8", errors="replace").splitlines(), 1):
+    for lineno, line in enumerate(lines, 1):
         text = line.split("#")[0].strip()
         if not text:
             continue
@@ -127,6 +132,22 @@ def _read_csv(path: Path) -> np.ndarray:
                              f"columns 'y, z' in mm, got {text[:60]!r}")
         rows.append((y, z, lineno))
     return _as_array(rows, path)
+
+
+def _rows_fast(lines: list[str]) -> np.ndarray | None:
+    """The points of lines that are all 'y,z' rows of finite numbers (comma separated, '#'
+    comments, blank lines), read by numpy's parser in C (the numbers of ``float``: both round
+    correctly); None for anything else (another separator, a header, a bad row, no rows), which
+    the row-by-row reading of :func:`_read_csv` then reads or refuses with its message."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")           # "input contained no data": read row by row
+            p = np.loadtxt(lines, dtype=float, delimiter=",", comments="#", ndmin=2)
+    except ValueError:
+        return None
+    if p.ndim != 2 or p.shape[1] != 2 or p.shape[0] == 0 or not np.isfinite(p).all():
+        return None
+    return p
 
 
 def _as_array(rows, path: Path) -> np.ndarray:

@@ -38,6 +38,11 @@ from scipy.linalg import solve_banded
 from conformal.errors import InputError
 
 ARC_STEP = 0.025   # mm, spacing of the arc-length re-parametrisation
+#: the 4-point Gauss-Legendre rule on [-1, 1] of the arc-length integral (nodes, weights): the numbers
+#: ``numpy.polynomial.legendre.leggauss(4)`` returns (a test compares them), without its eigenvalue
+#: solve per fitted curve
+GAUSS4 = ((-0.8611363115940526, -0.33998104358485626, 0.33998104358485626, 0.8611363115940526),
+          (0.34785484513745357, 0.6521451548625464, 0.6521451548625464, 0.34785484513745357))
 
 try:   # the ufunc that numpy.clip calls (the same numbers), without its per-call argument handling
     from numpy._core.umath import clip
@@ -548,7 +553,7 @@ def fit_curve(points: np.ndarray, smoothing: float = 0.0, name: str = "profile")
     # arc length of the fitted curve on a fine t grid (Gauss-Legendre per sub-interval)
     sub = max(4, int(math.ceil(t[-1] / ARC_STEP / (len(t) - 1))))
     tf = np.unique(np.concatenate([t, np.linspace(0.0, t[-1], (len(t) - 1) * sub + 1)]))
-    gx, gw = np.polynomial.legendre.leggauss(4)
+    gx, gw = np.array(GAUSS4[0]), np.array(GAUSS4[1])
     a, b = tf[:-1, None], tf[1:, None]
     tm = 0.5 * (a + b) + 0.5 * (b - a) * gx[None, :]
     dyz = fyz(tm, 1)

@@ -463,15 +463,22 @@ class _SlipOperator:
             else:
                 dxx, dyy = dxx / self.dx, dyy / self.dx
         self.diag = 0.5 * (dxx + dyy)
-        sym = [ffts.rfft2(_centred_at(k, cx, cy)) for k in (kxx, kxy, kyx, kyy)]
-        a, b, c, d = sym
+        # A_xy = A_yx (reciprocity): the two probes give the coupling bitwise alike (measured on every
+        # preconditioner of the Manchester sequence), and then its transform and inverse entry are
+        # taken once (the same numbers); otherwise each from its own probe
+        sym_xy = np.array_equal(kxy, kyx) and np.array_equal(np.signbit(kxy), np.signbit(kyx))
+        a, b, d = (ffts.rfft2(_centred_at(k, cx, cy)) for k in (kxx, kxy, kyy))
+        c = b if sym_xy else ffts.rfft2(_centred_at(kyx, cx, cy))
         det = a * d - b * c
         floor = 1e-8 * np.abs(det).max()
         det = np.where(np.abs(det) < floor, floor, det)
         # single precision: the preconditioner need not be accurate
-        inv = [v / det for v in (d, -b, -c, a)]
-        real = all(ffts.imag_negligible(v, 1e-6) for v in inv)
-        self._inv = tuple(v.real.astype(np.float32) if real else v.astype(np.complex64) for v in inv)
+        inv = [d / det, -b / det]
+        inv += [inv[1] if sym_xy else -c / det, a / det]
+        distinct = list({id(v): v for v in inv}.values())
+        real = all(ffts.imag_negligible(v, 1e-6) for v in distinct)
+        single = {id(v): v.real.astype(np.float32) if real else v.astype(np.complex64) for v in distinct}
+        self._inv = tuple(single[id(v)] for v in inv)
 
     def precondition(self, rc: np.ndarray) -> np.ndarray:
         """Approximately L^-1 r for r on the contact elements (2, nc); returns (2, nc)."""

@@ -230,3 +230,38 @@ def test_reversed_order_is_normalised():
     q = check_points(p[::-1], "rail", "reversed")
     assert np.array_equal(p, q)
     assert math.isclose(fit_curve(q).length, fit_curve(p).length, rel_tol=1e-12)
+
+
+def test_gauss_rule_of_the_arc_length_is_numpys():
+    """fit_curve's 4-point Gauss-Legendre rule (constants) is bitwise numpy's leggauss(4)."""
+    from conformal.geometry.spline import GAUSS4
+
+    g, w = np.polynomial.legendre.leggauss(4)
+    assert np.array_equal(np.array(GAUSS4[0]), g) and np.array_equal(np.array(GAUSS4[1]), w)
+
+
+def test_csv_rows_read_by_numpy_equal_the_row_by_row_reading(tmp_path):
+    """The C parser of comma-separated rows (profiles._rows_fast) gives bitwise the points of the
+    row-by-row reading (Python's float) on every built-in profile and on rows with comments, blank
+    lines and spaces; anything else (another separator, a header, a third column, an empty field,
+    a non-finite value, no rows) is left to the row-by-row reading and its messages."""
+    from conformal.geometry import profiles as pr
+
+    rng = np.random.default_rng(5)
+    texts = [(builtin_dir() / e.file).read_text() for e in BUILTIN.values()]
+    texts.append("# c\n" + "\n".join(f" {float(y)!r} , {float(z)!r}  # note" if i % 7 == 0 else f"{float(y)!r},{float(z)!r}"
+                                     for i, (y, z) in enumerate(rng.normal(scale=50.0, size=(200, 2)))) + "\n\n")
+    texts.append("\n".join(f"{y:.17g},{z:.6E}" for y, z in rng.uniform(-1e3, 1e3, size=(50, 2))))
+    for text in texts:
+        lines = text.splitlines()
+        fast = pr._rows_fast(lines)
+        rows = [ln.split("#")[0].strip() for ln in lines]
+        ref = np.array([[float(v) for v in r.split(",")] for r in rows if r])
+        assert fast is not None and fast.shape == ref.shape and np.array_equal(fast, ref)
+        assert np.array_equal(np.signbit(fast), np.signbit(ref))
+    for text in ("y,z\n1,2\n3,4", "1 2\n3 4", "1;2\n3;4", "1,2,3\n4,5,6", "1,,2\n3,4", "1,2,\n3,4",
+                 "nan,1\n2,3", "1,inf\n2,3", "# only a comment", "", "1_0,2\n3,4", "0x10,1\n2,3"):
+        assert pr._rows_fast(text.splitlines()) is None, text
+    f = tmp_path / "semi.csv"
+    f.write_text("# y;z\n" + "\n".join(f"{y};{0.01 * y * y}" for y in range(-10, 11)))
+    assert np.array_equal(read_points(f)[:, 1], [0.01 * y * y for y in range(-10, 11)])
