@@ -1123,6 +1123,14 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
             except NoContactError:
                 return None
             passes = []
+            if not balanced and len(st.patches) == 1:
+                # the next normal force for the contact angle d of the geometry just searched, which
+                # the next pass solves on: the fixed point W / (cos d + r sin d) (or the secant step)
+                # scaled from the previous geometry's angle to it (that angle left the FZ of the pass
+                # after the search 2.1e-5 W off at 0.5 mm, a third pass; with the new one 2.0e-6 W)
+                d = st.patches[0].patch.delta
+                w_new, w_old = math.cos(d) + ratio * math.sin(d), c + ratio * math.sin(pg.patch.delta)
+                fn_next = fn_next * w_old / w_new if w_new > 0 and w_old > 0 else fn_next
         else:
             st = st.lowered(z_next - st.z)
         if warn_n:    # a normal solve that set this height did not converge

@@ -111,3 +111,21 @@ def test_contact_jump_leaves_no_slope_and_keeps_the_ratio():
     assert abs(r65.extra["z_ws"] - z) <= 5e-5
     start = wr.WarmStart.from_result(r65)
     assert abs(start.ratios[0][1] - (-0.270)) < 0.02
+
+
+def test_pass_after_a_search_takes_the_searched_contact_angle():
+    """After a pass searches the geometry again, the next normal force W / (cos d + r sin d) takes
+    the contact angle d of the new geometry: at 0.5 mm (the wide tread patch, whose contact angle
+    moves 1.2e-4 rad between the first pass's geometry and the next) the pass after the search
+    balances (FZ 2.0e-6 W off, with the previous angle 2.1e-5 W and a third contact solve).  The
+    answers against the tight general balance as in the sweep tests (measured 2e-6 W in FN,
+    5e-7 W in FS, 4e-7 mm)."""
+    (_, r), _ = sweep((0.0, 0.5))
+    b = r.extra["balance"]
+    assert b["one_patch_passes"] and b["tangential_solves"] == 2 and b["searches"] == 3
+    assert abs(r.extra["FZ_track"] - W) <= wr.ONE_PATCH_TOL * W
+    ref, z = tight_general_balance(mbench_case(0.5))
+    assert abs(r.FN - ref.FN) <= 5e-5 * W
+    assert abs(r.FY - ref.FY) <= 5e-5 * W
+    assert abs(r.FX - ref.FX) <= 1e-4 * W
+    assert abs(r.extra["z_ws"] - z) <= 5e-5
