@@ -245,7 +245,6 @@ def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, 
     h_eff = h if extra_un is None else h + checks.field("extra_un", extra_un, grid.shape)
     if precondition is None:
         precondition = grid.size >= PRECONDITION_FROM
-    pc = op.normal_preconditioner() if precondition else None
     dA, a = element_areas(grid)
     w = _positive_weights("[model] load direction: weights w", weights, grid.shape)
     weighted = _Weighted(a, w)
@@ -259,14 +258,30 @@ def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, 
         else:
             p0 = initial_pressure(h_eff, FN, E_star, dA)
         p0 = p0 * (FN / (weighted.load(p0) * dA))
-        p, u, k, eps = _pk_force(op.apply_normal, pc, a_self, h_eff, FN / dA, p0, tol, int(maxit), weighted)
-        if pc is not None and not eps < tol:  # safety net: the plain Polonsky-Keer iteration
-            pc = None
-            p, u, k2, eps = _pk_force(op.apply_normal, None, a_self, h_eff, FN / dA, p0,
-                                      tol, int(maxit), weighted)
+        win = _window(op, p0) if weighted.unit and np.isscalar(a_self) else None
+        p, u, k, eps, pc, delta = None, None, 0, math.inf, None, math.nan
+        if win is not None:   # the iteration on a window around the start's support (WINDOW_FRACTION)
+            sl, wop = win
+            pw, _, k, eps, pcw = _force(wop, precondition, a_self, h_eff[sl], FN / dA, p0[sl], tol,
+                                        int(maxit), weighted)
+            p = np.zeros(grid.shape)
+            p[sl] = pw
+            u = op.apply_normal(p)     # one product on the whole grid: the gap outside the window
+            act = p > 0
+            delta = weighted.approach(u + h_eff, act)
+            e = u + h_eff
+            e -= delta
+            e[sl] = 1.0
+            if bool(np.all(e > 0.0)):
+                pc = pcw
+            else:   # the contact leaves the window: the whole grid, from the window's pressure
+                p0, win = p, None
+        if win is None:
+            p, u, k2, eps, pc = _force(op, precondition, a_self, h_eff, FN / dA, p0, tol, int(maxit),
+                                       weighted, u=u)
             k += k2
-        act = p > 0
-        delta = weighted.approach(u + h_eff, act)
+            act = p > 0
+            delta = weighted.approach(u + h_eff, act)
     else:
         delta = float(approach)
         if not math.isfinite(delta):
@@ -276,6 +291,7 @@ def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, 
             raise NoContactError(f"no contact: the approach {delta:.6g} mm does not exceed the smallest "
                                  f"undeformed distance {hmin:.6g} mm (gap {hmin - delta:.6g} mm)")
         args = (a_self, E_star, h_eff, delta, dA, tol, int(maxit), p_start, weighted)
+        pc = op.normal_preconditioner() if precondition else None
         p, u, k, eps = _solve_for_approach(op, pc, *args)
         if pc is not None and not eps < tol:  # safety net: the plain Polonsky-Keer iteration
             pc = None
@@ -295,6 +311,55 @@ def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, 
     return NormalSolution(pn=p, un=un, approach=delta, FN=FN, contact=act,
                           iterations=k, residual=eps, converged=bool(eps < tol), gap_residual=gap_res,
                           preconditioned=pc is not None, load=FN if weighted.unit else weighted.load(p) * dA)
+
+
+#: the force-prescribed iteration on a planar grid runs on a window around the start's support
+#: (p_start > 0, else that of :func:`initial_pressure`), grown by WINDOW_MARGIN elements on each
+#: side, its sides rounded up to multiples of WINDOW_STEP elements (so that the window shapes,
+#: and with them the operators and kernels built, stay few), where the operator has one
+#: (``window``: the half-space, invariant to translations) and the window holds at most
+#: WINDOW_FRACTION of the grid's elements; one product on the whole grid then checks the gap
+#: outside the window, and a contact that leaves it is solved again on the whole grid, started
+#: from the window's pressure (WINDOW_MARGIN < 0: no windows)
+WINDOW_MARGIN = 3
+WINDOW_STEP = 4
+WINDOW_FRACTION = 0.7
+
+
+def _window(op, p0: np.ndarray):
+    """(slices of the window, its operator) around the support of ``p0`` (:data:`WINDOW_MARGIN`),
+    or None where the whole grid is used."""
+    if WINDOW_MARGIN < 0:
+        return None
+    mx, my = p0.shape
+    pos = p0 > 0
+    rows, cols = np.flatnonzero(pos.any(axis=1)), np.flatnonzero(pos.any(axis=0))
+    if rows.size == 0:
+        return None
+    m, q = WINDOW_MARGIN, WINDOW_STEP
+    r0, c0 = max(int(rows[0]) - m, 0), max(int(cols[0]) - m, 0)
+    nx, ny = min(int(rows[-1]) + 1 + m, mx) - r0, min(int(cols[-1]) + 1 + m, my) - c0
+    nx, ny = min(mx, -(-nx // q) * q), min(my, -(-ny // q) * q)
+    if nx * ny > WINDOW_FRACTION * mx * my:
+        return None
+    wop = op.window(nx, ny)
+    if wop is None:
+        return None
+    r0, c0 = min(r0, mx - nx), min(c0, my - ny)
+    return (slice(r0, r0 + nx), slice(c0, c0 + ny)), wop
+
+
+def _force(op, precondition: bool, a_self, h, load, p0, tol, maxit, weighted, u=None):
+    """:func:`_pk_force` with ``op``'s preconditioner where ``precondition``, and the plain
+    Polonsky-Keer iteration as the safety net where the preconditioned one does not converge.
+    Returns (p, u, iterations, last relative change, the preconditioner used or None)."""
+    pc = op.normal_preconditioner() if precondition else None
+    p, u1, k, eps = _pk_force(op.apply_normal, pc, a_self, h, load, p0, tol, maxit, weighted, u=u)
+    if pc is not None and not eps < tol:
+        pc = None
+        p, u1, k2, eps = _pk_force(op.apply_normal, None, a_self, h, load, p0, tol, maxit, weighted, u=u)
+        k += k2
+    return p, u1, k, eps, pc
 
 
 def initial_pressure(h: np.ndarray, FN: float, E_star: float, dA: float) -> np.ndarray:
