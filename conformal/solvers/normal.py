@@ -321,9 +321,9 @@ def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, 
 #: WINDOW_FRACTION of the grid's elements; one product on the whole grid then checks the gap
 #: outside the window, and a contact that leaves it is solved again on the whole grid, started
 #: from the window's pressure (WINDOW_MARGIN < 0: no windows)
-WINDOW_MARGIN = 3
+WINDOW_MARGIN = 2
 WINDOW_STEP = 4
-WINDOW_FRACTION = 0.7
+WINDOW_FRACTION = 0.9
 
 
 def _window(op, p0: np.ndarray):
