@@ -321,7 +321,7 @@ def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, 
 #: WINDOW_FRACTION of the grid's elements; one product on the whole grid then checks the gap
 #: outside the window, and a contact that leaves it is solved again on the whole grid, started
 #: from the window's pressure (WINDOW_MARGIN < 0: no windows)
-WINDOW_MARGIN = 2
+WINDOW_MARGIN = 1
 WINDOW_STEP = 4
 WINDOW_FRACTION = 0.9
 
