@@ -325,8 +325,10 @@ def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, 
 #: outside the window, and a contact that leaves it is solved again on the whole grid, started
 #: from the window's pressure (WINDOW_MARGIN < 0: no windows).  Measured on the Manchester A-2.2
 #: sequence (54 normal solves, callgrind instructions of the whole sequence's second run against
-#: whole-grid solves): margin 3 / fraction 0.7 -1.4 %, 2 / 0.8 -2.8 %, 2 / 0.9 -2.9 %, 1 / 0.9
-#: -3.8 % (53 solves on windows, 6 fallbacks), 0 / 0.9 -3.0 % (more fallbacks)
+#: whole-grid solves, windows at the support's first row and column): margin 3 / fraction 0.7
+#: -1.4 %, 2 / 0.8 -2.8 %, 2 / 0.9 -2.9 %, 1 / 0.9 -3.8 %, 0 / 0.9 -3.0 % (more fallbacks); with
+#: the windows centred and nearly whole sides taken whole (as now), 1 / 0.9: -2.7 % (first run
+#: -2.5 %; 52 solves on windows, 6 fallbacks)
 WINDOW_MARGIN = 1
 WINDOW_STEP = 4
 WINDOW_FRACTION = 0.9
