@@ -801,9 +801,10 @@ def _overlap_start(pg: PatchGeometry) -> np.ndarray | None:
     return p if np.any(p > 0) else None
 
 
-def _contact_start(fields, pg: PatchGeometry, problem: ContactProblem, side: str = "right"):
+def _contact_start(fields, pg: PatchGeometry, problem: ContactProblem, side: str):
     """(pn, px, py) on the problem's grid from the nearest known field (px, py None from a normal
-    solve), or None."""
+    solve), or None; ``side``: the wheel's (a field of this position moves mirrored on a left wheel,
+    :func:`_moved_grid`)."""
     f = _nearest_field(fields, pg.patch.s_ref)
     if f is None:
         return None
@@ -1203,7 +1204,7 @@ def _general_passes(scene: Scene, pl: Placement, ratios, lowering, fields: list,
         z = st.z
         problems = problems_at(scene, pl, st, fns)
         if MODELS.accepts(scene.model.theory, WARM_START):   # the latest tractions of this patch start the iterations
-            problems = [replace(p, start=_contact_start(fields, pg, p)) for p, pg in zip(problems, st.patches)]
+            problems = [replace(p, start=_contact_start(fields, pg, p, pl.pair.side)) for p, pg in zip(problems, st.patches)]
         results = [solve_problem(p) for p in problems]
         fields = [PatchField(pg.patch.s_ref, r.field.grid, r.field.pn, r.field.px, r.field.py)
                   for pg, r in zip(st.patches, results) if r.field is not None]

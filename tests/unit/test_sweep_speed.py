@@ -263,7 +263,7 @@ def test_contact_solve_from_its_converged_solution_stops_at_once():
     assert first.converged and first.extra["normal_iterations"] > 2 and first.extra["tangential_iterations"] >= 1
     f = first.field
     fields = [wr.PatchField(pg.patch.s_ref, f.grid, f.pn, f.px, f.py)]
-    again = solve_problem(replace(problem, start=wr._contact_start(fields, pg, problem)))
+    again = solve_problem(replace(problem, start=wr._contact_start(fields, pg, problem, pl.pair.side)))
     assert again.converged
     assert again.extra["normal_iterations"] <= 2 and again.extra["tangential_iterations"] <= 2
     for k in ("FN", "FX", "FY"):
