@@ -1132,11 +1132,11 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
         pg = st.patches[0]
         c = math.cos(pg.patch.delta)
         problem = problems_at(scene, pl, st, [fn])[0]
-        problem = replace(problem, start=_contact_start(fields, pg, problem, pl.pair.side))
         loose = far and FIRST_PASS_TOL > problem.model.tol
         # a loose pass is never the answer: its forces, approach and tractions alone (lean)
-        r = solve_problem(replace(problem, model=replace(problem.model, tol=FIRST_PASS_TOL), lean=True)
-                          if loose else problem)
+        settings = dict(model=replace(problem.model, tol=FIRST_PASS_TOL), lean=True) if loose else {}
+        problem = replace(problem, start=_contact_start(fields, pg, problem, pl.pair.side), **settings)
+        r = solve_problem(problem)
         if r.field is not None:
             fields = [PatchField(pg.patch.s_ref, r.field.grid, r.field.pn, r.field.px, r.field.py, here=True)]
         if not (r.FN > 0 and r.approach > 0):
