@@ -305,8 +305,8 @@ def convergence_warnings(stages: Stages, tr: Tractions, tol: float, coupling: st
 def planar_result(problem, grid, h, op, stages: Stages) -> Result:
     """The :class:`Result` of a planar contact problem from its solved stages (totals as CONTACT
     prints them, module docstring).  A lean problem (``ContactProblem.lean``, a solve that is never
-    the answer) gets the totals and the field (pn, px, py, status, slip) alone: ``extra`` holds
-    ``lean`` True and no patches, totals of energy, iteration counts or warnings."""
+    the answer) gets the totals and the field (pn, px, py, status, slip) alone: an empty ``extra``
+    (no patches, totals of energy, iteration counts or warnings)."""
     dA = grid.area
     kin = problem.kinematics
     normal, tang = stages.normal, stages.tang
@@ -322,7 +322,7 @@ def planar_result(problem, grid, h, op, stages: Stages) -> Result:
                   iterations=stages.normal_iterations + stages.tangential_iterations,
                   residual=max(normal.residual, tr.residual), field=field)
     if problem.lean:
-        return Result(extra={"lean": True}, **common)
+        return Result(**common)
     patch_fn = _patches(grid, normal.pn, normal.contact)
     extra = solution_extra(problem, stages, tr, dA)
     extra.update({
