@@ -80,6 +80,11 @@ class ContactProblem:
     #: the previous pass of a wheel-rail balance; px, py may be None); the solution is the same to the
     #: solver's tolerance
     start: tuple[np.ndarray, np.ndarray | None, np.ndarray | None] | None = None
+    #: only the totals (FN, FX, FY, MZ, approach, pmax, a, b, creepages) and the traction fields pn, px,
+    #: py are wanted: a solve that is never the answer (a loose pass of a wheel-rail balance) skips
+    #: the displacements, the patches, CONTACT's totals of energy and the warnings; the numbers it
+    #: returns are those of the full solve.  A theory that does not read it computes everything
+    lean: bool = False
     line_contact: bool = False
     influence_file: Path | None = None
     rigid_slip: np.ndarray | None = None

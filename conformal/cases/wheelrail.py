@@ -1102,7 +1102,8 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
     approach agrees with the height within DZ_FINAL.  A pass costs one contact solve, started from
     the latest tractions of the patch (``fields``); a pass whose normal force comes from another
     geometry's ratio (the first, one after a search more than GEOMETRY_KEEP away) is solved to
-    FIRST_PASS_TOL and never the answer.
+    FIRST_PASS_TOL and never the answer (a lean solve, ``ContactProblem.lean``: the forces, the
+    approach and the tractions it passes on).
 
     Returns (state, results, problems, ratios, passes, fields, normal solves), or None when the contact leaves
     the one-patch case (another patch appears, the wheel lifts off, no convergence in
@@ -1131,9 +1132,11 @@ def one_patch_passes(scene: Scene, pl: Placement, st: PairState, fn: float, fiel
         pg = st.patches[0]
         c = math.cos(pg.patch.delta)
         problem = problems_at(scene, pl, st, [fn])[0]
-        problem = replace(problem, start=_contact_start(fields, pg, problem, pl.pair.side))
         loose = far and FIRST_PASS_TOL > problem.model.tol
-        r = solve_problem(replace(problem, model=replace(problem.model, tol=FIRST_PASS_TOL)) if loose else problem)
+        # a loose pass is never the answer: its forces, approach and tractions alone (lean)
+        settings = dict(model=replace(problem.model, tol=FIRST_PASS_TOL), lean=True) if loose else {}
+        problem = replace(problem, start=_contact_start(fields, pg, problem, pl.pair.side), **settings)
+        r = solve_problem(problem)
         if r.field is not None:
             fields = [PatchField(pg.patch.s_ref, r.field.grid, r.field.pn, r.field.px, r.field.py, here=True)]
         if not (r.FN > 0 and r.approach > 0):

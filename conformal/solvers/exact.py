@@ -119,7 +119,8 @@ def maxout_option(model) -> int:
 
 def solve_tangential_stage(op, grid, pn, problem, extra_u, tol, maxit, p_start):
     """The tangential problem of a planar contact problem for the pressure ``pn`` (one stage of
-    :func:`alternate`), with the problem's kinematics and friction."""
+    :func:`alternate`), with the problem's kinematics and friction (without the displacements
+    u_x, u_y for a lean problem, ``ContactProblem.lean``)."""
     from conformal.solvers.tangential import solve_tangential
 
     k, f = problem.kinematics, problem.friction
@@ -130,7 +131,7 @@ def solve_tangential_stage(op, grid, pn, problem, extra_u, tol, maxit, p_start):
     return solve_tangential(op, grid, pn_bound, xi=k.xi, eta=k.eta, phi=k.phi, mu_static=f.mu_static,
                             mu_kinetic=f.mu_kinetic, rolling=k.rolling, fx_rel=k.fx_rel, fy_rel=k.fy_rel,
                             extra_u=extra_u, tol=tol, maxit=maxit, p_start=p_start,
-                            rigid_slip=problem.info.get("rigid_slip"))
+                            rigid_slip=problem.info.get("rigid_slip"), displacements=not problem.lean)
 
 
 @dataclass(frozen=True, eq=False)
@@ -228,21 +229,22 @@ def solve(problem: ContactProblem) -> Result:
 class Tractions:
     """Per-element arrays of a solved problem (grid shape): tractions, slip, displacement
     differences (u_n with the coupling A_nt p_t of the final traction), status, and the tangential
-    residual and convergence (0 and True without a tangential problem)."""
+    residual and convergence (0 and True without a tangential problem).  Lean (``ContactProblem.lean``):
+    ux, uy None where the tangential solve skipped them, un without the coupling A_nt p_t."""
 
     px: np.ndarray
     py: np.ndarray
     sx: np.ndarray
     sy: np.ndarray
     un: np.ndarray
-    ux: np.ndarray
-    uy: np.ndarray
+    ux: np.ndarray | None
+    uy: np.ndarray | None
     status: np.ndarray
     residual: float
     converged: bool
 
 
-def tractions(op, stages: Stages) -> Tractions:
+def tractions(op, stages: Stages, lean: bool = False) -> Tractions:
     normal, tang = stages.normal, stages.tang
     if tang is None:  # frictionless / no creepage and no coupling: no tangential traction, no slip
         zeros = np.zeros(normal.pn.shape)
@@ -254,7 +256,7 @@ def tractions(op, stages: Stages) -> Tractions:
         status = np.where(normal.contact, tang.status, EXTERIOR).astype(np.int8)
         t_res, t_conv = float(tang.residual), bool(tang.converged)
     un = normal.un
-    if op.coupled and tang is not None:  # the coupling A_nt p_t of the final tangential traction
+    if op.coupled and tang is not None and not lean:  # the coupling A_nt p_t of the final tangential traction
         un = op.apply_normal(normal.pn) + op.apply_coupling_nt(px, py)
     return Tractions(px, py, sx, sy, un, ux, uy, status, t_res, t_conv)
 
@@ -302,17 +304,25 @@ def convergence_warnings(stages: Stages, tr: Tractions, tol: float, coupling: st
 
 def planar_result(problem, grid, h, op, stages: Stages) -> Result:
     """The :class:`Result` of a planar contact problem from its solved stages (totals as CONTACT
-    prints them, module docstring)."""
+    prints them, module docstring).  A lean problem (``ContactProblem.lean``, a solve that is never
+    the answer) gets the totals and the field (pn, px, py, status, slip) alone: an empty ``extra``
+    (no patches, totals of energy, iteration counts or warnings)."""
     dA = grid.area
     kin = problem.kinematics
     normal, tang = stages.normal, stages.tang
-    tr = tractions(op, stages)
+    tr = tractions(op, stages, lean=problem.lean)
     xi, eta = (kin.xi, kin.eta) if tang is None else (tang.xi, tang.eta)
     field = TractionField(grid=grid, pn=normal.pn, px=tr.px, py=tr.py, status=tr.status, sx=tr.sx, sy=tr.sy,
                           un=tr.un, ux=tr.ux, uy=tr.uy)
     FN, FX, FY, MZ = field.totals()
     rows, cols = normal.contact.any(axis=1), normal.contact.any(axis=0)   # for the extent and the edges
     a, b = _extent(grid, rows, cols)
+    common = dict(theory="exact", FN=FN, FX=FX, FY=FY, MZ=MZ, a=a, b=b, pmax=normal.pmax, approach=normal.approach,
+                  xi=xi, eta=eta, phi=kin.phi, converged=bool(normal.converged and tr.converged and stages.converged),
+                  iterations=stages.normal_iterations + stages.tangential_iterations,
+                  residual=max(normal.residual, tr.residual), field=field)
+    if problem.lean:
+        return Result(**common)
     patch_fn = _patches(grid, normal.pn, normal.contact)
     extra = solution_extra(problem, stages, tr, dA)
     extra.update({
@@ -336,8 +346,4 @@ def planar_result(problem, grid, h, op, stages: Stages) -> Result:
     if problem.hertz is not None:
         hz = problem.hertz
         extra["hertz"] = {"a": hz.a, "b": hz.b, "pmax": hz.pmax, "approach": hz.approach, "FN": hz.FN}
-    return Result(theory="exact", FN=FN, FX=FX, FY=FY, MZ=MZ, a=a, b=b, pmax=normal.pmax,
-                  approach=normal.approach, xi=xi, eta=eta, phi=kin.phi,
-                  converged=bool(normal.converged and tr.converged and stages.converged),
-                  iterations=stages.normal_iterations + stages.tangential_iterations,
-                  residual=max(normal.residual, tr.residual), field=field, extra=extra)
+    return Result(extra=extra, **common)

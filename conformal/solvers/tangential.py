@@ -197,7 +197,8 @@ class TangentialSolution:
     px, py : tangential tractions on body 1 (N/mm²); zero outside the contact (p_n = 0).
     sx, sy : slip in contact elements (steady rolling: relative slip velocity s/V, -; shift: slip
         distance, mm); zero in adhesion and outside.
-    ux, uy : tangential displacement difference A p (+ extra_u) at the element centres (mm).
+    ux, uy : tangential displacement difference A p (+ extra_u) at the element centres (mm); None
+        where the solve was asked for no displacements.
     status : EXTERIOR / ADHESION / SLIP (conformal.result).
     xi, eta : the creepages (shifts) used: solved where fx_rel / fy_rel were prescribed.
     iterations : Newton iterations; residual : max |F| (the friction-law residual in traction
@@ -212,8 +213,8 @@ class TangentialSolution:
     py: np.ndarray
     sx: np.ndarray
     sy: np.ndarray
-    ux: np.ndarray
-    uy: np.ndarray
+    ux: np.ndarray | None
+    uy: np.ndarray | None
     status: np.ndarray
     xi: float
     eta: float
@@ -927,7 +928,8 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
                      extra_u: np.ndarray | None = None, tol: float = 1e-6, maxit: int = 100,
                      p_start: np.ndarray | None = None,
                      rigid_slip: np.ndarray | None = None,
-                     creep_weight: np.ndarray | None = None) -> TangentialSolution:
+                     creep_weight: np.ndarray | None = None,
+                     displacements: bool = True) -> TangentialSolution:
     """Solve the tangential problem (module docstring) for the pressure ``pn`` on ``grid``.
 
     Parameters
@@ -952,6 +954,8 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
         included (the fraction of a transient step an element spent in contact, CONTACT's
         leading-edge correction: conformal.solvers.history.leading_edge_factor), or None (1).  A
         prescribed force is then found by the root search on the creepage (one force at a time).
+    displacements : False: ux, uy are left None (a solve whose answer is not reported, e.g. a loose
+        pass of a wheel-rail balance, skips the influence products of the final displacements).
 
     Returns
     -------
@@ -1014,13 +1018,15 @@ def solve_tangential(op, grid, pn: np.ndarray, *, xi: float, eta: float, phi: fl
             w = w + eu
 
     def finish(px, py, sx, sy, status, xi_, eta_, its, res, conv, msg, nprod, L=None):
-        if L is None:
+        if not displacements:
+            ux = uy = None
+        elif L is None:
             (ux, uy), nprod = op.apply_tangential(px, py), nprod + 1
         else:
             before = L.products
             ux, uy = L.grid_u(px, py)
             nprod += L.products - before
-        if extra_u is not None:
+        if extra_u is not None and displacements:
             ux, uy = ux + extra_u[0], uy + extra_u[1]
         return TangentialSolution(px=px, py=py, sx=sx, sy=sy, ux=ux, uy=uy, status=status.astype(np.int8),
                                   xi=float(xi_), eta=float(eta_), iterations=its, residual=float(res),
