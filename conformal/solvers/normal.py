@@ -73,8 +73,9 @@ PRECONDITION_WARM_FROM = 400
 #: tol 1e-7): 34 instead of 49 iterations, FN the same to 1e-8
 INEXACT_SECANT = 0.01
 
-#: the force-prescribed iteration's products A p in single precision where the operator has them
-#: (``normal_product32``, the planar half-space; studies switch it off to compare) ...
+#: the preconditioned force-prescribed iteration's products A p in single precision where the
+#: operator has them (``normal_product32``, the planar half-space; :func:`_product32`; studies
+#: switch it off to compare) ...
 SINGLE_PRECISION = True
 #: ... while the pressure changes by at least this much per iteration (sum |dp| / sum p), and to
 #: the end of a solve whose tolerance is at least this (it stops on single-precision products);
@@ -373,10 +374,13 @@ def _window(op, p0: np.ndarray):
     return (slice(r0, r0 + nx), slice(c0, c0 + ny)), wop
 
 
-def _product32(op):
-    """``op``'s single-precision normal product where it has one and :data:`SINGLE_PRECISION`, else
-    None (operators without ``normal_product32``, e.g. those of curved grids, run in double)."""
-    make = getattr(op, "normal_product32", None) if SINGLE_PRECISION else None
+def _product32(op, pc):
+    """``op``'s single-precision normal product for the preconditioned iteration (``pc`` not None)
+    where the operator has one and :data:`SINGLE_PRECISION`, else None.  Operators without
+    ``normal_product32`` (e.g. those of curved grids) run in double, and so does the plain
+    iteration, so that planar grids keep the arithmetic of the curved strips without a
+    preconditioner (the planar limit of the conformal theory, as for :data:`PRECONDITION_FROM`)."""
+    make = getattr(op, "normal_product32", None) if SINGLE_PRECISION and pc is not None else None
     return make() if make is not None else None
 
 
@@ -386,13 +390,12 @@ def _force(op, precondition: bool, a_self, h, load, p0, tol, maxit, weighted, u=
     ``u_exact``: see :func:`_pk_force`.
     Returns (p, u, iterations, last relative change, the preconditioner used or None)."""
     pc = op.normal_preconditioner() if precondition else None
-    A32 = _product32(op)
-    p, u1, k, eps = _pk_force(op.apply_normal, pc, a_self, h, load, p0, tol, maxit, weighted, u=u, A32=A32,
-                              u_exact=u_exact)
+    p, u1, k, eps = _pk_force(op.apply_normal, pc, a_self, h, load, p0, tol, maxit, weighted, u=u,
+                              A32=_product32(op, pc), u_exact=u_exact)
     if pc is not None and not eps < tol:
         pc = None
         p, u1, k2, eps = _pk_force(op.apply_normal, None, a_self, h, load, p0, tol, maxit, weighted, u=u,
-                                   A32=A32, u_exact=u_exact)
+                                   u_exact=u_exact)
         k += k2
     return p, u1, k, eps, pc
 
@@ -440,7 +443,7 @@ def _solve_for_approach(op, pc, a_self, E_star, h, delta, dA, tol, maxit, p_star
     total, mismatch = 0, math.inf
     inner_tol = 0.1 * tol
     u = None      # A p of the last inner solve: the next one starts from both, rescaled (A is linear)
-    A32 = _product32(op)
+    A32 = _product32(op, pc)
     for _ in range(60):
         if p is None or p.sum() <= 0:
             p, u = np.full(h.shape, FN / (dA * h.size)), None

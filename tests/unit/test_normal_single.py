@@ -1,6 +1,7 @@
-"""The force-prescribed normal iteration with single-precision products far from its tolerance
-(conformal.solvers.normal: SINGLE_PRECISION, SINGLE_ABOVE; HalfSpaceInfluence.normal_product32)
-against the same iteration in double precision throughout."""
+"""The preconditioned force-prescribed normal iteration with single-precision products far from
+its tolerance (conformal.solvers.normal: SINGLE_PRECISION, SINGLE_ABOVE;
+HalfSpaceInfluence.normal_product32) against the same iteration in double precision throughout,
+and the plain iteration, which stays in double precision."""
 import numpy as np
 import pytest
 
@@ -30,7 +31,7 @@ def _solve(monkeypatch, single: bool, tol: float, n: int = 41, above: float | No
         monkeypatch.setattr(normal, "SINGLE_ABOVE", above)
     hz, g, h = _hertz(n)
     op, _ = build_operator(g, STEEL)
-    return op, solve_normal(op, g, h, normal_force=FN, tol=tol, material=STEEL)
+    return op, solve_normal(op, g, h, normal_force=FN, tol=tol, material=STEEL, precondition=True)
 
 
 def test_normal_product32_is_the_double_product_to_float32_rounding():
@@ -90,3 +91,11 @@ def test_single_products_only_far_from_the_tolerance(monkeypatch):
     assert sol.converged
     first_double = calls.index("double")
     assert first_double > 0 and "single" not in calls[first_double:]
+
+
+def test_the_plain_iteration_stays_in_double_precision(monkeypatch):
+    """Without the preconditioner the planar grid keeps the arithmetic of the curved strips."""
+    monkeypatch.setattr(HalfSpaceInfluence, "normal_product32", lambda self: pytest.fail("single product"))
+    hz, g, h = _hertz()
+    sol = solve_normal(None, g, h, normal_force=FN, tol=1e-6, material=STEEL, precondition=False)
+    assert sol.converged and not sol.preconditioned
