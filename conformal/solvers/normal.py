@@ -73,6 +73,18 @@ PRECONDITION_WARM_FROM = 400
 #: tol 1e-7): 34 instead of 49 iterations, FN the same to 1e-8
 INEXACT_SECANT = 0.01
 
+#: the preconditioned force-prescribed iteration's products A p in single precision where the
+#: operator has them (``normal_product32``, the planar half-space; :func:`_product32`; studies
+#: switch it off to compare) ...
+SINGLE_PRECISION = True
+#: ... while the pressure changes by at least this much per iteration (sum |dp| / sum p), and to
+#: the end of a solve whose tolerance is at least this (it stops on single-precision products);
+#: below it the products are in double precision, from u = A p computed anew.  The float32
+#: product's relative error is about 3e-7 (padded patch grids of 24 x 16 to 56 x 36); the pressure
+#: of an iteration run to 1e-13 on it differs from the double one by 5e-7 (40 x 28, 60 x 40) to
+#: 1.6e-6 (100 x 100) in sum |dp| / sum p, with the same contact set: 1/60 of this threshold or less
+SINGLE_ABOVE = 1e-4
+
 
 def warm_precondition(grid, p_start) -> bool | None:
     """The ``precondition`` argument of :func:`solve_normal` for a start from a neighbouring
@@ -266,7 +278,7 @@ def solve_normal(op: InfluenceOperator | None, grid: PlanarGrid, h: np.ndarray, 
         if win is not None:   # the iteration on a window around the start's support (WINDOW_FRACTION)
             sl, wop = win
             pw, _, k, eps, pcw = _force(wop, precondition, a_self, h_eff[sl], FN / dA, p0[sl], tol,
-                                        int(maxit), weighted)
+                                        int(maxit), weighted, u_exact=False)
             p = np.zeros(grid.shape)
             p[sl] = pw
             u = op.apply_normal(p)     # one product on the whole grid: the gap outside the window
@@ -362,15 +374,28 @@ def _window(op, p0: np.ndarray):
     return (slice(r0, r0 + nx), slice(c0, c0 + ny)), wop
 
 
-def _force(op, precondition: bool, a_self, h, load, p0, tol, maxit, weighted, u=None):
+def _product32(op, pc):
+    """``op``'s single-precision normal product for the preconditioned iteration (``pc`` not None)
+    where the operator has one and :data:`SINGLE_PRECISION`, else None.  Operators without
+    ``normal_product32`` (e.g. those of curved grids) run in double, and so does the plain
+    iteration, so that planar grids keep the arithmetic of the curved strips without a
+    preconditioner (the planar limit of the conformal theory, as for :data:`PRECONDITION_FROM`)."""
+    make = getattr(op, "normal_product32", None) if SINGLE_PRECISION and pc is not None else None
+    return make() if make is not None else None
+
+
+def _force(op, precondition: bool, a_self, h, load, p0, tol, maxit, weighted, u=None, u_exact=True):
     """:func:`_pk_force` with ``op``'s preconditioner where ``precondition``, and the plain
-    Polonsky-Keer iteration as the safety net where the preconditioned one does not converge.
+    Polonsky-Keer iteration as the safety net where the preconditioned one does not converge;
+    ``u_exact``: see :func:`_pk_force`.
     Returns (p, u, iterations, last relative change, the preconditioner used or None)."""
     pc = op.normal_preconditioner() if precondition else None
-    p, u1, k, eps = _pk_force(op.apply_normal, pc, a_self, h, load, p0, tol, maxit, weighted, u=u)
+    p, u1, k, eps = _pk_force(op.apply_normal, pc, a_self, h, load, p0, tol, maxit, weighted, u=u,
+                              A32=_product32(op, pc), u_exact=u_exact)
     if pc is not None and not eps < tol:
         pc = None
-        p, u1, k2, eps = _pk_force(op.apply_normal, None, a_self, h, load, p0, tol, maxit, weighted, u=u)
+        p, u1, k2, eps = _pk_force(op.apply_normal, None, a_self, h, load, p0, tol, maxit, weighted, u=u,
+                                   u_exact=u_exact)
         k += k2
     return p, u1, k, eps, pc
 
@@ -418,6 +443,7 @@ def _solve_for_approach(op, pc, a_self, E_star, h, delta, dA, tol, maxit, p_star
     total, mismatch = 0, math.inf
     inner_tol = 0.1 * tol
     u = None      # A p of the last inner solve: the next one starts from both, rescaled (A is linear)
+    A32 = _product32(op, pc)
     for _ in range(60):
         if p is None or p.sum() <= 0:
             p, u = np.full(h.shape, FN / (dA * h.size)), None
@@ -425,13 +451,14 @@ def _solve_for_approach(op, pc, a_self, E_star, h, delta, dA, tol, maxit, p_star
         p = p * c
         loose = max(inner_tol, min(INEXACT_SECANT * mismatch, 1e-3)) if INEXACT_SECANT else inner_tol
         p, u, k, eps = _pk_force(op.apply_normal, pc, a_self, h, FN / dA, p, loose, maxit, weighted,
-                                 u=None if u is None else u * c)
+                                 u=None if u is None else u * c, A32=A32)
         total += k
         act = p > 0
         d = weighted.approach(u + h, act) - hmin
         mismatch = abs(d - d_target) / d_target
         if loose > inner_tol and mismatch < 10 * tol:   # nearly there: solve the same force tightly
-            p, u, k, eps = _pk_force(op.apply_normal, pc, a_self, h, FN / dA, p, inner_tol, maxit, weighted, u=u)
+            p, u, k, eps = _pk_force(op.apply_normal, pc, a_self, h, FN / dA, p, inner_tol, maxit, weighted, u=u,
+                                     A32=A32)
             total += k
             d = weighted.approach(u + h, p > 0) - hmin
             mismatch = abs(d - d_target) / d_target
@@ -472,7 +499,7 @@ def _direction(ga, act, actf, wa, ww, weighted, pc):
     return z
 
 
-def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
+def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None, A32=None, u_exact=True):
     """Polonsky-Keer with the load sum(a w p) = load prescribed (load = FN / dA_ref; planar:
     sum(p) = FN / dxdy).  On the contact set the gap is g - lambda w with lambda the weighted mean
     of g (:class:`_Weighted`); inner products carry the relative areas a.
@@ -485,11 +512,21 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
     a sum over a field that is already zero outside the contact set equals its masked sum.  The
     displacement u is kept up to date by the step (u - tau r) s where the contact set keeps its
     elements and the pressure stays positive, and recomputed (A p) where it changes; it is returned
-    as it is (it differs from a product A p of the final pressure by rounding only)."""
+    as it is (it differs from a product A p of the final pressure by rounding only).
+
+    ``A32``: A in single precision (float64 in and out), used for the products while the pressure
+    changes by at least :data:`SINGLE_ABOVE` per iteration; then u = A p is computed anew in double
+    and the iteration goes on in double precision, so that a solve to a tolerance below
+    SINGLE_ABOVE stops on double-precision products only.  A solve to a tolerance of at least
+    SINGLE_ABOVE stops on the single-precision ones (their error, about 1e-6 of the pressure, is a
+    hundredth of its tolerance); its u is then computed anew in double where ``u_exact`` (a
+    caller that computes A p itself passes False and gets the single-precision u)."""
     weighted = weighted or _Weighted()
     a, w = weighted.a, weighted.w
     plain = weighted.unit
-    u = A(p) if u is None else u
+    single = A32 is not None
+    prod = A32 if single else A     # the products of this iteration
+    u = prod(p) if u is None else u
     t = None
     G_old, restart = 1.0, True
     eps, k = math.inf, 0
@@ -502,7 +539,7 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
             hw = h / w
             p = np.where(hw == hw.min(), 1.0, 0.0)
             p *= load / weighted.load(p)
-            u = A(p)
+            u = prod(p)
             continue
         g = u + h
         actf = act.astype(float)
@@ -528,7 +565,7 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
             if not kept:
                 t *= actf
         G_old = G
-        r = A(t)
+        r = prod(t)
         if plain:
             rt = _dot(r, t) - _dot(r, actf) / ww * float(_sum(t))
         else:
@@ -544,7 +581,7 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
                 p = p.copy()
                 p[overlap] = -(g[overlap] - lam) / (a_self if np.isscalar(a_self) else a_self[overlap])
                 p *= load / weighted.load(p)
-                u = A(p)
+                u = prod(p)
                 restart, eps = True, math.inf
                 continue
             eps = 0.0 if G == 0.0 else eps
@@ -567,7 +604,7 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
         s = load / (float(_sum(p_new)) if plain else weighted.load(p_new))
         p_new *= s
         if changed:
-            u = A(p_new)
+            u = prod(p_new)
         else:
             ur = np.multiply(r, tau)
             np.subtract(u, ur, out=ur)    # (u - tau r) s
@@ -577,6 +614,11 @@ def _pk_force(A, pc, a_self, h, load, p, tol, maxit, weighted=None, u=None):
         np.abs(dp, out=dp)
         eps = (float(_sum(dp)) / load) if plain else weighted.norm(dp) / weighted.norm(p_new)
         p = p_new
-        if eps < tol:
+        if eps < tol and not (single and tol < SINGLE_ABOVE):
             break
+        if single and eps < SINGLE_ABOVE:   # near the answer: double-precision products from here on
+            single, prod = False, A
+            u = A(p)
+    if single and u_exact:   # stopped on single-precision products: u = A p in double
+        u = A(p)
     return p, u, k, eps

@@ -112,7 +112,9 @@ def test_flat_punch_boussinesq():
 def test_two_bumps_give_two_patches():
     """Two equal spheres 12 mm apart: two patches of FN/2 each; the approach is Hertz's for FN/2
     plus the far-field displacement (1-nu)/(pi G) (FN/2)/d of the other patch (3.6 % of it).
-    Measured: within 0.2 % on 0.2 mm elements."""
+    Measured: within 0.2 % on 0.2 mm elements.  The two forces are equal to the solver's
+    tolerance (1e-6), not to rounding: the first iterations' single-precision products are not
+    mirror-symmetric to rounding (measured 1.2e-8 apart)."""
     L, n = 12.0, 60
     g = PlanarGrid.centred(2 * n, n, L / n, L / n)
     X, Y = g.mesh()
@@ -122,7 +124,7 @@ def test_two_bumps_give_two_patches():
     labels, k = ndimage.label(s.contact)
     assert k == 2
     forces = ndimage.sum_labels(s.pn, labels, [1, 2]) * g.area
-    np.testing.assert_allclose(forces, 10.0, rtol=1e-9)
+    np.testing.assert_allclose(forces, 10.0, rtol=1e-7)
     hz = hertz_from_curvatures(A, A, PE, normal_force=10.0)
     far = (1 - PE.nu) / (math.pi * PE.G) * 10.0 / L
     assert s.approach == pytest.approx(hz.approach + far, rel=3e-3)
