@@ -131,10 +131,10 @@ def first_touch(pair: WheelRailPair, top: RailTop | None = None, *, step: float 
 
 #: mm of wheel profile between the locus samples of the first look of :func:`touches_after`: where
 #: the bounds of that coarse locus already show the wheel touching after z, the finer one is not
-#: sampled (a tenth of its samples).  Its bounds hold the searched height on the Manchester A-2.2
+#: sampled (a fifth of its samples).  Its bounds hold the searched height on the Manchester A-2.2
 #: positions of both wheels, the tread -> flange sweep and the flange-climbing jump
 #: (tests/unit/test_touch_shortcuts.py), the lower one at most 0.046 mm below it (flange: the rail
-#: top's chords) and 2e-4 .. 8e-4 mm on the other wheel's treads, which touch 0.0015 mm and more
+#: top's chords) and 2e-4 .. 9e-4 mm on the other wheel's treads, which touch 0.0017 mm and more
 #: after the right wheel at 0.5 .. 10 mm: all decided here
 AFTER_STEP = 0.5
 
