@@ -129,18 +129,33 @@ def first_touch(pair: WheelRailPair, top: RailTop | None = None, *, step: float 
     return z
 
 
+#: mm of wheel profile between the locus samples of the first look of :func:`touches_after`: where
+#: the bounds of that coarse locus already show the wheel touching after z, the finer one is not
+#: sampled (a fifth of its samples).  Its bounds hold the searched height on the Manchester A-2.2
+#: positions of both wheels, the tread -> flange sweep and the flange-climbing jump
+#: (tests/unit/test_touch_shortcuts.py), the lower one at most 0.046 mm below it (flange: the rail
+#: top's chords) and 2e-4 .. 9e-4 mm on the other wheel's treads, which touch 0.0017 mm and more
+#: after the right wheel at 0.5 .. 10 mm: all decided here
+AFTER_STEP = 0.5
+
+
 def touches_after(pair: WheelRailPair, z: float, top: RailTop | None = None, *, step: float = TOUCH_STEP) -> bool:
     """Whether the wheel of ``pair`` provably first touches its rail below the height z (side frame,
     z down, mm), i.e. after a wheel that touches at z, from its contact locus sampled every ``step``
     mm alone (:func:`~conformal.geometry.search.touch_bounds`: the lower bound of its touching height
     more than 1e-9 mm beyond z, and the touch away from the profiles' ends, where
-    :func:`first_touch` would refuse the position).  False where it cannot tell: then
-    :func:`first_touch` gives the height (a wheelset's first touch is min(z, that height))."""
-    try:
-        z_low, _, clear = touch_bounds(pair, top, step=step)
-    except (InputError, NoContactError, ConvergenceError):
-        return False
-    return clear and z_low > z + 1e-9
+    :func:`first_touch` would refuse the position).  The locus is first sampled every AFTER_STEP mm
+    (where ``step`` is finer): its bounds decide where they show the touch after z, else those of
+    ``step``.  False where it cannot tell: then :func:`first_touch` gives the height (a wheelset's
+    first touch is min(z, that height))."""
+    for st in (AFTER_STEP, step) if step < AFTER_STEP else (step,):
+        try:
+            z_low, _, clear = touch_bounds(pair, top, step=st)
+        except (InputError, NoContactError, ConvergenceError):
+            continue
+        if clear and z_low > z + 1e-9:
+            return True
+    return False
 
 
 def wheelset_roll(geo: WheelRailGeometry, base_dir: str | Path = ".", lateral_shift: float | None = None,

@@ -92,6 +92,29 @@ def test_touch_bounds_bracket_the_height(searched):
         assert hi - lo < (1e-4 if abs(sr.contacts[0].delta) < 0.2 else 5e-3), name
 
 
+def test_coarse_bounds_of_the_other_wheel_hold_the_height(searched, monkeypatch):
+    """The bounds of the locus sampled every AFTER_STEP mm (touches_after's first look) hold the
+    searched height on every pair (tread, flange, the switch, the jump, the two-point contact);
+    touches_after decides as the TOUCH_STEP bounds alone do on the Manchester left wheels (True at
+    0.5 .. 10 mm), there from the coarse locus alone (no TOUCH_STEP locus sampled)."""
+    from conformal.geometry import wheelrail as gw
+    for name, pair, z, _ in searched:
+        lo, hi, clear = gs.touch_bounds(pair, step=gw.AFTER_STEP)
+        assert lo <= z <= hi and clear, name
+    z = {name: z for name, _, z, _ in searched}
+    pairs = dict(PAIRS)
+    steps = []
+    bounds = gs.touch_bounds
+    monkeypatch.setattr(gw, "touch_bounds", lambda *a, **k: steps.append(k["step"]) or bounds(*a, **k))
+    for c in CASES:
+        y = c["inputs"]["Y_WS_mm"]
+        left, z_r = pairs[f"left {y:g}"], z[f"right {y:g}"]
+        n = len(steps)
+        lo, _, clear = bounds(left, step=gs.TOUCH_STEP)
+        assert touches_after(left, z_r) == (clear and lo > z_r + 1e-9), y
+        assert steps[n:] == ([gw.AFTER_STEP, gs.TOUCH_STEP] if y == 0.0 else [gw.AFTER_STEP]), y
+
+
 def test_the_other_wheel_is_searched_only_where_it_can_touch_first(searched):
     """touches_after is True only where the searched height of the other wheel lies below the
     right wheel's (0.0017 mm and more on the Manchester positions 0.5 .. 10 mm), False at 0 mm (both
