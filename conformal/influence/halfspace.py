@@ -299,6 +299,16 @@ class HalfSpaceInfluence:
         """The (Mx, My//2+1) real-to-complex transform of :meth:`kernel`."""
         return self._kernel_hat(i, j)
 
+    def real_kernel_hat(self, i: int, j: int) -> np.ndarray | None:
+        """:meth:`kernel_hat` as a real array where it is real: the one :meth:`_symmetric_hat`
+        computed, else the real part of the rfft2's where its imaginary part is rounding (at most
+        1e-9 of its largest value), else None.  The factors of the single-precision products."""
+        hat = self._kernel_hat(i, j)
+        re = self._fhat.get(("real", i, j))
+        if re is not None:
+            return re
+        return hat.real if ffts.imag_negligible(hat, 1e-9) else None
+
     # -------------------------------------------------------------- products
     def _forward(self, p: np.ndarray) -> np.ndarray:
         """Zero-padded rfft2 of p (..., mx, my): only the mx non-zero rows are transformed along y,
@@ -426,15 +436,18 @@ class HalfSpaceInfluence:
 
         return apply
 
-    def normal_product32(self) -> Callable[[np.ndarray], np.ndarray]:
+    def normal_product32(self) -> Callable[[np.ndarray], np.ndarray] | None:
         """u_n = A_zz p_n in single precision (:func:`conformal.influence.fft.padded_product32`,
         relative error about 3e-7 on the patch grids of a wheel-rail sweep), float64 in and out,
         for the iterations of the normal problem far from their tolerance
         (:mod:`conformal.solvers.normal`); built once per operator.  A_zz is even in x and y, so its
-        transform is real."""
+        transform is real (:meth:`real_kernel_hat`; None where it is not)."""
         if "normal32" not in self._fhat:
-            self._fhat["normal32"] = ffts.doubled(self._kernel_hat(Z, Z).real.astype(np.float32))
+            re = self.real_kernel_hat(Z, Z)
+            self._fhat["normal32"] = None if re is None else ffts.doubled(re.astype(np.float32))
         k2, shape = self._fhat["normal32"], self._fhat["shape"]
+        if k2 is None:
+            return None
 
         def apply(pn: np.ndarray) -> np.ndarray:
             return ffts.padded_product32(pn.astype(np.float32), k2, shape).astype(np.float64)
@@ -686,14 +699,13 @@ class TangentialProduct32:
     def __init__(self, op: HalfSpaceInfluence):
         self.mx, self.my = op.mx, op.my
         self.Mx, self.My = op.padded_shape
-        k = [op.kernel_hat(i, j) for i, j in ((X, X), (X, Y), (Y, Y))]
+        pairs = ((X, X), (X, Y), (Y, Y))
         # the half-space kernels are even-even (xx, yy) or odd-odd (xy): real transforms, and a
-        # real factor halves the cost of the products in Fourier space (real by construction
-        # where the operator computed them as such, :meth:`HalfSpaceInfluence._symmetric_hat`)
-        re = [op._fhat.get(("real", i, j)) for i, j in ((X, X), (X, Y), (Y, Y))]
-        real = all(v is not None for v in re) or all(ffts.imag_negligible(v, 1e-9) for v in k)
-        self.k = [(r if r is not None else v.real).astype(np.float32) if real else v.astype(np.complex64)
-                  for v, r in zip(k, re)]
+        # real factor halves the cost of the products in Fourier space
+        re = [op.real_kernel_hat(i, j) for i, j in pairs]
+        real = all(r is not None for r in re)
+        self.k = [r.astype(np.float32) for r in re] if real else \
+            [op.kernel_hat(i, j).astype(np.complex64) for i, j in pairs]
         half = self.My // 2 + 1
         self.block = BLOCK_COLUMNS if 2 * self.Mx * half * 8 > BLOCK_FROM_BYTES else half
         # unblocked, real kernels: each value repeated for the real and imaginary part, so that the
