@@ -577,6 +577,9 @@ def main(argv=None) -> int:
                 r["warm_cpu_s"] = mbench_sequence(what["quick"])["cpu_s"]
             print(json.dumps(r, default=str))
             return 0
+        if what["kind"] == "perfc_shift":   # one run in a fresh process (studies/contact_side_by_side.py)
+            print(json.dumps(perfc_shift(1), default=str))
+            return 0
         r = fe_pair(what["mx"], what["ms"], what["workers"]) if what["kind"] == "pair" else \
             fe_scene(what["scene"], what.get("influence_fe", False))
         print(json.dumps(r, default=str))
