@@ -106,7 +106,6 @@ class Plan:
 def plan(parsed: ParsedDeck) -> Plan:
     """Map every case onto the project's problems; collect the reasons for the others."""
     from conformal.contact_inp.solve1 import scene_of
-    from conformal.contact_inp.solve3 import problem_of, same_geometry
     from conformal.contact_inp.module3 import Unsupported
 
     base = parsed.path.parent
@@ -123,14 +122,20 @@ def plan(parsed: ParsedDeck) -> Plan:
             prob = None
             if reason is None:
                 try:
-                    prob = scene_of(c, base, memo=heights) if getattr(c, "module", 3) == 1 else problem_of(c, base)
                     if getattr(c, "module", 3) == 1:
+                        prob = scene_of(c, base, memo=heights)
                         _check_profiles(prob, base)
+                    else:     # module 3 only: its solver path (conformal.contact_inp.solve3) loads here
+                        from conformal.contact_inp.solve3 import problem_of
+
+                        prob = problem_of(c, base)
                 except Unsupported as exc:
                     reason = str(exc).split("not supported: ", 1)[-1]
                 except InputError as exc:     # e.g. nu = 0.5, which the project's materials refuse
                     reason = str(exc)
-            if reason is None and k > 0:
+            if reason is None and k > 0:      # a module-3 sequence (module-1 chains have one case)
+                from conformal.contact_inp.solve3 import same_geometry
+
                 p0 = items[0][1]
                 if p0.info or prob.info or p0.kinematics.direction != 1 or not same_geometry(p0, prob):
                     reason = ("a sequence (P = 0) whose grid, material or friction changes, or with C = 9, E = 9 "
@@ -158,11 +163,9 @@ def solve_deck(parsed: ParsedDeck, cases=None):
     """Yield one JSON-ready dict per solved case, in the order of the deck; ``cases``: only these
     case numbers (a case of a sequence is solved with the cases before it).  Unsupported cases
     among those asked for raise :class:`~conformal.contact_inp.module3.Unsupported` before anything
-    is solved."""
+    is solved.  The module-3 solver path (conformal.contact_inp.solve3, history)
+    loads only for a deck with module-3 cases."""
     from conformal.contact_inp.module3 import Unsupported
-    from conformal.contact_inp.solve3 import history_step, summary
-    from conformal.models import solve_problem
-    from conformal.solvers.history import solve_history
 
     pl = plan(parsed)
     want = None if cases is None else set(int(c) for c in cases)
@@ -186,6 +189,10 @@ def solve_deck(parsed: ParsedDeck, cases=None):
 
             yield summary1(first, solve_case(first, p0, parsed.path.parent))
             continue
+        from conformal.contact_inp.solve3 import history_step, summary
+        from conformal.models import solve_problem
+        from conformal.solvers.history import solve_history
+
         T0 = first.digits["T"]
         if len(chain) == 1 and (T0 in (0, 3) or (T0 == 1 and first.digits["P"] == 2)):
             yield summary(first, solve_problem(p0))

@@ -194,35 +194,31 @@ def solve_case(case: Module1Case, raw: dict, base_dir: Path):
     from conformal.scene import scene_from_dict
     from conformal.dispatch import solve_scene
 
-    def run(d):
-        try:
-            return solve_scene(scene_from_dict(d, base_dir=base_dir, name=d["name"]))
-        except (InputError, NoContactError, ConvergenceError) as exc:
-            text = str(exc)
-            if isinstance(exc, InputError) and not text.startswith("[geometry]"):
-                raise
-            if isinstance(exc, ConvergenceError) and not text.startswith(("wheel surface", "rail surface")):
-                raise
-            raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
-                              f"the project's wheel-rail set-up fails here ({text})") from None
-
-    r = run(raw)
+    try:
+        scene = scene_from_dict(raw, base_dir=base_dir, name=raw["name"])
+        r = solve_scene(scene)
+    except (InputError, NoContactError, ConvergenceError) as exc:
+        text = str(exc)
+        if isinstance(exc, InputError) and not text.startswith("[geometry]"):
+            raise
+        if isinstance(exc, ConvergenceError) and not text.startswith(("wheel surface", "rail surface")):
+            raise
+        raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
+                          f"the project's wheel-rail set-up fails here ({text})") from None
     extra = dict(r.extra)
-    extra["warnings"] = list(extra.get("warnings", [])) + _combination_warnings(case, raw, base_dir, r)
+    extra["warnings"] = list(extra.get("warnings", [])) + _combination_warnings(case, scene, r)
     return replace(r, extra=extra)
 
 
-def _combination_warnings(case: Module1Case, raw: dict, base_dir: Path, r) -> list[str]:
+def _combination_warnings(case: Module1Case, scene, r) -> list[str]:
     """The warnings of conformal.contact_inp.combine: where CONTACT would combine, blend or turn
     the contact regions at the solved wheelset height differently from the patches solved here."""
     from conformal.contact_inp.combine import combination_warnings, reader_gap, regions_at, strip_count_warning
     from conformal.errors import ConvergenceError, InputError, NoContactError
-    from conformal.scene import scene_from_dict
 
     z = r.extra.get("z_ws")
     if z is None:
         return []
-    scene = scene_from_dict(raw, base_dir=base_dir, name=raw["name"])
     try:
         regions = regions_at(scene, float(z))
     except (InputError, NoContactError, ConvergenceError):
