@@ -163,7 +163,14 @@ def solve_deck(parsed: ParsedDeck, cases=None):
     """Yield one JSON-ready dict per solved case, in the order of the deck; ``cases``: only these
     case numbers (a case of a sequence is solved with the cases before it).  Unsupported cases
     among those asked for raise :class:`~conformal.contact_inp.module3.Unsupported` before anything
-    is solved.  The module-3 solver path (conformal.contact_inp.solve3, history)
+    is solved.
+
+    Consecutive module-1 cases of one sequence of wheelset positions (the same
+    :func:`~conformal.contact_inp.solve1.sequence_key`: profiles, track, grid, material, friction,
+    load and model) start each from the one solved before it, as CONTACT does and as a sweep and
+    the Manchester study do (:class:`~conformal.cases.wheelrail.WarmStart`); a case is then the
+    same vertical balance to its tolerances as solved alone, not bitwise (module 1 of
+    conformal.contact_inp.solve1).  The module-3 solver path (conformal.contact_inp.solve3, history)
     loads only for a deck with module-3 cases."""
     from conformal.contact_inp.module3 import Unsupported
 
@@ -177,6 +184,7 @@ def solve_deck(parsed: ParsedDeck, cases=None):
     for c, reason in pl.unsupported:
         if want is None or c.number in want:
             raise Unsupported(f"{c.deck}, line {c.line} (case {c.number}): not supported: {reason}")
+    warm, warm_key = None, None           # the last module-1 case's warm start and its sequence
     for chain in pl.chains:
         if want is not None:
             keep = [k for k, (c, _) in enumerate(chain) if c.number in want]
@@ -185,9 +193,15 @@ def solve_deck(parsed: ParsedDeck, cases=None):
             chain = chain[:keep[-1] + 1]
         first, p0 = chain[0]
         if getattr(first, "module", 3) == 1:
-            from conformal.contact_inp.solve1 import solve_case, summary as summary1
+            from conformal.cases.wheelrail import WarmStart
+            from conformal.contact_inp.solve1 import sequence_key, solve_case, summary as summary1
 
-            yield summary1(first, solve_case(first, p0, parsed.path.parent))
+            key = sequence_key(p0)
+            if key is None or key != warm_key:
+                warm = None
+            r = solve_case(first, p0, parsed.path.parent, warm=warm)
+            warm, warm_key = (None, None) if key is None else (WarmStart.from_result(r, warm), key)
+            yield summary1(first, r)
             continue
         from conformal.contact_inp.solve3 import history_step, summary
         from conformal.models import solve_problem
