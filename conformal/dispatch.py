@@ -28,7 +28,7 @@ from conformal.scene import MIN_CONTACT_ELEMENTS, Scene, as_scene, scene_warning
 from conformal.models import SOLVE, combine, solve_problem  # noqa: E402,F401
 
 
-def solve_scene(scene: Scene) -> Result:
+def solve_scene(scene: Scene, *, warm=None) -> Result:
     """Solve a validated scene with the model it names.
 
     Planar scenes give one contact problem (:func:`conformal.problem.problems_from_scene`) solved
@@ -39,6 +39,9 @@ def solve_scene(scene: Scene) -> Result:
     Parameters
     ----------
     scene : Scene
+    warm : conformal.cases.wheelrail.WarmStart, optional
+        A wheel-rail scene only: the warm start of a neighbouring position (a sequence of wheelset
+        positions, e.g. a CONTACT deck's cases), passed to :func:`conformal.cases.solve_wheel_rail`.
 
     Returns
     -------
@@ -58,7 +61,7 @@ def solve_scene(scene: Scene) -> Result:
         if scene.geometry.kind == "wheel_rail":  # patches in their own frames, track-frame totals
             from conformal.cases import solve_wheel_rail
 
-            out = solve_wheel_rail(scene)
+            out = solve_wheel_rail(scene, warm=warm)
         elif scene.history:  # [[history]]: steps with memory (seed Eqs. 39-40); the last step's result
             out = _solve_history(scene)
         else:

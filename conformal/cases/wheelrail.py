@@ -297,6 +297,23 @@ class Placement:
         return float(z - self.z_first)
 
 
+def placed_pair(scene: Scene) -> tuple[WheelRailPair, RailTop, float, float | None]:
+    """The scene's wheel over its rail before any height is searched: (the pair, its rail top, the
+    wheelset roll (rad, track frame), the height where both wheels touch where the roll was found
+    from it (:func:`~conformal.geometry.wheelrail.wheelset_roll`; None for a given roll)).
+    :func:`place_scene` adds the touching heights; the surfaces at a known height need only this
+    (conformal.contact_inp.combine)."""
+    geo = scene.geometry
+    if not isinstance(geo, WheelRailGeometry):
+        raise InputError("[geometry] kind: not a wheel_rail scene")
+    roll, z_both = geo.roll, None
+    if roll is None and geo.placement == "wheelset":
+        roll, z_both = wheelset_roll(geo, scene.base_dir)
+    roll = 0.0 if roll is None else roll
+    pair = build_pair(geo, scene.base_dir, roll=roll)
+    return pair, RailTop.of(pair.rail), roll, z_both
+
+
 def place_scene(scene: Scene, *, touch_only: bool = False, like: Placement | None = None) -> Placement:
     """The wheelset placed (roll, the wheel-rail pair) and the heights where this wheel and the first
     wheel of the wheelset touch; ``touch_only``: z_first is left equal to z_touch (the other wheel
@@ -306,19 +323,10 @@ def place_scene(scene: Scene, *, touch_only: bool = False, like: Placement | Non
     wheelset is searched only where its sampled locus does not show that it touches after this one
     (:func:`~conformal.geometry.wheelrail.touches_after`): z_first is then z_touch."""
     geo = scene.geometry
-    if not isinstance(geo, WheelRailGeometry):
-        raise InputError("[geometry] kind: not a wheel_rail scene")
     base = scene.base_dir
-    roll = geo.roll
-    z_other = None
-    if roll is None and geo.placement == "wheelset":
-        roll, z_both = wheelset_roll(geo, base)
-        z_other = z_both
-    roll = 0.0 if roll is None else roll
-    pair = build_pair(geo, base, roll=roll)
+    pair, top, roll, z_other = placed_pair(scene)
     if like is not None:
         pair.share_locus(like.pair)
-    top = RailTop.of(pair.rail)
     # the pair of a touch_only placement is not searched further: its locus is sampled for the height
     # alone (as finely as like's, whose locus angles it takes, where like is given); this wheel's height
     # from the search per trial height on the locus its contact searches use (bitwise the height that

@@ -72,14 +72,15 @@ def contact_treatment(d: float, dangle: float, d_comb: float, d_sep: float, d_tu
 
 def regions_at(scene, z: float) -> list[Region]:
     """The interpenetration regions of the scene's wheel at side-frame wheelset height ``z``,
-    ordered along the rail profile (every region on its own: no combination)."""
-    from conformal.cases.wheelrail import place_scene
+    ordered along the rail profile (every region on its own: no combination).  The wheel is placed
+    without searching where it touches (conformal.cases.wheelrail.placed_pair): ``z`` is known."""
+    from conformal.cases.wheelrail import placed_pair
     from conformal.geometry.patches import find_patches
     from conformal.geometry.search import pair_locus
 
-    pl = place_scene(scene)
-    rail = pl.pair.rail
-    lobes = find_patches(pl.pair.wheel(z), rail, pl.top, d_comb=0.0, locus=pair_locus(pl.pair, pl.top, z))
+    pair, top = placed_pair(scene)[:2]
+    rail = pair.rail
+    lobes = find_patches(pair.wheel(z), rail, top, d_comb=0.0, locus=pair_locus(pair, top, z))
     out = []
     for p in sorted(lobes, key=lambda p: p.s_range[0]):
         s = np.linspace(p.s_range[0], p.s_range[1], 41)

@@ -106,7 +106,6 @@ class Plan:
 def plan(parsed: ParsedDeck) -> Plan:
     """Map every case onto the project's problems; collect the reasons for the others."""
     from conformal.contact_inp.solve1 import scene_of
-    from conformal.contact_inp.solve3 import problem_of, same_geometry
     from conformal.contact_inp.module3 import Unsupported
 
     base = parsed.path.parent
@@ -123,14 +122,20 @@ def plan(parsed: ParsedDeck) -> Plan:
             prob = None
             if reason is None:
                 try:
-                    prob = scene_of(c, base, memo=heights) if getattr(c, "module", 3) == 1 else problem_of(c, base)
                     if getattr(c, "module", 3) == 1:
+                        prob = scene_of(c, base, memo=heights)
                         _check_profiles(prob, base)
+                    else:     # module 3 only: its solver path (conformal.contact_inp.solve3) loads here
+                        from conformal.contact_inp.solve3 import problem_of
+
+                        prob = problem_of(c, base)
                 except Unsupported as exc:
                     reason = str(exc).split("not supported: ", 1)[-1]
                 except InputError as exc:     # e.g. nu = 0.5, which the project's materials refuse
                     reason = str(exc)
-            if reason is None and k > 0:
+            if reason is None and k > 0:      # a module-3 sequence (module-1 chains have one case)
+                from conformal.contact_inp.solve3 import same_geometry
+
                 p0 = items[0][1]
                 if p0.info or prob.info or p0.kinematics.direction != 1 or not same_geometry(p0, prob):
                     reason = ("a sequence (P = 0) whose grid, material or friction changes, or with C = 9, E = 9 "
@@ -158,11 +163,16 @@ def solve_deck(parsed: ParsedDeck, cases=None):
     """Yield one JSON-ready dict per solved case, in the order of the deck; ``cases``: only these
     case numbers (a case of a sequence is solved with the cases before it).  Unsupported cases
     among those asked for raise :class:`~conformal.contact_inp.module3.Unsupported` before anything
-    is solved."""
+    is solved.
+
+    Consecutive module-1 cases of one sequence of wheelset positions (the same
+    :func:`~conformal.contact_inp.solve1.sequence_key`: profiles, track, grid, material, friction,
+    load and model) start each from the one solved before it, as CONTACT does and as a sweep and
+    the Manchester study do (:class:`~conformal.cases.wheelrail.WarmStart`); a case is then the
+    same vertical balance to its tolerances as solved alone, not bitwise (module 1 of
+    conformal.contact_inp.solve1).  The module-3 solver path (conformal.contact_inp.solve3, history)
+    loads only for a deck with module-3 cases."""
     from conformal.contact_inp.module3 import Unsupported
-    from conformal.contact_inp.solve3 import history_step, summary
-    from conformal.models import solve_problem
-    from conformal.solvers.history import solve_history
 
     pl = plan(parsed)
     want = None if cases is None else set(int(c) for c in cases)
@@ -174,6 +184,7 @@ def solve_deck(parsed: ParsedDeck, cases=None):
     for c, reason in pl.unsupported:
         if want is None or c.number in want:
             raise Unsupported(f"{c.deck}, line {c.line} (case {c.number}): not supported: {reason}")
+    warm, warm_key = None, None           # the last module-1 case's warm start and its sequence
     for chain in pl.chains:
         if want is not None:
             keep = [k for k, (c, _) in enumerate(chain) if c.number in want]
@@ -182,10 +193,20 @@ def solve_deck(parsed: ParsedDeck, cases=None):
             chain = chain[:keep[-1] + 1]
         first, p0 = chain[0]
         if getattr(first, "module", 3) == 1:
-            from conformal.contact_inp.solve1 import solve_case, summary as summary1
+            from conformal.cases.wheelrail import WarmStart
+            from conformal.contact_inp.solve1 import sequence_key, solve_case, summary as summary1
 
-            yield summary1(first, solve_case(first, p0, parsed.path.parent))
+            key = sequence_key(p0)
+            if key is None or key != warm_key:
+                warm = None
+            r = solve_case(first, p0, parsed.path.parent, warm=warm)
+            warm, warm_key = (None, None) if key is None else (WarmStart.from_result(r, warm), key)
+            yield summary1(first, r)
             continue
+        from conformal.contact_inp.solve3 import history_step, summary
+        from conformal.models import solve_problem
+        from conformal.solvers.history import solve_history
+
         T0 = first.digits["T"]
         if len(chain) == 1 and (T0 in (0, 3) or (T0 == 1 and first.digits["P"] == 2)):
             yield summary(first, solve_problem(p0))

@@ -185,8 +185,37 @@ def _height_prescribed(case: Module1Case, raw: dict, base_dir: Path, memo: dict 
     return raw
 
 
-def solve_case(case: Module1Case, raw: dict, base_dir: Path):
-    """Solve one case's scene.  A case the project's wheel-rail set-up cannot place (no contact
+#: the scene keys in which consecutive module-1 cases of a deck may differ and still form one
+#: sequence of wheelset positions (CONTACT starts every case from the one before): the position
+#: (``[geometry]`` lateral_shift, yaw, roll) and the velocities (``[kinematics]``); profiles, track,
+#: grid, material, friction, load and model must be the same
+SEQUENCE_POSITION = ("lateral_shift", "yaw", "roll")
+
+
+def sequence_key(raw: dict) -> str | None:
+    """What a module-1 case's scene shares with its neighbours in a sequence of wheelset positions
+    (the scene less its name, position and velocities, :data:`SEQUENCE_POSITION`): consecutive cases
+    with the same key start each from the one before (:func:`solve_case`, ``warm``).  None for a
+    case with the wheelset height prescribed (N = 0, ``[load] approach``), which has no vertical
+    balance to start."""
+    import json
+
+    if raw["load"].get("wheel_load") is None:
+        return None
+    geometry = {k: v for k, v in raw["geometry"].items() if k not in SEQUENCE_POSITION}
+    rest = {k: v for k, v in raw.items() if k not in ("name", "geometry", "kinematics")}
+    return json.dumps([geometry, rest], sort_keys=True)
+
+
+def solve_case(case: Module1Case, raw: dict, base_dir: Path, warm=None):
+    """Solve one case's scene; ``warm``: the :class:`~conformal.cases.wheelrail.WarmStart` of the
+    case before it in the same sequence (:func:`sequence_key`), where the vertical balance and the
+    contact solves start.  The answer is then the same balance to its tolerances as a cold solve,
+    not bitwise: the passes keep a geometry searched near the neighbour's height (within
+    GEOMETRY_KEEP of the final one, conformal.cases.wheelrail), where a cold solve searches at its
+    settled height (Manchester A-2.2 deck, 21 cases: FN, FX, FY within 0.41, 0.35, 0.17 N = 4e-5 of
+    the wheel load of the cold solves, the same as the study's warm-started sequence against cold
+    solves of its positions, with FZ balanced to 6e-6 of the load).  A case the project's wheel-rail set-up cannot place (no contact
     point within the profiles, normals that miss a profile, a ``[geometry]`` check) is refused
     naming that, as an unsupported case (one line, exit 2)."""
     from conformal.contact_inp.module3 import Unsupported
@@ -194,35 +223,31 @@ def solve_case(case: Module1Case, raw: dict, base_dir: Path):
     from conformal.scene import scene_from_dict
     from conformal.dispatch import solve_scene
 
-    def run(d):
-        try:
-            return solve_scene(scene_from_dict(d, base_dir=base_dir, name=d["name"]))
-        except (InputError, NoContactError, ConvergenceError) as exc:
-            text = str(exc)
-            if isinstance(exc, InputError) and not text.startswith("[geometry]"):
-                raise
-            if isinstance(exc, ConvergenceError) and not text.startswith(("wheel surface", "rail surface")):
-                raise
-            raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
-                              f"the project's wheel-rail set-up fails here ({text})") from None
-
-    r = run(raw)
+    try:
+        scene = scene_from_dict(raw, base_dir=base_dir, name=raw["name"])
+        r = solve_scene(scene, warm=warm)
+    except (InputError, NoContactError, ConvergenceError) as exc:
+        text = str(exc)
+        if isinstance(exc, InputError) and not text.startswith("[geometry]"):
+            raise
+        if isinstance(exc, ConvergenceError) and not text.startswith(("wheel surface", "rail surface")):
+            raise
+        raise Unsupported(f"{case.deck}, line {case.line} (case {case.number}): not supported: module 1, "
+                          f"the project's wheel-rail set-up fails here ({text})") from None
     extra = dict(r.extra)
-    extra["warnings"] = list(extra.get("warnings", [])) + _combination_warnings(case, raw, base_dir, r)
+    extra["warnings"] = list(extra.get("warnings", [])) + _combination_warnings(case, scene, r)
     return replace(r, extra=extra)
 
 
-def _combination_warnings(case: Module1Case, raw: dict, base_dir: Path, r) -> list[str]:
+def _combination_warnings(case: Module1Case, scene, r) -> list[str]:
     """The warnings of conformal.contact_inp.combine: where CONTACT would combine, blend or turn
     the contact regions at the solved wheelset height differently from the patches solved here."""
     from conformal.contact_inp.combine import combination_warnings, reader_gap, regions_at, strip_count_warning
     from conformal.errors import ConvergenceError, InputError, NoContactError
-    from conformal.scene import scene_from_dict
 
     z = r.extra.get("z_ws")
     if z is None:
         return []
-    scene = scene_from_dict(raw, base_dir=base_dir, name=raw["name"])
     try:
         regions = regions_at(scene, float(z))
     except (InputError, NoContactError, ConvergenceError):
