@@ -5,6 +5,7 @@ Shared by tests/studies and the validation tests that run a study (``from _studi
 from __future__ import annotations
 
 import importlib.metadata
+import importlib.util
 import json
 import os
 import subprocess
@@ -12,6 +13,15 @@ import sys
 from pathlib import Path
 
 from _paths import ROOT, STUDIES
+
+
+def load_study(name: str):
+    """The module of ``studies/<name>.py``, imported from its file (studies are scripts, not a
+    package), to test its functions directly."""
+    spec = importlib.util.spec_from_file_location(f"study_{name}", STUDIES / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
 
 
 def run_study(name: str, out: Path, *args: str, timeout: float = 300.0, env: dict | None = None) -> Path:

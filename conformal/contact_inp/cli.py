@@ -41,6 +41,7 @@ def _case_numbers(text: str | None):
 
 
 def cmd_inp(args) -> int:
+    from conformal._threads import single_threaded_blas
     from conformal.contact_inp.combine import PREFIX
     from conformal.contact_inp.deck import read_deck, solve_deck
     from conformal.errors import InputError, unconverged_exit
@@ -57,15 +58,16 @@ def cmd_inp(args) -> int:
     parsed = read_deck(args.deck, ignore_subsurface=args.ignore_subsurface,
                        ignore_temperature=args.ignore_temperature)
     lines, unconverged = [], []
-    for d in solve_deck(parsed, cases=cases):
-        if d.get("converged") is False:
-            unconverged.append(str(d.get("case")))
-        text = json.dumps(d)
-        print(text, flush=True)
-        for w in d.get("warnings", []):      # CONTACT's patch combination not reproduced: one line each
-            if w.startswith(PREFIX):
-                print(f"case {d['case']}: {w}", file=sys.stderr)
-        lines.append(text)
+    with single_threaded_blas():          # once for the deck, not once per case (conformal._threads)
+        for d in solve_deck(parsed, cases=cases):
+            if d.get("converged") is False:
+                unconverged.append(str(d.get("case")))
+            text = json.dumps(d)
+            print(text, flush=True)
+            for w in d.get("warnings", []):      # CONTACT's patch combination not reproduced: one line each
+                if w.startswith(PREFIX):
+                    print(f"case {d['case']}: {w}", file=sys.stderr)
+            lines.append(text)
     if out_path is not None:      # conformal.files: atomic, like every file the package writes
         write_text(out_path, "".join(t + "\n" for t in lines))
         print(f"wrote {out_path}", file=sys.stderr)

@@ -4,21 +4,18 @@ Timing needs a CONTACT executable, which CI does not have; the check logic runs 
 reference output standing in for a fresh ``.out`` (the same format)."""
 from __future__ import annotations
 
-import importlib.util
 import subprocess
 import sys
 
 import pytest
 from _paths import ROOT
+from _studies import load_study
 
 from conformal.contact_inp.refout import read_ref_out
 
 
 def _study():
-    spec = importlib.util.spec_from_file_location("contact_side_by_side", ROOT / "studies" / "contact_side_by_side.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_study("contact_side_by_side")
 
 
 def test_check_accepts_contacts_reference_and_ours_within_one_percent():

@@ -2,22 +2,18 @@
 numbers it reports are the right ones (forces against their references, the fitted exponent)."""
 from __future__ import annotations
 
-import importlib.util
 import json
 
 import numpy as np
 import pytest
-from _paths import ROOT
+from _studies import load_study
 
 CONTACT_FX_100 = -13990.0     # CONTACT GDsteady, case circ at n = 100 (studies/steady_rolling_speed.py)
 HERTZ_FN = 32847.0            # meshes/scenes/hertz_crowned_wheel.toml: Hertz at the prescribed approach
 
 
 def _study():
-    spec = importlib.util.spec_from_file_location("performance_study", ROOT / "studies" / "performance.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_study("performance")
 
 
 def test_growth_exponent_is_the_slope_of_the_logs():

@@ -130,6 +130,37 @@ def test_a_single_threaded_blas_inside_a_solve(monkeypatch):
     assert seen and all(n == 1 for n in seen)
 
 
+def test_nested_single_threaded_blas_limits_once_and_restores(monkeypatch):
+    """A command that wraps many solves sets the limit once; the solves inside do not set it again
+    (each limit rescans the loaded libraries), and leaving the outer block restores BLAS."""
+    import threadpoolctl
+    from threadpoolctl import threadpool_info
+
+    from conformal._threads import single_threaded_blas
+
+    for k in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS", "BLIS_NUM_THREADS"):
+        monkeypatch.delenv(k, raising=False)
+    calls = []
+    real = threadpoolctl.threadpool_limits
+
+    def counting(*a, **k):
+        calls.append(k)
+        return real(*a, **k)
+
+    monkeypatch.setattr(threadpoolctl, "threadpool_limits", counting)
+    before = [p["num_threads"] for p in threadpool_info()]
+    with single_threaded_blas():
+        for _ in range(3):
+            with single_threaded_blas():
+                inner = [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
+                assert all(n == 1 for n in inner)
+    assert len(calls) == 1
+    assert [p["num_threads"] for p in threadpool_info()] == before
+    with single_threaded_blas():            # a new outer block limits again
+        pass
+    assert len(calls) == 2
+
+
 @pytest.mark.parametrize("name", ["circ.toml", "flange_worn.toml", "mbench_right_y5.toml", "groove_conformal.toml"])
 def test_scene_to_dict_round_trip(name):
     from conformal.scene import scene_from_dict

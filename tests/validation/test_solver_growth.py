@@ -5,11 +5,10 @@ and products), and the growth of steady rolling from 200² to 400² in influence
 (studies/steady_rolling_speed.py measures the times)."""
 from __future__ import annotations
 
-import importlib.util
 
 import numpy as np
 import pytest
-from _paths import ROOT
+from _studies import load_study
 
 from conformal.grid import PlanarGrid
 from conformal.influence.halfspace import HalfSpaceInfluence, TangentialProduct32
@@ -23,10 +22,7 @@ STEEL = Material.steel()
 
 
 def _performance_study():
-    spec = importlib.util.spec_from_file_location("performance_study", ROOT / "studies" / "performance.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_study("performance")
 
 
 def circ(n: int):
