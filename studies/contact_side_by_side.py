@@ -28,7 +28,9 @@ that disagrees stops the study.  Times: wall (perf_counter) and CPU (user + syst
 
     python studies/contact_side_by_side.py --contact /path/to/contact [--rounds 7] [--quick]
 
-``--contact`` may also come from the environment variable ``CONTACT_EXE``.  Writes
+``--contact`` may also come from the environment variable ``CONTACT_EXE``.  How the CONTACT of the
+committed run was built (gfortran, MKL from PyPI, the changes gfortran needs) and what its numbers
+mean: docs/validation/performance.md, "Side by side with CONTACT built on this machine".  Writes
 studies/out/contact_side_by_side/{side_by_side.md, side_by_side.json, run.json}.
 """
 from __future__ import annotations
