@@ -215,9 +215,11 @@ def solve_case(case: Module1Case, raw: dict, base_dir: Path, warm=None):
     GEOMETRY_KEEP of the final one, conformal.cases.wheelrail), where a cold solve searches at its
     settled height (Manchester A-2.2 deck, 21 cases: FN, FX, FY within 0.41, 0.35, 0.17 N = 4e-5 of
     the wheel load of the cold solves, the same as the study's warm-started sequence against cold
-    solves of its positions, with FZ balanced to 6e-6 of the load).  A case the project's wheel-rail set-up cannot place (no contact
-    point within the profiles, normals that miss a profile, a ``[geometry]`` check) is refused
-    naming that, as an unsupported case (one line, exit 2)."""
+    solves of its positions, with FZ balanced to 6e-6 of the load).
+
+    A case the project's wheel-rail set-up cannot place (no contact point within the profiles,
+    normals that miss a profile, a ``[geometry]`` check) is refused naming that, as an unsupported
+    case (one line, exit 2)."""
     from conformal.contact_inp.module3 import Unsupported
     from conformal.errors import ConvergenceError, InputError, NoContactError
     from conformal.scene import scene_from_dict
