@@ -41,12 +41,9 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
 import json  # noqa: E402
-import resource  # noqa: E402
 import shutil  # noqa: E402
-import subprocess  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
-import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -56,6 +53,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _provenance import output_dir, write_sidecar  # noqa: E402
+from performance import run_timed  # noqa: E402  (one timing of a command for both studies)
 
 DECKS = ROOT / "tests" / "reference" / "contact_decks"
 PERFC = ROOT / "tests" / "reference" / "contact_perfc"
@@ -70,18 +68,6 @@ JOBS = {
     "perfc_shift": dict(deck=PERFC / "tang_problm_1s.inp", files=(), ref=None, inproc={"kind": "perfc_shift"},
                         inp=False, counts=(3148, 1730)),
 }
-
-
-def run_timed(cmd: list[str], cwd: Path, timeout: float, env: dict | None = None) -> dict:
-    """One run of ``cmd``: wall and CPU seconds (user + system of the child), exit status, output."""
-    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.perf_counter()
-    p = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout,
-                       env={**os.environ, **(env or {})})
-    wall = time.perf_counter() - t0
-    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime
-    return dict(wall_s=wall, cpu_s=cpu, rc=p.returncode, stdout=p.stdout, stderr=p.stderr)
 
 
 def contact_run(exe: str, job: dict, scratch: Path) -> dict:

@@ -219,20 +219,29 @@ def spawn(what: dict, timeout: float, env: dict | None = None) -> dict:
 
 
 # ----------------------------------------------------------------------------- 5, 6: commands
+def run_timed(cmd: list[str], cwd: Path, timeout: float, env: dict | None = None) -> dict:
+    """One run of ``cmd``: wall seconds, CPU seconds of the command and its helper processes (user +
+    system, from the rusage of the children waited for), exit status, stdout and stderr."""
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    p = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout,
+                       env=None if env is None else {**os.environ, **env})
+    wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime
+    return dict(wall_s=wall, cpu_s=cpu, rc=p.returncode, stdout=p.stdout, stderr=p.stderr)
+
+
 def timed_command(cmd: list[str], repeats: int, cwd: Path, timeout: float) -> dict:
-    """Best wall time of ``repeats`` runs, with the CPU time of the command and its helper
-    processes (user + system, from the rusage of the children waited for)."""
+    """Best wall time of ``repeats`` runs (:func:`run_timed`), with the CPU time of that run."""
     walls, cpus, loads, rc = [], [], [], 0
     for _ in range(repeats):
         la = load()
-        r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        t0 = time.perf_counter()
-        p = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout)
-        walls.append(time.perf_counter() - t0)
-        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        cpus.append(r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime)
+        r = run_timed(cmd, cwd, timeout)
+        walls.append(r["wall_s"])
+        cpus.append(r["cpu_s"])
         loads.append(la)
-        rc = rc or p.returncode
+        rc = rc or r["rc"]
     k = int(np.argmin(walls))
     return dict(command=" ".join(cmd), wall_s=walls[k], walls=walls, cpu_s=cpus[k], cpus=cpus, load=loads[k], rc=rc)
 
